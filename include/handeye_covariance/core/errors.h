@@ -1,0 +1,43 @@
+// Named, actionable errors. Every refusal says what was wrong, where, and what
+// to do; the estimator never returns NaN or a result it cannot stand behind.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace handeye {
+
+enum class ErrorCode {
+  MalformedFile,             // not YAML, or a key of the wrong type
+  MissingKey,                // a required key is absent
+  WrongLength,               // a list has the wrong number of entries
+  NonFinite,                 // NaN or Inf in a pose or a covariance
+  QuaternionNotUnit,         // |q| far from 1
+  RotationNotOrthonormal,    // R^T R != I or det(R) != 1
+  InvalidNoise,              // a covariance that is not symmetric positive semi-definite
+  TooFewMotions,             // fewer than 2 motions
+  PureTranslation,           // no motion rotates
+  ParallelRotationAxes,      // every informative motion rotates about the same axis
+  RotationTooSmallForNoise,  // rotations comparable to the stated rotation noise
+  AngleMismatch,             // |angle(A) - angle(B)| far beyond the noise: not the same motion
+  NoiseUnidentifiable,       // no noise given and too few motions to estimate it
+  PoorlyConstrained,         // solved, but the rotation sigma is too large for a first-order covariance
+  IoError,                   // file cannot be read or written
+};
+
+/// Stable name used in messages and in tests, e.g. "ParallelRotationAxes".
+const char* to_string(ErrorCode code);
+
+class HandEyeError : public std::runtime_error {
+ public:
+  /// what: what was wrong; where: the file/field/index; fix: what the user should do.
+  HandEyeError(ErrorCode code, const std::string& what, const std::string& where,
+               const std::string& fix);
+
+  ErrorCode code() const { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+}  // namespace handeye

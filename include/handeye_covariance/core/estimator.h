@@ -1,0 +1,105 @@
+// The AX = XB estimator with its covariance (Nguyen & Pham, "On the covariance
+// of X in AX = XB", sections II-III).
+//
+//  1. Park-Martin closed form for the initial rotation and translation.
+//  2. Rotation: covariance-weighted Gauss-Newton on SO(3), eq. (18-35). The
+//     beta_i block is eliminated by its Schur complement, written per pair with
+//     the matrix inversion lemma,
+//         U_i - W_i Z_i^-1 W_i^T = [R b_i]^T (Sigma_alpha_i + R Sigma_beta_i R^T)^-1 [R b_i],
+//     so time and memory are O(k) and a noise-free robot (Sigma_A = 0, as in the
+//     paper's real-data experiment) needs no inverse of a singular matrix.
+//  3. Translation: the iterative solution of eq. (36-56), same elimination of
+//     the R_Ai block.
+//  4. Covariance: full first-order propagation of every input noise through
+//     the converged estimator (a "sandwich"). Eq. (35) and (56) assume each pair
+//     carries its own independent error; they do not. The rotation estimate's
+//     error enters every q_i = R t_Bi - t_Ai (shared by all pairs), q_i is
+//     correlated with R_Ai, and on a pose stream consecutive motions share a
+//     pose. The propagation below carries all three, and gives the R-t cross
+//     block. Its cost is O(k): each input noise touches at most two motions.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/measurements.h"
+
+namespace handeye {
+
+struct SolverOptions {
+  int max_iterations = 50;
+  /// Stop when the step's squared Mahalanobis length under the current
+  /// information matrix falls below this: the step is then ~1e-6 sigma, a
+  /// relative criterion that works at every noise level.
+  double step_tolerance = 1e-12;
+  /// ... or when the relative change of the weighted cost falls below this.
+  double cost_tolerance = 1e-14;
+  /// A motion counts as rotating when both its angles exceed this ...
+  double min_rotation_angle = 0.5 * M_PI / 180.0;
+  /// ... and this many sigma of its rotation-angle noise.
+  double min_rotation_sigmas = 3.0;
+  /// Two rotation axes count as different beyond this angle.
+  double min_axis_angle = 1.0 * M_PI / 180.0;
+  /// |angle(A) - angle(B)| beyond this many sigma refuses the input.
+  double angle_mismatch_sigmas = 8.0;
+  /// Refuse a result whose rotation 1-sigma exceeds this (rad): the first-order
+  /// covariance is meaningless there.
+  double max_rotation_sigma = 0.1;
+};
+
+enum class StopReason {
+  StepBelowTolerance,  // converged: the last step was negligible against sigma
+  CostChangeBelowTolerance,  // converged: the cost no longer changes
+  MaxIterations,       // not converged
+};
+const char* to_string(StopReason reason);
+
+struct StageDiagnostics {
+  int iterations = 0;
+  StopReason stop_reason = StopReason::MaxIterations;
+  double chi2 = 0.0;  // weighted residual sum of squares at the solution
+  int dof = 0;        // 3k - 3
+  bool converged() const { return stop_reason != StopReason::MaxIterations; }
+};
+
+/// Where the noise came from.
+enum class NoiseOrigin { Given, EstimatedFromResiduals };
+
+struct Calibration {
+  /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
+  /// input, the X of A X = X B.
+  Eigen::Isometry3d T_parent_camera = Eigen::Isometry3d::Identity();
+  Eigen::Matrix3d rotation_covariance = Eigen::Matrix3d::Zero();     // rad^2, left perturbation
+  Eigen::Matrix3d translation_covariance = Eigen::Matrix3d::Zero();  // m^2
+  Matrix6d pose_covariance = Matrix6d::Zero();  // ROS order (x,y,z,rx,ry,rz), with R-t cross block
+
+  /// Eq. (35) and (56) as printed: each pair's error taken as independent.
+  /// For comparison only; it is overconfident wherever the rotation error,
+  /// shared by all pairs, dominates the translation error.
+  DecoupledCovariance per_pair_covariance;
+
+  Eigen::Isometry3d initial_guess = Eigen::Isometry3d::Identity();  // Park-Martin
+  StageDiagnostics rotation_stage, translation_stage;
+  int motions_used = 0;
+  int samples_used = 0;  // pose input only; 0 for motion input
+
+  NoiseOrigin noise_origin = NoiseOrigin::Given;
+  /// The noise the covariance is based on: as given, or the estimate (isotropic
+  /// camera noise, robot taken as exact) when none was given.
+  MeasurementNoise noise;
+  std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
+};
+
+/// Park-Martin closed form (the paper's [3]): R from the polar decomposition of
+/// sum beta_i alpha_i^T, then t by linear least squares. Throws on < 2 motions.
+Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions);
+
+/// Solve from independent motion pairs.
+Calibration solve(const MotionSet& motions, const SolverOptions& options = {});
+
+/// Solve from absolute pose samples. Consecutive samples form the motions
+/// (n samples -> n-1 motions), and each sample's noise is propagated into both
+/// motions that use it, so their correlation is in the covariance.
+Calibration solve(const SampleSet& samples, const SolverOptions& options = {});
+
+}  // namespace handeye

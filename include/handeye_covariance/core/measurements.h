@@ -1,0 +1,64 @@
+// Inputs to the estimator: absolute pose samples (what a robot and a camera
+// produce) or independent motion pairs (A_i, B_i) (the paper's experiments).
+//
+// Frames: T_a_b maps points in frame b to frame a (p_a = T_a_b * p_b).
+//   eye_in_hand: X = T_effector_camera, camera on the flange, pattern fixed in the world.
+//   eye_to_hand: X = T_base_camera, camera fixed, pattern on the flange.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/pose_covariance.h"
+
+namespace handeye {
+
+enum class Setup { EyeInHand, EyeToHand };
+
+const char* to_string(Setup setup);  // "eye_in_hand" / "eye_to_hand"
+
+struct FrameNames {
+  std::string base, effector, camera, pattern;  // empty when unknown
+};
+
+/// Noise of the two measured poses, each as decoupled rotation/translation
+/// covariances (rad^2, m^2; rotation as a left perturbation in the parent frame).
+///   samples: robot = T_base_effector, camera = T_camera_pattern
+///   motions: robot = A,               camera = B
+struct MeasurementNoise {
+  DecoupledCovariance robot;
+  DecoupledCovariance camera;
+};
+
+struct PoseSample {
+  Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
+  std::optional<double> stamp;             // seconds
+  std::optional<MeasurementNoise> noise;   // overrides SampleSet::noise for this sample
+};
+
+struct SampleSet {
+  Setup setup = Setup::EyeInHand;
+  FrameNames frames;
+  std::optional<MeasurementNoise> noise;  // absent: estimated from the residuals
+  std::vector<PoseSample> samples;
+};
+
+struct MotionPair {
+  Eigen::Isometry3d A = Eigen::Isometry3d::Identity();  // robot motion
+  Eigen::Isometry3d B = Eigen::Isometry3d::Identity();  // camera motion, A X = X B
+  std::optional<MeasurementNoise> noise;                 // overrides MotionSet::noise
+};
+
+struct MotionSet {
+  std::optional<MeasurementNoise> noise;  // absent: estimated from the residuals
+  std::vector<MotionPair> motions;
+};
+
+/// The motion pair between two samples i -> j, per the paper's eq. (2):
+///   eye_in_hand: A = T_base_effector_j^-1 T_base_effector_i, B = T_camera_pattern_j T_camera_pattern_i^-1
+///   eye_to_hand: A = T_base_effector_j T_base_effector_i^-1,  B = T_camera_pattern_j T_camera_pattern_i^-1
+MotionPair motion_between(Setup setup, const PoseSample& from, const PoseSample& to);
+
+}  // namespace handeye

@@ -1,0 +1,59 @@
+// Synthetic calibration data with known truth, seeded and deterministic.
+// Used by the tests, the benchmarks, the shipped demo file and `handeye validate`.
+#pragma once
+
+#include <random>
+
+#include "handeye_covariance/core/measurements.h"
+
+namespace handeye {
+
+using Rng = std::mt19937_64;
+
+/// Zero-mean Gaussian 3-vector with the given covariance (PSD; zero allowed).
+Eigen::Vector3d sample_gaussian(Rng& rng, const Eigen::Matrix3d& covariance);
+
+/// Rotation uniform on SO(3) (Shoemake), translation uniform in [-extent, extent]^3.
+Eigen::Isometry3d random_pose(Rng& rng, double translation_extent);
+
+/// The noise model of the paper (eq. 3-6): R = exp([xi_R]) R_bar, t = t_bar + xi_t.
+Eigen::Isometry3d perturb(Rng& rng, const Eigen::Isometry3d& pose, const DecoupledCovariance& noise);
+
+/// The paper's synthetic study (section IV-A), eq. (57-60), scaled by lambda.
+MeasurementNoise paper_noise(double lambda);
+
+/// k independent pairs: A_bar random (uniform rotation, translation in
+/// [-extent, extent]^3), B_bar = X^-1 A_bar X, each corrupted by `noise`.
+/// The returned set carries `noise` as its noise block.
+MotionSet simulate_motions(Rng& rng, const Eigen::Isometry3d& X, int k, const MeasurementNoise& noise,
+                           double translation_extent = 0.5);
+
+/// Geometry of a calibration session: the camera looks at the pattern from
+/// viewpoints on a cap of a sphere, as an integrator would move the robot.
+struct ViewpointOptions {
+  double min_distance = 0.4;        // m, camera to pattern
+  double max_distance = 0.8;        // m
+  double max_tilt = 35.0 * M_PI / 180.0;  // viewing angle off the pattern normal
+  double max_roll = 60.0 * M_PI / 180.0;  // about the optical axis
+  double max_offset = 0.05;         // m, pattern centre off the optical axis
+};
+
+/// A T_camera_pattern seen from a random viewpoint.
+Eigen::Isometry3d random_view(Rng& rng, const ViewpointOptions& options);
+
+struct SimulatedSession {
+  SampleSet samples;                  // noisy, with the noise block set
+  Eigen::Isometry3d X;                // truth: T_effector_camera or T_base_camera
+  Eigen::Isometry3d T_world_pattern;  // truth: T_base_pattern (in hand) or T_effector_pattern (to hand)
+};
+
+/// n absolute samples of a session with truth X. eye_in_hand: the pattern is
+/// fixed in the base frame; eye_to_hand: it is fixed on the flange.
+SimulatedSession simulate_session(Rng& rng, Setup setup, const Eigen::Isometry3d& X, int n,
+                                  const MeasurementNoise& noise, const ViewpointOptions& views = {});
+
+/// A plausible X for demos and tests: a camera 10 cm off the flange (eye-in-hand),
+/// or 1.2 m from the base looking at the workspace (eye-to-hand).
+Eigen::Isometry3d typical_X(Setup setup);
+
+}  // namespace handeye

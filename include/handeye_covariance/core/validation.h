@@ -1,0 +1,22 @@
+// Input checks shared by the file readers and the library entry points.
+// Each throws HandEyeError naming the field (`where`) and the fix.
+#pragma once
+
+#include <string>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/pose_covariance.h"
+
+namespace handeye {
+
+/// Finite, orthonormal rotation with det +1 (tolerance 1e-6), finite translation.
+void check_pose(const Eigen::Isometry3d& pose, const std::string& where);
+
+/// Finite, symmetric and positive semi-definite.
+void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where);
+void check_covariance(const DecoupledCovariance& covariance, const std::string& where);
+
+/// |q| within 1e-3 of 1 and finite; returns the normalised quaternion.
+Eigen::Quaterniond checked_unit_quaternion(const Eigen::Quaterniond& q, const std::string& where);
+
+}  // namespace handeye

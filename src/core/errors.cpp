@@ -1,0 +1,40 @@
+#include "handeye_covariance/core/errors.h"
+
+namespace handeye {
+
+const char* to_string(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::MalformedFile: return "MalformedFile";
+    case ErrorCode::MissingKey: return "MissingKey";
+    case ErrorCode::WrongLength: return "WrongLength";
+    case ErrorCode::NonFinite: return "NonFinite";
+    case ErrorCode::QuaternionNotUnit: return "QuaternionNotUnit";
+    case ErrorCode::RotationNotOrthonormal: return "RotationNotOrthonormal";
+    case ErrorCode::InvalidNoise: return "InvalidNoise";
+    case ErrorCode::TooFewMotions: return "TooFewMotions";
+    case ErrorCode::PureTranslation: return "PureTranslation";
+    case ErrorCode::ParallelRotationAxes: return "ParallelRotationAxes";
+    case ErrorCode::RotationTooSmallForNoise: return "RotationTooSmallForNoise";
+    case ErrorCode::AngleMismatch: return "AngleMismatch";
+    case ErrorCode::NoiseUnidentifiable: return "NoiseUnidentifiable";
+    case ErrorCode::PoorlyConstrained: return "PoorlyConstrained";
+    case ErrorCode::IoError: return "IoError";
+  }
+  return "Unknown";
+}
+
+namespace {
+std::string format(ErrorCode code, const std::string& what, const std::string& where,
+                   const std::string& fix) {
+  std::string message = std::string(to_string(code)) + ": " + what;
+  if (!where.empty()) message += " (at " + where + ")";
+  if (!fix.empty()) message += ". Fix: " + fix;
+  return message;
+}
+}  // namespace
+
+HandEyeError::HandEyeError(ErrorCode code, const std::string& what, const std::string& where,
+                           const std::string& fix)
+    : std::runtime_error(format(code, what, where, fix)), code_(code) {}
+
+}  // namespace handeye

@@ -1,0 +1,810 @@
+#include "handeye_covariance/core/estimator.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/validation.h"
+
+namespace handeye {
+
+const char* to_string(StopReason reason) {
+  switch (reason) {
+    case StopReason::StepBelowTolerance: return "step_below_tolerance";
+    case StopReason::CostChangeBelowTolerance: return "cost_change_below_tolerance";
+    case StopReason::MaxIterations: return "max_iterations";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+std::string fmt(double value, int precision = 3) {
+  std::ostringstream out;
+  out.precision(precision);
+  out << value;
+  return out.str();
+}
+
+double degrees(double radians) { return radians * 180.0 / M_PI; }
+
+// ---------------------------------------------------------------------------
+// The problem: motions plus the independent noise inputs that perturb them.
+// ---------------------------------------------------------------------------
+
+/// How one noise input perturbs one motion's A (robot) or B (camera), ROS order.
+struct Influence {
+  int motion = 0;
+  bool on_robot = true;
+  Matrix6d jacobian = Matrix6d::Identity();
+};
+
+/// An independent noise input: a motion's own A or B noise (motion input), or
+/// one sample's effector or pattern pose noise (pose input, touches 2 motions).
+struct NoiseInput {
+  DecoupledCovariance covariance;
+  bool robot = true;  // robot/effector noise or camera/pattern noise
+  std::array<Influence, 2> influences;
+  int count = 0;
+  void add(const Influence& influence) { influences[count++] = influence; }
+};
+
+struct Problem {
+  std::vector<Isometry3d> A, B;
+  std::vector<std::string> labels;  // where each motion came from
+  std::vector<NoiseInput> inputs;
+  bool noise_given = true;
+  int samples = 0;
+  std::size_t size() const { return A.size(); }
+};
+
+/// Per-kind multipliers on the input covariances. 1 when the noise is given;
+/// estimated from the residuals otherwise (robot noise is then zero).
+struct NoiseScale {
+  double rotation = 1.0;
+  double translation = 1.0;
+};
+
+Matrix6d scaled(const DecoupledCovariance& covariance, const NoiseScale& scale) {
+  Matrix6d out = Matrix6d::Zero();
+  out.topLeftCorner<3, 3>() = scale.translation * covariance.translation;
+  out.bottomRightCorner<3, 3>() = scale.rotation * covariance.rotation;
+  return out;
+}
+
+/// Marginal covariance of each motion's A and B; used as the solver's weights.
+struct Marginals {
+  std::vector<Matrix6d> A, B;
+};
+
+Marginals marginals(const Problem& problem, const NoiseScale& scale) {
+  Marginals m;
+  m.A.assign(problem.size(), Matrix6d::Zero());
+  m.B.assign(problem.size(), Matrix6d::Zero());
+  for (const NoiseInput& input : problem.inputs) {
+    const Matrix6d covariance = scaled(input.covariance, scale);
+    for (int j = 0; j < input.count; ++j) {
+      const Influence& inf = input.influences[j];
+      (inf.on_robot ? m.A : m.B)[inf.motion] += inf.jacobian * covariance * inf.jacobian.transpose();
+    }
+  }
+  return m;
+}
+
+/// Sum over inputs of (sum over influences of gain * J) Sigma (...)^T: the exact
+/// first-order covariance of an estimate whose sensitivity to each motion's A
+/// and B perturbation is `gain(motion, on_robot)` (Rows x 6).
+template <int Rows, typename Gain>
+Eigen::Matrix<double, Rows, Rows> propagate(const Problem& problem, const NoiseScale& scale,
+                                            const Gain& gain) {
+  Eigen::Matrix<double, Rows, Rows> covariance = Eigen::Matrix<double, Rows, Rows>::Zero();
+  for (const NoiseInput& input : problem.inputs) {
+    Eigen::Matrix<double, Rows, 6> total = Eigen::Matrix<double, Rows, 6>::Zero();
+    for (int j = 0; j < input.count; ++j) {
+      const Influence& inf = input.influences[j];
+      total += gain(inf.motion, inf.on_robot) * inf.jacobian;
+    }
+    covariance += total * scaled(input.covariance, scale) * total.transpose();
+  }
+  return 0.5 * (covariance + covariance.transpose());
+}
+
+Matrix3d inverse_spd(const Matrix3d& C, const std::string& where) {
+  Eigen::LLT<Matrix3d> llt(C);
+  if (llt.info() != Eigen::Success || !C.allFinite()) {
+    throw HandEyeError(ErrorCode::InvalidNoise,
+                       "the combined robot + camera noise of this motion is singular", where,
+                       "give a non-zero rotation and translation noise for the camera (pattern) "
+                       "or the robot (effector), or omit the noise block to estimate it");
+  }
+  return llt.solve(Matrix3d::Identity());
+}
+
+// ---------------------------------------------------------------------------
+// Rotation stage, eq. (13-35).
+// ---------------------------------------------------------------------------
+
+struct RotationData {
+  std::vector<Vector3d> alpha, beta;         // log R_A, log R_B (eq. 13)
+  std::vector<Matrix3d> sigma_alpha, sigma_beta;  // eq. (14-15)
+};
+
+RotationData rotation_data(const Problem& problem) {
+  RotationData d;
+  const std::size_t k = problem.size();
+  d.alpha.resize(k);
+  d.beta.resize(k);
+  d.sigma_alpha.resize(k);
+  d.sigma_beta.resize(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    d.alpha[i] = so3::log(problem.A[i].linear());
+    d.beta[i] = so3::log(problem.B[i].linear());
+  }
+  return d;
+}
+
+void update_log_covariances(RotationData& d, const Marginals& m) {
+  for (std::size_t i = 0; i < d.alpha.size(); ++i) {
+    const Matrix3d Ja = so3::left_jacobian_inverse(d.alpha[i]);
+    const Matrix3d Jb = so3::left_jacobian_inverse(d.beta[i]);
+    d.sigma_alpha[i] = Ja * m.A[i].bottomRightCorner<3, 3>() * Ja.transpose();
+    d.sigma_beta[i] = Jb * m.B[i].bottomRightCorner<3, 3>() * Jb.transpose();
+  }
+}
+
+/// The reduced (beta-eliminated) rotation problem linearised at R.
+struct RotationLinearization {
+  std::vector<Matrix3d> L;          // d residual / d xi_R = [R beta_hat_i]  (eq. 24)
+  std::vector<Matrix3d> C_inverse;  // (Sigma_alpha + R Sigma_beta R^T)^-1
+  Matrix3d information = Matrix3d::Zero();  // U - W Z^-1 W^T  (eq. 35)
+  Vector3d gradient = Vector3d::Zero();
+  double cost = 0.0;
+};
+
+RotationLinearization linearize_rotation(const Matrix3d& R, const RotationData& d,
+                                         const Problem& problem) {
+  RotationLinearization lin;
+  const std::size_t k = d.alpha.size();
+  lin.L.resize(k);
+  lin.C_inverse.resize(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const Matrix3d C = d.sigma_alpha[i] + R * d.sigma_beta[i] * R.transpose();
+    const Matrix3d Ci = inverse_spd(C, problem.labels[i]);
+    const Vector3d e = d.alpha[i] - R * d.beta[i];  // residual of eq. (17)
+    // beta_hat minimises the joint cost for this R (eq. 34 at convergence);
+    // linearising at R beta_hat gives the joint problem's exact gradient.
+    const Vector3d beta_hat = d.beta[i] + d.sigma_beta[i] * R.transpose() * (Ci * e);
+    lin.L[i] = so3::hat(R * beta_hat);
+    lin.C_inverse[i] = Ci;
+    lin.information += lin.L[i].transpose() * Ci * lin.L[i];
+    lin.gradient += lin.L[i].transpose() * Ci * e;
+    lin.cost += e.dot(Ci * e);
+  }
+  return lin;
+}
+
+double rotation_cost(const Matrix3d& R, const RotationData& d, const Problem& problem) {
+  double cost = 0.0;
+  for (std::size_t i = 0; i < d.alpha.size(); ++i) {
+    const Matrix3d C = d.sigma_alpha[i] + R * d.sigma_beta[i] * R.transpose();
+    const Vector3d e = d.alpha[i] - R * d.beta[i];
+    cost += e.dot(inverse_spd(C, problem.labels[i]) * e);
+  }
+  return cost;
+}
+
+bool converged_by_cost(double previous, double current, double tolerance) {
+  return std::abs(previous - current) <= tolerance * std::max(previous, 1e-300);
+}
+
+/// Near pi the log's axis sign is arbitrary; pick for each beta_i the
+/// representative (angle theta or theta - 2 pi) that agrees with alpha_i under R.
+void align_representatives(const Matrix3d& R, RotationData& d) {
+  for (std::size_t i = 0; i < d.alpha.size(); ++i) {
+    const Vector3d other = so3::other_representative(d.beta[i]);
+    if ((d.alpha[i] - R * other).norm() < (d.alpha[i] - R * d.beta[i]).norm()) d.beta[i] = other;
+  }
+}
+
+struct RotationResult {
+  Matrix3d R = Matrix3d::Identity();
+  StageDiagnostics diagnostics;
+};
+
+/// Gauss-Newton on SO(3) with step halving; eq. (20) R <- exp([xi]) R, eq. (33).
+RotationResult solve_rotation(const Matrix3d& R0, const RotationData& d, const Problem& problem,
+                              const SolverOptions& options) {
+  RotationResult result;
+  result.R = R0;
+  RotationLinearization lin = linearize_rotation(result.R, d, problem);
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    result.diagnostics.iterations = iteration;
+    Vector3d xi = -lin.information.ldlt().solve(lin.gradient);
+    const double step = xi.dot(lin.information * xi);
+    Matrix3d candidate = so3::exp(xi) * result.R;
+    double cost = rotation_cost(candidate, d, problem);
+    for (int halving = 0; halving < 30 && cost > lin.cost * (1.0 + 1e-12); ++halving) {
+      xi *= 0.5;
+      candidate = so3::exp(xi) * result.R;
+      cost = rotation_cost(candidate, d, problem);
+    }
+    const double previous_cost = lin.cost;
+    if (cost <= previous_cost * (1.0 + 1e-12)) result.R = candidate;
+    lin = linearize_rotation(result.R, d, problem);
+    if (step < options.step_tolerance) {
+      result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
+      break;
+    }
+    if (converged_by_cost(previous_cost, lin.cost, options.cost_tolerance)) {
+      result.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
+      break;
+    }
+  }
+  result.diagnostics.chi2 = lin.cost;
+  result.diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
+  return result;
+}
+
+/// First-order sensitivity of xi_R to each motion's rotation noise:
+/// xi_R = -S^-1 sum L_i^T C_i^-1 (J^-1(alpha_i) xi_RA - R J^-1(beta_i) xi_RB).
+struct RotationGains {
+  std::vector<Matrix3d> from_robot, from_camera;
+};
+
+RotationGains rotation_gains(const Matrix3d& R, const RotationData& d, const Problem& problem) {
+  const RotationLinearization lin = linearize_rotation(R, d, problem);
+  const Matrix3d S_inverse = lin.information.inverse();
+  RotationGains g;
+  g.from_robot.resize(d.alpha.size());
+  g.from_camera.resize(d.alpha.size());
+  for (std::size_t i = 0; i < d.alpha.size(); ++i) {
+    const Matrix3d common = S_inverse * lin.L[i].transpose() * lin.C_inverse[i];
+    g.from_robot[i] = -common * so3::left_jacobian_inverse(d.alpha[i]);
+    g.from_camera[i] = common * R * so3::left_jacobian_inverse(d.beta[i]);
+  }
+  return g;
+}
+
+Matrix3d rotation_covariance(const Problem& problem, const NoiseScale& scale,
+                             const RotationGains& g) {
+  return propagate<3>(problem, scale, [&](int motion, bool on_robot) {
+    Eigen::Matrix<double, 3, 6> gain = Eigen::Matrix<double, 3, 6>::Zero();
+    gain.rightCols<3>() = on_robot ? g.from_robot[motion] : g.from_camera[motion];
+    return gain;
+  });
+}
+
+// ---------------------------------------------------------------------------
+// Translation stage, eq. (36-56).
+// ---------------------------------------------------------------------------
+
+struct TranslationLinearization {
+  std::vector<Matrix3d> M;          // R_hat_Ai - I  (eq. 46)
+  std::vector<Matrix3d> C_inverse;  // (Sigma_qi + [R_A t] Sigma_RA [R_A t]^T)^-1
+  std::vector<Vector3d> reduced_residual;
+  Matrix3d information = Matrix3d::Zero();  // eq. (56) before inversion
+  Vector3d rhs = Vector3d::Zero();
+  double cost = 0.0;
+};
+
+struct TranslationState {
+  Vector3d t = Vector3d::Zero();
+  std::vector<Vector3d> adjustment;  // xi_RAi of eq. (41)
+};
+
+TranslationLinearization linearize_translation(const TranslationState& s, const Matrix3d& R,
+                                               const Matrix3d& sigma_R, const Marginals& m,
+                                               const Problem& problem) {
+  TranslationLinearization lin;
+  const std::size_t k = problem.size();
+  lin.M.resize(k);
+  lin.C_inverse.resize(k);
+  lin.reduced_residual.resize(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const Matrix3d R_A = so3::exp(s.adjustment[i]) * problem.A[i].linear();
+    const Vector3d RtB = R * problem.B[i].translation();
+    const Vector3d q = RtB - problem.A[i].translation();  // eq. (36)
+    const Matrix3d lever_B = so3::hat(RtB);
+    const Matrix3d lever_A = so3::hat(R_A * s.t);
+    // eq. (37): Sigma_q = Sigma_tA + R Sigma_tB R^T + [R t_B] Sigma_R [R t_B]^T, plus the
+    // eliminated R_Ai block [R_A t] Sigma_RA [R_A t]^T (eq. 47 via Schur).
+    const Matrix3d C = m.A[i].topLeftCorner<3, 3>() + R * m.B[i].topLeftCorner<3, 3>() * R.transpose() +
+                       lever_B * sigma_R * lever_B.transpose() +
+                       lever_A * m.A[i].bottomRightCorner<3, 3>() * lever_A.transpose();
+    lin.M[i] = R_A - Matrix3d::Identity();
+    lin.C_inverse[i] = inverse_spd(C, problem.labels[i]);
+    // Linearised residual of q_i with the adjustment folded in (see solve_translation).
+    lin.reduced_residual[i] = q - lin.M[i] * s.t - lever_A * s.adjustment[i];
+    lin.information += lin.M[i].transpose() * lin.C_inverse[i] * lin.M[i];
+    lin.rhs += lin.M[i].transpose() * lin.C_inverse[i] * lin.reduced_residual[i];
+    lin.cost += lin.reduced_residual[i].dot(lin.C_inverse[i] * lin.reduced_residual[i]);
+  }
+  return lin;
+}
+
+struct TranslationResult {
+  TranslationState state;
+  TranslationLinearization linearization;
+  StageDiagnostics diagnostics;
+};
+
+/// Joint Gauss-Newton on (t, xi_RA1..k), eq. (40-49), with the xi_RA block
+/// eliminated per pair. For a step dt the optimal adjustment is
+///   eta_i = -Sigma_RA [R_A t]^T C_i^-1 (u_i - M_i dt),  u_i = the reduced residual.
+TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const Matrix3d& sigma_R,
+                                    const Marginals& m, const Problem& problem,
+                                    const SolverOptions& options) {
+  TranslationResult result;
+  result.state.t = t0;
+  result.state.adjustment.assign(problem.size(), Vector3d::Zero());
+  result.linearization = linearize_translation(result.state, R, sigma_R, m, problem);
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    result.diagnostics.iterations = iteration;
+    const TranslationLinearization& lin = result.linearization;
+    const Vector3d dt = lin.information.ldlt().solve(lin.rhs);  // eq. (48)
+    const double step = dt.dot(lin.information * dt);
+    for (std::size_t i = 0; i < problem.size(); ++i) {  // eq. (49)
+      const Matrix3d R_A = so3::exp(result.state.adjustment[i]) * problem.A[i].linear();
+      const Matrix3d lever_A = so3::hat(R_A * result.state.t);
+      result.state.adjustment[i] = -m.A[i].bottomRightCorner<3, 3>() * lever_A.transpose() *
+                                   lin.C_inverse[i] * (lin.reduced_residual[i] - lin.M[i] * dt);
+    }
+    result.state.t += dt;  // eq. (40)
+    const double previous_cost = lin.cost;
+    result.linearization = linearize_translation(result.state, R, sigma_R, m, problem);
+    if (step < options.step_tolerance) {
+      result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
+      break;
+    }
+    if (converged_by_cost(previous_cost, result.linearization.cost, options.cost_tolerance)) {
+      result.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
+      break;
+    }
+  }
+  result.diagnostics.chi2 = result.linearization.cost;
+  result.diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
+  return result;
+}
+
+/// Least-squares t for a fixed R with unit weights (Park-Martin's second step).
+Vector3d unweighted_translation(const Matrix3d& R, const Problem& problem) {
+  Matrix3d normal = Matrix3d::Zero();
+  Vector3d rhs = Vector3d::Zero();
+  for (std::size_t i = 0; i < problem.size(); ++i) {
+    const Matrix3d M = problem.A[i].linear() - Matrix3d::Identity();
+    normal += M.transpose() * M;
+    rhs += M.transpose() * (R * problem.B[i].translation() - problem.A[i].translation());
+  }
+  return normal.ldlt().solve(rhs);
+}
+
+/// The full 6x6 first-order covariance of (t, xi_R) in ROS order. With
+/// N_i = H^-1 M_i^T C_i^-1 and the noise part of the reduced residual
+///   n_i = R xi_tBi - [R t_Bi] xi_R - xi_tAi + [R_Ai t] xi_RAi,
+/// dt = sum_i N_i n_i, and xi_R = sum_i (K_Ai xi_RAi + K_Bi xi_RBi) is the
+/// rotation estimate's own error, shared by every pair.
+Matrix6d pose_covariance(const Problem& problem, const NoiseScale& scale, const Matrix3d& R,
+                         const TranslationResult& translation, const RotationGains& g) {
+  const TranslationLinearization& lin = translation.linearization;
+  const Matrix3d H_inverse = lin.information.inverse();
+  const std::size_t k = problem.size();
+  std::vector<Matrix3d> N(k);
+  Matrix3d D = Matrix3d::Zero();  // dt / d xi_R = -D
+  for (std::size_t i = 0; i < k; ++i) {
+    N[i] = H_inverse * lin.M[i].transpose() * lin.C_inverse[i];
+    D += N[i] * so3::hat(R * problem.B[i].translation());
+  }
+  const Vector3d& t = translation.state.t;
+  return propagate<6>(problem, scale, [&](int i, bool on_robot) {
+    Matrix6d gain = Matrix6d::Zero();
+    if (on_robot) {
+      gain.topLeftCorner<3, 3>() = -N[i];
+      gain.topRightCorner<3, 3>() =
+          N[i] * so3::hat(problem.A[i].linear() * t) - D * g.from_robot[i];
+      gain.bottomRightCorner<3, 3>() = g.from_robot[i];
+    } else {
+      gain.topLeftCorner<3, 3>() = N[i] * R;
+      gain.topRightCorner<3, 3>() = -D * g.from_camera[i];
+      gain.bottomRightCorner<3, 3>() = g.from_camera[i];
+    }
+    return gain;
+  });
+}
+
+// ---------------------------------------------------------------------------
+// Degeneracy checks.
+// ---------------------------------------------------------------------------
+
+/// 1-sigma of the rotation angle of a motion: the angle moves along the axis.
+double angle_sigma(const Vector3d& v, const Matrix3d& sigma) {
+  const double n = v.norm();
+  if (n == 0.0) return std::sqrt(std::max(0.0, sigma.trace() / 3.0));
+  const Vector3d axis = v / n;
+  return std::sqrt(std::max(0.0, axis.dot(sigma * axis)));
+}
+
+double median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+void check_motions(const Problem& problem, const RotationData& d, const SolverOptions& options) {
+  const std::size_t k = problem.size();
+  if (k < 2) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "got " + std::to_string(k) + " motion(s); at least 2 are needed", "input",
+                       "record more samples (10-30 poses rotating about different axes is typical)");
+  }
+  std::vector<double> sigma(k, 0.0), mismatch(k);
+  double largest_angle = 0.0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double a = d.alpha[i].norm(), b = d.beta[i].norm();
+    largest_angle = std::max({largest_angle, a, b});
+    mismatch[i] = std::abs(a - b);
+    if (problem.noise_given) {
+      sigma[i] = std::hypot(angle_sigma(d.alpha[i], d.sigma_alpha[i]),
+                            angle_sigma(d.beta[i], d.sigma_beta[i]));
+    }
+  }
+  // A robust noise level when none was given: the median angle mismatch.
+  const double robust_sigma = problem.noise_given ? 0.0 : 1.4826 * median(mismatch);
+  for (std::size_t i = 0; i < k; ++i) {
+    const double limit = problem.noise_given ? options.angle_mismatch_sigmas * sigma[i]
+                                             : (k >= 6 ? 2.0 * options.angle_mismatch_sigmas * robust_sigma
+                                                       : INFINITY);
+    if (mismatch[i] > std::max(limit, 1e-9)) {
+      throw HandEyeError(
+          ErrorCode::AngleMismatch,
+          "robot and camera rotation angles differ by " + fmt(degrees(mismatch[i])) + " deg (" +
+              fmt(degrees(d.alpha[i].norm())) + " vs " + fmt(degrees(d.beta[i].norm())) +
+              " deg), far beyond the noise (limit " + fmt(degrees(std::max(limit, 1e-9))) + " deg)",
+          problem.labels[i],
+          "the two poses of this motion were not taken at the same time, or the pattern detection "
+          "is wrong; remove the sample, or check that the effector and pattern poses are paired");
+    }
+  }
+
+  std::vector<std::size_t> informative;
+  int above_floor = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double angle = std::min(d.alpha[i].norm(), d.beta[i].norm());
+    if (angle <= options.min_rotation_angle) continue;
+    ++above_floor;
+    if (angle > options.min_rotation_sigmas * sigma[i]) informative.push_back(i);
+  }
+  if (above_floor == 0) {
+    throw HandEyeError(ErrorCode::PureTranslation,
+                       "no motion rotates by more than " + fmt(degrees(options.min_rotation_angle)) +
+                           " deg (largest: " + fmt(degrees(largest_angle)) + " deg)",
+                       "input",
+                       "the robot only translated; rotate the flange between samples, 10-30 deg about "
+                       "at least two different axes");
+  }
+  if (informative.size() < 2 && above_floor >= 2) {
+    throw HandEyeError(ErrorCode::RotationTooSmallForNoise,
+                       std::to_string(above_floor - informative.size()) +
+                           " motion(s) rotate by less than " + fmt(options.min_rotation_sigmas) +
+                           " sigma of the stated rotation noise; " + std::to_string(informative.size()) +
+                           " usable motion(s) remain, 2 are needed",
+                       "input", "use larger rotations between samples, or check the noise block (it holds variances, rad^2)");
+  }
+  if (informative.size() < 2) {
+    throw HandEyeError(ErrorCode::ParallelRotationAxes,
+                       "only " + std::to_string(informative.size()) +
+                           " motion rotates enough; 2 motions with non-parallel rotation axes are needed",
+                       "input", "add samples that rotate the flange about a different axis");
+  }
+  // Axes: compare each to the axis of the largest rotation, which is the best known.
+  std::size_t reference = informative.front();
+  for (std::size_t i : informative)
+    if (d.alpha[i].norm() > d.alpha[reference].norm()) reference = i;
+  const Vector3d axis = d.alpha[reference].normalized();
+  double widest = 0.0, needed = options.min_axis_angle;
+  for (std::size_t i : informative) {
+    const double between = std::asin(std::min(1.0, axis.cross(d.alpha[i].normalized()).norm()));
+    const double limit = std::max(options.min_axis_angle,
+                                  options.min_rotation_sigmas *
+                                      (sigma[reference] / d.alpha[reference].norm() + sigma[i] / d.alpha[i].norm()));
+    if (between - limit > widest - needed) {
+      widest = between;
+      needed = limit;
+    }
+  }
+  if (widest <= needed) {
+    throw HandEyeError(ErrorCode::ParallelRotationAxes,
+                       "all " + std::to_string(informative.size()) +
+                           " rotating motions turn about the same axis (widest spread " +
+                           fmt(degrees(widest)) + " deg, need > " + fmt(degrees(needed)) + " deg)",
+                       "input",
+                       "the rotation about that axis and the translation along it are unobservable; "
+                       "add samples that rotate the flange about a second, different axis");
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Building problems from the two kinds of input.
+// ---------------------------------------------------------------------------
+
+MeasurementNoise unit_camera_noise() {
+  // Shape used when no noise is given: isotropic camera noise, exact robot.
+  // Only its shape matters; the scale is estimated from the residuals.
+  MeasurementNoise noise;
+  noise.camera.rotation = Matrix3d::Identity();
+  noise.camera.translation = Matrix3d::Identity();
+  return noise;
+}
+
+void check_noise_block(const MeasurementNoise& noise, const std::string& where) {
+  check_covariance(noise.robot, where + ".robot");
+  check_covariance(noise.camera, where + ".camera");
+}
+
+/// Per-item noise, with the rules shared by both inputs.
+MeasurementNoise noise_for(const std::optional<MeasurementNoise>& item,
+                           const std::optional<MeasurementNoise>& global, const std::string& where) {
+  if (item) {
+    if (!global) {
+      throw HandEyeError(ErrorCode::InvalidNoise,
+                         "a per-item noise is given but there is no global noise block", where,
+                         "add a global `noise` block (it is the default for the other items), or "
+                         "remove the per-item noise to have all noise estimated from the residuals");
+    }
+    check_noise_block(*item, where + ".noise");
+    return *item;
+  }
+  return global ? *global : unit_camera_noise();
+}
+
+Problem build(const MotionSet& set) {
+  Problem p;
+  p.noise_given = set.noise.has_value();
+  if (set.noise) check_noise_block(*set.noise, "noise");
+  for (std::size_t i = 0; i < set.motions.size(); ++i) {
+    const MotionPair& motion = set.motions[i];
+    const std::string where = "motions[" + std::to_string(i) + "]";
+    check_pose(motion.A, where + ".A");
+    check_pose(motion.B, where + ".B");
+    const MeasurementNoise noise = noise_for(motion.noise, set.noise, where);
+    p.A.push_back(motion.A);
+    p.B.push_back(motion.B);
+    p.labels.push_back(where);
+    NoiseInput robot, camera;
+    robot.covariance = noise.robot;
+    robot.robot = true;
+    robot.add({static_cast<int>(i), true, Matrix6d::Identity()});
+    camera.covariance = noise.camera;
+    camera.robot = false;
+    camera.add({static_cast<int>(i), false, Matrix6d::Identity()});
+    p.inputs.push_back(robot);
+    p.inputs.push_back(camera);
+  }
+  return p;
+}
+
+Problem build(const SampleSet& set) {
+  Problem p;
+  p.noise_given = set.noise.has_value();
+  p.samples = static_cast<int>(set.samples.size());
+  if (set.noise) check_noise_block(*set.noise, "noise");
+  const std::size_t n = set.samples.size();
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::string where = "samples[" + std::to_string(s) + "]";
+    check_pose(set.samples[s].T_base_effector, where + ".effector");
+    check_pose(set.samples[s].T_camera_pattern, where + ".pattern");
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const MotionPair motion = motion_between(set.setup, set.samples[i], set.samples[i + 1]);
+    p.A.push_back(motion.A);
+    p.B.push_back(motion.B);
+    p.labels.push_back("samples[" + std::to_string(i) + "] -> samples[" + std::to_string(i + 1) + "]");
+  }
+  const bool in_hand = set.setup == Setup::EyeInHand;
+  for (std::size_t s = 0; s < n; ++s) {
+    const PoseSample& sample = set.samples[s];
+    const MeasurementNoise noise =
+        noise_for(sample.noise, set.noise, "samples[" + std::to_string(s) + "]");
+    const Isometry3d& E = sample.T_base_effector;
+    const Isometry3d& P = sample.T_camera_pattern;
+    NoiseInput effector, pattern;
+    effector.covariance = noise.robot;
+    effector.robot = true;
+    pattern.covariance = noise.camera;
+    pattern.robot = false;
+    // Motion s-1 ends at this sample; motion s starts at it.
+    if (s >= 1) {
+      const int m = static_cast<int>(s) - 1;
+      const Isometry3d& E_prev = set.samples[s - 1].T_base_effector;
+      const Isometry3d& P_prev = set.samples[s - 1].T_camera_pattern;
+      // eye_in_hand A = E^-1 E_prev; eye_to_hand A = E E_prev^-1; B = P P_prev^-1.
+      const Matrix6d dA = in_hand ? compose_jacobian_left(E.inverse(), E_prev) * inverse_jacobian(E)
+                                  : compose_jacobian_left(E, E_prev.inverse());
+      effector.add({m, true, dA});
+      pattern.add({m, false, compose_jacobian_left(P, P_prev.inverse())});
+    }
+    if (s + 1 < n) {
+      const int m = static_cast<int>(s);
+      const Isometry3d& E_next = set.samples[s + 1].T_base_effector;
+      const Isometry3d& P_next = set.samples[s + 1].T_camera_pattern;
+      const Matrix6d dA = in_hand ? compose_jacobian_right(E_next.inverse())
+                                  : compose_jacobian_right(E_next) * inverse_jacobian(E);
+      effector.add({m, true, dA});
+      pattern.add({m, false, compose_jacobian_right(P_next) * inverse_jacobian(P)});
+    }
+    p.inputs.push_back(effector);
+    p.inputs.push_back(pattern);
+  }
+  return p;
+}
+
+// ---------------------------------------------------------------------------
+// The pipeline.
+// ---------------------------------------------------------------------------
+
+Matrix3d park_martin_rotation(const std::vector<Vector3d>& alpha, const std::vector<Vector3d>& beta) {
+  // Motions near pi have an ambiguous log sign; leave them out of the closed
+  // form when enough others remain (they are used by the iterative stage).
+  Matrix3d M = Matrix3d::Zero();
+  int used = 0;
+  for (std::size_t i = 0; i < alpha.size(); ++i) {
+    if (std::max(alpha[i].norm(), beta[i].norm()) < M_PI - 0.3) {
+      M += beta[i] * alpha[i].transpose();
+      ++used;
+    }
+  }
+  if (used < 2) {
+    M.setZero();
+    for (std::size_t i = 0; i < alpha.size(); ++i) M += beta[i] * alpha[i].transpose();
+  }
+  // R = (M^T M)^-1/2 M^T, computed as the closest rotation to M^T (polar factor).
+  Eigen::JacobiSVD<Matrix3d> svd(M.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix3d D = Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixU() * D * svd.matrixV().transpose();
+}
+
+struct StageSolution {
+  Matrix3d R;
+  StageDiagnostics rotation_stage;
+  RotationGains gains;
+  Matrix3d sigma_R;
+  Matrix3d per_pair_rotation_covariance;  // eq. (35)
+  TranslationResult translation;
+};
+
+StageSolution solve_stages(const Problem& problem, RotationData& d, const Matrix3d& R0,
+                           const NoiseScale& scale, const SolverOptions& options) {
+  StageSolution s;
+  const Marginals m = marginals(problem, scale);
+  update_log_covariances(d, m);
+  const RotationResult rotation = solve_rotation(R0, d, problem, options);
+  s.R = rotation.R;
+  s.rotation_stage = rotation.diagnostics;
+  s.gains = rotation_gains(s.R, d, problem);
+  s.sigma_R = rotation_covariance(problem, scale, s.gains);
+  s.per_pair_rotation_covariance = linearize_rotation(s.R, d, problem).information.inverse();
+  s.translation = solve_translation(unweighted_translation(s.R, problem), s.R, s.sigma_R, m,
+                                    problem, options);
+  return s;
+}
+
+Calibration solve_problem(const Problem& problem, const SolverOptions& options) {
+  RotationData d = rotation_data(problem);
+  NoiseScale scale;
+  update_log_covariances(d, marginals(problem, scale));
+  check_motions(problem, d, options);
+
+  const Matrix3d R0 = park_martin_rotation(d.alpha, d.beta);
+  align_representatives(R0, d);
+
+  Calibration result;
+  result.initial_guess = se3::make_pose(R0, unweighted_translation(R0, problem));
+  result.motions_used = static_cast<int>(problem.size());
+  result.samples_used = problem.samples;
+
+  StageSolution s;
+  if (problem.noise_given) {
+    s = solve_stages(problem, d, R0, scale, options);
+  } else {
+    // Variance-component estimation: scale the rotation noise until the
+    // rotation chi^2 equals its dof, then the translation noise likewise.
+    const int dof = 3 * static_cast<int>(problem.size()) - 3;
+    if (dof < 6) {
+      throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                         "no noise was given and " + std::to_string(problem.size()) +
+                             " motions are too few to estimate it from the residuals (need >= 3)",
+                         "input", "add a `noise` block with the pose covariances, or record more samples");
+    }
+    constexpr double kFloor = 1e-24;  // (1e-12 rad or m)^2: noise-free input
+    scale.translation = 1e-6;
+    s = solve_stages(problem, d, R0, scale, options);
+    scale.rotation = std::max(kFloor, s.rotation_stage.chi2 / dof);
+    for (int round = 0; round < 30; ++round) {
+      s = solve_stages(problem, d, s.R, scale, options);
+      const double ratio = s.translation.diagnostics.chi2 / dof;
+      scale.translation = std::max(kFloor, scale.translation * ratio);
+      if (std::abs(ratio - 1.0) < 1e-3 || scale.translation == kFloor) break;
+    }
+    s = solve_stages(problem, d, s.R, scale, options);
+    result.noise_origin = NoiseOrigin::EstimatedFromResiduals;
+    MeasurementNoise estimated;
+    estimated.camera.rotation = scale.rotation * Matrix3d::Identity();
+    estimated.camera.translation = scale.translation * Matrix3d::Identity();
+    result.noise = estimated;
+  }
+  if (problem.noise_given) {
+    // The global block is representative; per-item overrides are not summarised.
+    for (const NoiseInput& input : problem.inputs) {
+      (input.robot ? result.noise.robot : result.noise.camera) = input.covariance;
+    }
+  }
+
+  result.T_parent_camera = se3::make_pose(s.R, s.translation.state.t);
+  result.rotation_stage = s.rotation_stage;
+  result.translation_stage = s.translation.diagnostics;
+  result.pose_covariance = pose_covariance(problem, scale, s.R, s.translation, s.gains);
+  result.translation_covariance = result.pose_covariance.topLeftCorner<3, 3>();
+  result.per_pair_covariance.rotation = s.per_pair_rotation_covariance;
+  result.per_pair_covariance.translation = s.translation.linearization.information.inverse();
+  result.rotation_covariance = result.pose_covariance.bottomRightCorner<3, 3>();
+
+  const double rotation_sigma = max_sigma(result.rotation_covariance);
+  if (!(rotation_sigma <= options.max_rotation_sigma)) {
+    throw HandEyeError(ErrorCode::PoorlyConstrained,
+                       "the motions constrain the rotation only to " + fmt(degrees(rotation_sigma)) +
+                           " deg (1 sigma); a first-order covariance is not valid there",
+                       "input", "add samples with larger rotations about different axes, or reduce the noise");
+  }
+  if (problem.noise_given) {
+    for (const auto* stage : {&result.rotation_stage, &result.translation_stage}) {
+      const double ratio = stage->chi2 / std::max(1, stage->dof);
+      if (stage->dof >= 9 && ratio > 3.0) {
+        result.warnings.push_back(
+            std::string(stage == &result.rotation_stage ? "rotation" : "translation") +
+            " residuals are " + fmt(std::sqrt(ratio), 2) +
+            "x larger than the stated noise predicts (chi2/dof = " + fmt(ratio, 3) +
+            "); the covariance is likely optimistic. Check the noise block or estimate it "
+            "(omit it, or use `handeye noise`).");
+      }
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions) {
+  MotionSet set;
+  set.motions = motions;
+  const Problem problem = build(set);
+  if (problem.size() < 2) {
+    throw HandEyeError(ErrorCode::TooFewMotions, "Park-Martin needs at least 2 motions", "input",
+                       "record more samples");
+  }
+  RotationData d = rotation_data(problem);
+  const Matrix3d R = park_martin_rotation(d.alpha, d.beta);
+  return se3::make_pose(R, unweighted_translation(R, problem));
+}
+
+Calibration solve(const MotionSet& motions, const SolverOptions& options) {
+  return solve_problem(build(motions), options);
+}
+
+Calibration solve(const SampleSet& samples, const SolverOptions& options) {
+  if (samples.samples.size() < 3) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "got " + std::to_string(samples.samples.size()) +
+                           " sample(s); at least 3 are needed (2 motions)",
+                       "samples", "record more samples (10-30 poses rotating about different axes is typical)");
+  }
+  return solve_problem(build(samples), options);
+}
+
+}  // namespace handeye

@@ -1,0 +1,118 @@
+#include "handeye_covariance/core/simulation.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace handeye {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+Vector3d sample_gaussian(Rng& rng, const Matrix3d& covariance) {
+  // Eigen-decomposition rather than Cholesky so singular (e.g. zero) noise works.
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(covariance);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Vector3d z(normal(rng), normal(rng), normal(rng));
+  const Vector3d sd = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return eig.eigenvectors() * sd.cwiseProduct(z);
+}
+
+Isometry3d random_pose(Rng& rng, double translation_extent) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double u1 = unit(rng), u2 = 2.0 * M_PI * unit(rng), u3 = 2.0 * M_PI * unit(rng);
+  const Eigen::Quaterniond q(std::sqrt(u1) * std::cos(u3), std::sqrt(1.0 - u1) * std::sin(u2),
+                             std::sqrt(1.0 - u1) * std::cos(u2), std::sqrt(u1) * std::sin(u3));
+  std::uniform_real_distribution<double> box(-translation_extent, translation_extent);
+  return se3::make_pose(q.toRotationMatrix(), Vector3d(box(rng), box(rng), box(rng)));
+}
+
+Isometry3d perturb(Rng& rng, const Isometry3d& pose, const DecoupledCovariance& noise) {
+  const Vector3d xi_R = sample_gaussian(rng, noise.rotation);
+  const Vector3d xi_t = sample_gaussian(rng, noise.translation);
+  return se3::make_pose(so3::exp(xi_R) * pose.linear(), pose.translation() + xi_t);
+}
+
+MeasurementNoise paper_noise(double lambda) {
+  MeasurementNoise noise;
+  noise.robot.rotation = lambda * Vector3d(0.5, 0.2, 0.3).asDiagonal();     // eq. (57)
+  noise.camera.rotation = lambda * Vector3d(0.7, 0.2, 0.8).asDiagonal();    // eq. (58)
+  noise.robot.translation = lambda * Vector3d(0.1, 0.2, 0.5).asDiagonal();  // eq. (59)
+  noise.camera.translation = lambda * Vector3d(0.7, 0.8, 0.1).asDiagonal(); // eq. (60)
+  return noise;
+}
+
+MotionSet simulate_motions(Rng& rng, const Isometry3d& X, int k, const MeasurementNoise& noise,
+                           double translation_extent) {
+  MotionSet set;
+  set.noise = noise;
+  const Isometry3d X_inverse = X.inverse();
+  for (int i = 0; i < k; ++i) {
+    const Isometry3d A = random_pose(rng, translation_extent);
+    MotionPair pair;
+    pair.A = perturb(rng, A, noise.robot);
+    pair.B = perturb(rng, X_inverse * A * X, noise.camera);
+    set.motions.push_back(pair);
+  }
+  return set;
+}
+
+Isometry3d random_view(Rng& rng, const ViewpointOptions& options) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double azimuth = 2.0 * M_PI * unit(rng);
+  // Uniform over the cap's area: cos(tilt) uniform in [cos(max_tilt), 1].
+  const double tilt = std::acos(1.0 - unit(rng) * (1.0 - std::cos(options.max_tilt)));
+  const double roll = options.max_roll * (2.0 * unit(rng) - 1.0);
+  const double distance =
+      options.min_distance + (options.max_distance - options.min_distance) * unit(rng);
+  const Vector3d tilt_axis(std::cos(azimuth), std::sin(azimuth), 0.0);
+  // Camera z looks down the pattern's -z, from `distance` along the tilted normal.
+  const Matrix3d R_pattern_camera = so3::exp(tilt * tilt_axis) *
+                                    Eigen::AngleAxisd(M_PI, Vector3d::UnitX()).toRotationMatrix() *
+                                    Eigen::AngleAxisd(roll, Vector3d::UnitZ()).toRotationMatrix();
+  std::uniform_real_distribution<double> offset(-options.max_offset, options.max_offset);
+  const Vector3d camera_position =
+      so3::exp(tilt * tilt_axis) * Vector3d(0.0, 0.0, distance) +
+      R_pattern_camera * Vector3d(offset(rng), offset(rng), 0.0);
+  return se3::make_pose(R_pattern_camera, camera_position).inverse();
+}
+
+Isometry3d typical_X(Setup setup) {
+  if (setup == Setup::EyeInHand) {
+    // Camera 10 cm off the flange, looking roughly along the tool axis.
+    return se3::make_pose(so3::exp(Vector3d(0.05, -0.08, 1.52)), Vector3d(0.035, -0.062, 0.101));
+  }
+  // Camera 1.2 m from the base, looking down at the workspace.
+  return se3::make_pose(so3::exp(Vector3d(2.6, 0.4, -0.3)), Vector3d(0.85, 0.42, 1.21));
+}
+
+SimulatedSession simulate_session(Rng& rng, Setup setup, const Isometry3d& X, int n,
+                                  const MeasurementNoise& noise, const ViewpointOptions& views) {
+  SimulatedSession session;
+  session.X = X;
+  session.samples.setup = setup;
+  session.samples.noise = noise;
+  session.samples.frames = {"base_link", "tool0", "camera_optical_frame", "tag_0"};
+  if (setup == Setup::EyeInHand) {
+    // Pattern on the table 0.6 m in front of the robot.
+    session.T_world_pattern =
+        se3::make_pose(so3::exp(Vector3d(0.0, 0.0, 0.3)), Vector3d(0.6, 0.1, 0.02));
+  } else {
+    // Pattern plate 8 cm off the flange.
+    session.T_world_pattern = se3::make_pose(so3::exp(Vector3d(0.1, 0.2, -0.4)), Vector3d(0.01, 0.02, 0.08));
+  }
+  const Isometry3d& Y = session.T_world_pattern;
+  for (int i = 0; i < n; ++i) {
+    const Isometry3d P = random_view(rng, views);  // T_camera_pattern
+    // eye_in_hand: E X P = Y; eye_to_hand: E Y = X P.
+    const Isometry3d E = setup == Setup::EyeInHand ? Y * P.inverse() * X.inverse() : X * P * Y.inverse();
+    PoseSample sample;
+    sample.T_base_effector = perturb(rng, E, noise.robot);
+    sample.T_camera_pattern = perturb(rng, P, noise.camera);
+    sample.stamp = 2.0 * i;
+    session.samples.samples.push_back(sample);
+  }
+  return session;
+}
+
+}  // namespace handeye

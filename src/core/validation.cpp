@@ -1,0 +1,72 @@
+#include "handeye_covariance/core/validation.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <sstream>
+
+namespace handeye {
+
+namespace {
+std::string describe(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+}  // namespace
+
+void check_pose(const Eigen::Isometry3d& pose, const std::string& where) {
+  if (!pose.matrix().allFinite()) {
+    throw HandEyeError(ErrorCode::NonFinite, "pose contains NaN or Inf", where,
+                       "drop this sample or fix the source that produced it");
+  }
+  const Eigen::Matrix3d& R = pose.linear();
+  const double orthonormality = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
+  const double det = R.determinant();
+  if (orthonormality > 1e-6 || std::abs(det - 1.0) > 1e-6) {
+    throw HandEyeError(ErrorCode::RotationNotOrthonormal,
+                       "rotation is not orthonormal (|R^T R - I| = " + describe(orthonormality) +
+                           ", det = " + describe(det) + ")",
+                       where, "pass a proper rotation matrix (re-orthonormalise it, or check the units and the row/column order)");
+  }
+}
+
+void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where) {
+  if (!covariance.allFinite()) {
+    throw HandEyeError(ErrorCode::NonFinite, "covariance contains NaN or Inf", where,
+                       "give 9 finite numbers, row-major, in rad^2 or m^2");
+  }
+  const double scale = covariance.cwiseAbs().maxCoeff();
+  if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "covariance is not symmetric", where,
+                       "give a symmetric 3x3 matrix, row-major");
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance, Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues().minCoeff() < -1e-12 * std::max(scale, 1e-300)) {
+    throw HandEyeError(ErrorCode::InvalidNoise,
+                       "covariance is not positive semi-definite (smallest eigenvalue " +
+                           describe(eig.eigenvalues().minCoeff()) + ")",
+                       where, "variances go on the diagonal and must be >= 0 (they are sigma^2, not sigma)");
+  }
+}
+
+void check_covariance(const DecoupledCovariance& covariance, const std::string& where) {
+  check_covariance(covariance.rotation, where + ".rotation");
+  check_covariance(covariance.translation, where + ".translation");
+}
+
+Eigen::Quaterniond checked_unit_quaternion(const Eigen::Quaterniond& q, const std::string& where) {
+  if (!q.coeffs().allFinite()) {
+    throw HandEyeError(ErrorCode::NonFinite, "quaternion contains NaN or Inf", where,
+                       "drop this sample or fix the source that produced it");
+  }
+  const double norm = q.norm();
+  if (std::abs(norm - 1.0) > 1e-3) {
+    throw HandEyeError(ErrorCode::QuaternionNotUnit,
+                       "quaternion norm is " + describe(norm) + ", not 1",
+                       where, "give a unit quaternion in the order [qx, qy, qz, qw]");
+  }
+  return q.normalized();
+}
+
+}  // namespace handeye
