@@ -44,7 +44,7 @@ double degrees(double radians) { return radians * 180.0 / M_PI; }
 struct Influence {
   int motion = 0;
   bool on_robot = true;
-  Matrix6d jacobian = Matrix6d::Identity();
+  int jacobian = -1;  // index into Problem::jacobians; -1: identity (a motion's own noise)
 };
 
 /// An independent noise input: a motion's own A or B noise (motion input), or
@@ -59,11 +59,20 @@ struct NoiseInput {
 
 struct Problem {
   std::vector<Isometry3d> A, B;
-  std::vector<std::string> labels;  // where each motion came from
   std::vector<NoiseInput> inputs;
+  std::vector<Matrix6d> jacobians;  // kept apart so motion input stays small in memory
   bool noise_given = true;
-  int samples = 0;
+  int samples = 0;  // > 0: motions are consecutive samples
   std::size_t size() const { return A.size(); }
+  int add_jacobian(const Matrix6d& J) {
+    jacobians.push_back(J);
+    return static_cast<int>(jacobians.size()) - 1;
+  }
+  /// Where motion i came from, for messages (built only when needed).
+  std::string label(std::size_t i) const {
+    return samples > 0 ? "samples[" + std::to_string(i) + "] -> samples[" + std::to_string(i + 1) + "]"
+                       : "motions[" + std::to_string(i) + "]";
+  }
 };
 
 /// Per-kind multipliers on the input covariances. 1 when the noise is given;
@@ -73,27 +82,33 @@ struct NoiseScale {
   double translation = 1.0;
 };
 
-Matrix6d scaled(const DecoupledCovariance& covariance, const NoiseScale& scale) {
-  Matrix6d out = Matrix6d::Zero();
-  out.topLeftCorner<3, 3>() = scale.translation * covariance.translation;
-  out.bottomRightCorner<3, 3>() = scale.rotation * covariance.rotation;
-  return out;
-}
-
-/// Marginal covariance of each motion's A and B; used as the solver's weights.
+/// The marginal blocks of each motion's A and B covariance that the solver
+/// uses as weights (the R-t cross blocks only enter through propagate()).
 struct Marginals {
-  std::vector<Matrix6d> A, B;
+  std::vector<Matrix3d> A_translation, A_rotation, B_translation, B_rotation;
 };
 
 Marginals marginals(const Problem& problem, const NoiseScale& scale) {
+  const std::size_t k = problem.size();
   Marginals m;
-  m.A.assign(problem.size(), Matrix6d::Zero());
-  m.B.assign(problem.size(), Matrix6d::Zero());
+  for (auto* v : {&m.A_translation, &m.A_rotation, &m.B_translation, &m.B_rotation}) v->assign(k, Matrix3d::Zero());
   for (const NoiseInput& input : problem.inputs) {
-    const Matrix6d covariance = scaled(input.covariance, scale);
+    const Matrix3d sigma_t = scale.translation * input.covariance.translation;
+    const Matrix3d sigma_R = scale.rotation * input.covariance.rotation;
     for (int j = 0; j < input.count; ++j) {
       const Influence& inf = input.influences[j];
-      (inf.on_robot ? m.A : m.B)[inf.motion] += inf.jacobian * covariance * inf.jacobian.transpose();
+      Matrix3d& translation = (inf.on_robot ? m.A_translation : m.B_translation)[inf.motion];
+      Matrix3d& rotation = (inf.on_robot ? m.A_rotation : m.B_rotation)[inf.motion];
+      if (inf.jacobian < 0) {
+        translation += sigma_t;
+        rotation += sigma_R;
+        continue;
+      }
+      const Matrix6d& J = problem.jacobians[inf.jacobian];
+      translation += J.topLeftCorner<3, 3>() * sigma_t * J.topLeftCorner<3, 3>().transpose() +
+                     J.topRightCorner<3, 3>() * sigma_R * J.topRightCorner<3, 3>().transpose();
+      rotation += J.bottomLeftCorner<3, 3>() * sigma_t * J.bottomLeftCorner<3, 3>().transpose() +
+                  J.bottomRightCorner<3, 3>() * sigma_R * J.bottomRightCorner<3, 3>().transpose();
     }
   }
   return m;
@@ -110,22 +125,37 @@ Eigen::Matrix<double, Rows, Rows> propagate(const Problem& problem, const NoiseS
     Eigen::Matrix<double, Rows, 6> total = Eigen::Matrix<double, Rows, 6>::Zero();
     for (int j = 0; j < input.count; ++j) {
       const Influence& inf = input.influences[j];
-      total += gain(inf.motion, inf.on_robot) * inf.jacobian;
+      if (inf.jacobian < 0) {
+        total += gain(inf.motion, inf.on_robot);
+      } else {
+        total += gain(inf.motion, inf.on_robot) * problem.jacobians[inf.jacobian];
+      }
     }
-    covariance += total * scaled(input.covariance, scale) * total.transpose();
+    // The input covariance is block-diagonal (translation, rotation).
+    covariance += scale.translation * total.template leftCols<3>() * input.covariance.translation *
+                      total.template leftCols<3>().transpose() +
+                  scale.rotation * total.template rightCols<3>() * input.covariance.rotation *
+                      total.template rightCols<3>().transpose();
   }
   return 0.5 * (covariance + covariance.transpose());
 }
 
-Matrix3d inverse_spd(const Matrix3d& C, const std::string& where) {
-  Eigen::LLT<Matrix3d> llt(C);
-  if (llt.info() != Eigen::Success || !C.allFinite()) {
+/// Inverse of a symmetric 3x3 matrix that must be positive definite (checked by
+/// Sylvester's criterion; the closed-form inverse is ~10x faster than a solve).
+Matrix3d inverse_spd(const Matrix3d& C, std::size_t motion, const Problem& problem) {
+  const double minor2 = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
+  const double det = C.determinant();
+  const double scale = C.trace();
+  // Relative thresholds: a covariance 1e-14 below full rank counts as singular.
+  // Written so that NaN or Inf anywhere fails the test as well.
+  if (!(C(0, 0) > 0.0 && minor2 > 1e-28 * scale * scale && det > 1e-42 * scale * scale * scale)) {
+    const std::string where = problem.label(motion);
     throw HandEyeError(ErrorCode::InvalidNoise,
                        "the combined robot + camera noise of this motion is singular", where,
                        "give a non-zero rotation and translation noise for the camera (pattern) "
                        "or the robot (effector), or omit the noise block to estimate it");
   }
-  return llt.solve(Matrix3d::Identity());
+  return C.inverse();
 }
 
 // ---------------------------------------------------------------------------
@@ -133,7 +163,8 @@ Matrix3d inverse_spd(const Matrix3d& C, const std::string& where) {
 // ---------------------------------------------------------------------------
 
 struct RotationData {
-  std::vector<Vector3d> alpha, beta;         // log R_A, log R_B (eq. 13)
+  std::vector<Vector3d> alpha, beta;              // log R_A, log R_B (eq. 13)
+  std::vector<Matrix3d> J_alpha, J_beta;          // J_l^-1(alpha), J_l^-1(beta)
   std::vector<Matrix3d> sigma_alpha, sigma_beta;  // eq. (14-15)
 };
 
@@ -142,21 +173,23 @@ RotationData rotation_data(const Problem& problem) {
   const std::size_t k = problem.size();
   d.alpha.resize(k);
   d.beta.resize(k);
+  d.J_alpha.resize(k);
+  d.J_beta.resize(k);
   d.sigma_alpha.resize(k);
   d.sigma_beta.resize(k);
   for (std::size_t i = 0; i < k; ++i) {
     d.alpha[i] = so3::log(problem.A[i].linear());
     d.beta[i] = so3::log(problem.B[i].linear());
+    d.J_alpha[i] = so3::left_jacobian_inverse(d.alpha[i]);
+    d.J_beta[i] = so3::left_jacobian_inverse(d.beta[i]);
   }
   return d;
 }
 
 void update_log_covariances(RotationData& d, const Marginals& m) {
   for (std::size_t i = 0; i < d.alpha.size(); ++i) {
-    const Matrix3d Ja = so3::left_jacobian_inverse(d.alpha[i]);
-    const Matrix3d Jb = so3::left_jacobian_inverse(d.beta[i]);
-    d.sigma_alpha[i] = Ja * m.A[i].bottomRightCorner<3, 3>() * Ja.transpose();
-    d.sigma_beta[i] = Jb * m.B[i].bottomRightCorner<3, 3>() * Jb.transpose();
+    d.sigma_alpha[i] = d.J_alpha[i] * m.A_rotation[i] * d.J_alpha[i].transpose();
+    d.sigma_beta[i] = d.J_beta[i] * m.B_rotation[i] * d.J_beta[i].transpose();
   }
 }
 
@@ -169,15 +202,19 @@ struct RotationLinearization {
   double cost = 0.0;
 };
 
-RotationLinearization linearize_rotation(const Matrix3d& R, const RotationData& d,
-                                         const Problem& problem) {
-  RotationLinearization lin;
+/// Fills `lin` in place: its per-motion vectors are reused between iterations,
+/// so large k does not churn the allocator (mmap + page faults above 128 KB).
+void linearize_rotation(const Matrix3d& R, const RotationData& d, const Problem& problem,
+                        RotationLinearization& lin) {
+  lin.information.setZero();
+  lin.gradient.setZero();
+  lin.cost = 0.0;
   const std::size_t k = d.alpha.size();
   lin.L.resize(k);
   lin.C_inverse.resize(k);
   for (std::size_t i = 0; i < k; ++i) {
     const Matrix3d C = d.sigma_alpha[i] + R * d.sigma_beta[i] * R.transpose();
-    const Matrix3d Ci = inverse_spd(C, problem.labels[i]);
+    const Matrix3d Ci = inverse_spd(C, i, problem);
     const Vector3d e = d.alpha[i] - R * d.beta[i];  // residual of eq. (17)
     // beta_hat minimises the joint cost for this R (eq. 34 at convergence);
     // linearising at R beta_hat gives the joint problem's exact gradient.
@@ -188,17 +225,6 @@ RotationLinearization linearize_rotation(const Matrix3d& R, const RotationData& 
     lin.gradient += lin.L[i].transpose() * Ci * e;
     lin.cost += e.dot(Ci * e);
   }
-  return lin;
-}
-
-double rotation_cost(const Matrix3d& R, const RotationData& d, const Problem& problem) {
-  double cost = 0.0;
-  for (std::size_t i = 0; i < d.alpha.size(); ++i) {
-    const Matrix3d C = d.sigma_alpha[i] + R * d.sigma_beta[i] * R.transpose();
-    const Vector3d e = d.alpha[i] - R * d.beta[i];
-    cost += e.dot(inverse_spd(C, problem.labels[i]) * e);
-  }
-  return cost;
 }
 
 bool converged_by_cost(double previous, double current, double tolerance) {
@@ -210,12 +236,16 @@ bool converged_by_cost(double previous, double current, double tolerance) {
 void align_representatives(const Matrix3d& R, RotationData& d) {
   for (std::size_t i = 0; i < d.alpha.size(); ++i) {
     const Vector3d other = so3::other_representative(d.beta[i]);
-    if ((d.alpha[i] - R * other).norm() < (d.alpha[i] - R * d.beta[i]).norm()) d.beta[i] = other;
+    if ((d.alpha[i] - R * other).norm() < (d.alpha[i] - R * d.beta[i]).norm()) {
+      d.beta[i] = other;
+      d.J_beta[i] = so3::left_jacobian_inverse(other);
+    }
   }
 }
 
 struct RotationResult {
   Matrix3d R = Matrix3d::Identity();
+  RotationLinearization linearization;  // at R: gives eq. (35) and the gains
   StageDiagnostics diagnostics;
 };
 
@@ -224,31 +254,37 @@ RotationResult solve_rotation(const Matrix3d& R0, const RotationData& d, const P
                               const SolverOptions& options) {
   RotationResult result;
   result.R = R0;
-  RotationLinearization lin = linearize_rotation(result.R, d, problem);
+  linearize_rotation(result.R, d, problem, result.linearization);
+  RotationLinearization next;
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.diagnostics.iterations = iteration;
+    const RotationLinearization& lin = result.linearization;
+    const double previous_cost = lin.cost;
     Vector3d xi = -lin.information.ldlt().solve(lin.gradient);
     const double step = xi.dot(lin.information * xi);
-    Matrix3d candidate = so3::exp(xi) * result.R;
-    double cost = rotation_cost(candidate, d, problem);
-    for (int halving = 0; halving < 30 && cost > lin.cost * (1.0 + 1e-12); ++halving) {
-      xi *= 0.5;
-      candidate = so3::exp(xi) * result.R;
-      cost = rotation_cost(candidate, d, problem);
-    }
-    const double previous_cost = lin.cost;
-    if (cost <= previous_cost * (1.0 + 1e-12)) result.R = candidate;
-    lin = linearize_rotation(result.R, d, problem);
     if (step < options.step_tolerance) {
+      // ~1e-5 sigma: take it; the current linearisation is as good to first order.
+      result.R = so3::exp(xi) * result.R;
       result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
       break;
     }
-    if (converged_by_cost(previous_cost, lin.cost, options.cost_tolerance)) {
+    Matrix3d candidate = so3::exp(xi) * result.R;
+    linearize_rotation(candidate, d, problem, next);
+    for (int halving = 0; halving < 30 && next.cost > previous_cost * (1.0 + 1e-12); ++halving) {
+      xi *= 0.5;
+      candidate = so3::exp(xi) * result.R;
+      linearize_rotation(candidate, d, problem, next);
+    }
+    if (next.cost <= previous_cost * (1.0 + 1e-12)) {
+      result.R = candidate;
+      std::swap(result.linearization, next);
+    }
+    if (converged_by_cost(previous_cost, result.linearization.cost, options.cost_tolerance)) {
       result.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
       break;
     }
   }
-  result.diagnostics.chi2 = lin.cost;
+  result.diagnostics.chi2 = result.linearization.cost;
   result.diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
   return result;
 }
@@ -259,16 +295,15 @@ struct RotationGains {
   std::vector<Matrix3d> from_robot, from_camera;
 };
 
-RotationGains rotation_gains(const Matrix3d& R, const RotationData& d, const Problem& problem) {
-  const RotationLinearization lin = linearize_rotation(R, d, problem);
+RotationGains rotation_gains(const Matrix3d& R, const RotationLinearization& lin, const RotationData& d) {
   const Matrix3d S_inverse = lin.information.inverse();
   RotationGains g;
   g.from_robot.resize(d.alpha.size());
   g.from_camera.resize(d.alpha.size());
   for (std::size_t i = 0; i < d.alpha.size(); ++i) {
     const Matrix3d common = S_inverse * lin.L[i].transpose() * lin.C_inverse[i];
-    g.from_robot[i] = -common * so3::left_jacobian_inverse(d.alpha[i]);
-    g.from_camera[i] = common * R * so3::left_jacobian_inverse(d.beta[i]);
+    g.from_robot[i] = -common * d.J_alpha[i];
+    g.from_camera[i] = common * R * d.J_beta[i];
   }
   return g;
 }
@@ -289,6 +324,7 @@ Matrix3d rotation_covariance(const Problem& problem, const NoiseScale& scale,
 struct TranslationLinearization {
   std::vector<Matrix3d> M;          // R_hat_Ai - I  (eq. 46)
   std::vector<Matrix3d> C_inverse;  // (Sigma_qi + [R_A t] Sigma_RA [R_A t]^T)^-1
+  std::vector<Matrix3d> lever_A;    // [R_hat_Ai t]  (eq. 47)
   std::vector<Vector3d> reduced_residual;
   Matrix3d information = Matrix3d::Zero();  // eq. (56) before inversion
   Vector3d rhs = Vector3d::Zero();
@@ -300,34 +336,38 @@ struct TranslationState {
   std::vector<Vector3d> adjustment;  // xi_RAi of eq. (41)
 };
 
-TranslationLinearization linearize_translation(const TranslationState& s, const Matrix3d& R,
-                                               const Matrix3d& sigma_R, const Marginals& m,
-                                               const Problem& problem) {
-  TranslationLinearization lin;
+/// Fills `lin` in place (see linearize_rotation).
+void linearize_translation(const TranslationState& s, const Matrix3d& R, const Matrix3d& sigma_R,
+                           const Marginals& m, const Problem& problem, TranslationLinearization& lin) {
+  lin.information.setZero();
+  lin.rhs.setZero();
+  lin.cost = 0.0;
   const std::size_t k = problem.size();
   lin.M.resize(k);
   lin.C_inverse.resize(k);
+  lin.lever_A.resize(k);
   lin.reduced_residual.resize(k);
   for (std::size_t i = 0; i < k; ++i) {
-    const Matrix3d R_A = so3::exp(s.adjustment[i]) * problem.A[i].linear();
+    const Matrix3d R_A = s.adjustment[i].isZero(0.0) ? problem.A[i].linear()
+                                                     : Matrix3d(so3::exp(s.adjustment[i]) * problem.A[i].linear());
     const Vector3d RtB = R * problem.B[i].translation();
     const Vector3d q = RtB - problem.A[i].translation();  // eq. (36)
     const Matrix3d lever_B = so3::hat(RtB);
     const Matrix3d lever_A = so3::hat(R_A * s.t);
     // eq. (37): Sigma_q = Sigma_tA + R Sigma_tB R^T + [R t_B] Sigma_R [R t_B]^T, plus the
     // eliminated R_Ai block [R_A t] Sigma_RA [R_A t]^T (eq. 47 via Schur).
-    const Matrix3d C = m.A[i].topLeftCorner<3, 3>() + R * m.B[i].topLeftCorner<3, 3>() * R.transpose() +
+    const Matrix3d C = m.A_translation[i] + R * m.B_translation[i] * R.transpose() +
                        lever_B * sigma_R * lever_B.transpose() +
-                       lever_A * m.A[i].bottomRightCorner<3, 3>() * lever_A.transpose();
+                       lever_A * m.A_rotation[i] * lever_A.transpose();
     lin.M[i] = R_A - Matrix3d::Identity();
-    lin.C_inverse[i] = inverse_spd(C, problem.labels[i]);
+    lin.lever_A[i] = lever_A;
+    lin.C_inverse[i] = inverse_spd(C, i, problem);
     // Linearised residual of q_i with the adjustment folded in (see solve_translation).
     lin.reduced_residual[i] = q - lin.M[i] * s.t - lever_A * s.adjustment[i];
     lin.information += lin.M[i].transpose() * lin.C_inverse[i] * lin.M[i];
     lin.rhs += lin.M[i].transpose() * lin.C_inverse[i] * lin.reduced_residual[i];
     lin.cost += lin.reduced_residual[i].dot(lin.C_inverse[i] * lin.reduced_residual[i]);
   }
-  return lin;
 }
 
 struct TranslationResult {
@@ -345,25 +385,24 @@ TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const
   TranslationResult result;
   result.state.t = t0;
   result.state.adjustment.assign(problem.size(), Vector3d::Zero());
-  result.linearization = linearize_translation(result.state, R, sigma_R, m, problem);
+  linearize_translation(result.state, R, sigma_R, m, problem, result.linearization);
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.diagnostics.iterations = iteration;
     const TranslationLinearization& lin = result.linearization;
     const Vector3d dt = lin.information.ldlt().solve(lin.rhs);  // eq. (48)
     const double step = dt.dot(lin.information * dt);
+    if (step < options.step_tolerance) {  // as in solve_rotation
+      result.state.t += dt;
+      result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
+      break;
+    }
     for (std::size_t i = 0; i < problem.size(); ++i) {  // eq. (49)
-      const Matrix3d R_A = so3::exp(result.state.adjustment[i]) * problem.A[i].linear();
-      const Matrix3d lever_A = so3::hat(R_A * result.state.t);
-      result.state.adjustment[i] = -m.A[i].bottomRightCorner<3, 3>() * lever_A.transpose() *
+      result.state.adjustment[i] = -m.A_rotation[i] * lin.lever_A[i].transpose() *
                                    lin.C_inverse[i] * (lin.reduced_residual[i] - lin.M[i] * dt);
     }
     result.state.t += dt;  // eq. (40)
     const double previous_cost = lin.cost;
-    result.linearization = linearize_translation(result.state, R, sigma_R, m, problem);
-    if (step < options.step_tolerance) {
-      result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
-      break;
-    }
+    linearize_translation(result.state, R, sigma_R, m, problem, result.linearization);
     if (converged_by_cost(previous_cost, result.linearization.cost, options.cost_tolerance)) {
       result.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
       break;
@@ -443,30 +482,35 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
                        "got " + std::to_string(k) + " motion(s); at least 2 are needed", "input",
                        "record more samples (10-30 poses rotating about different axes is typical)");
   }
-  std::vector<double> sigma(k, 0.0), mismatch(k);
+  std::vector<double> sigma(k, 0.0), normalized(k);
   double largest_angle = 0.0;
   for (std::size_t i = 0; i < k; ++i) {
     const double a = d.alpha[i].norm(), b = d.beta[i].norm();
     largest_angle = std::max({largest_angle, a, b});
-    mismatch[i] = std::abs(a - b);
     if (problem.noise_given) {
       sigma[i] = std::hypot(angle_sigma(d.alpha[i], d.sigma_alpha[i]),
                             angle_sigma(d.beta[i], d.sigma_beta[i]));
     }
+    normalized[i] = std::abs(a - b) / (problem.noise_given ? std::max(sigma[i], 1e-300) : 1.0);
   }
-  // A robust noise level when none was given: the median angle mismatch.
-  const double robust_sigma = problem.noise_given ? 0.0 : 1.4826 * median(mismatch);
+  // A motion is refused when its A/B angle mismatch is far beyond the noise AND
+  // far beyond the other motions' (robust spread: 1.4826 x median). Uniformly
+  // understated noise is therefore not blamed on one motion; the chi^2 warning
+  // reports it instead.
+  double spread = problem.noise_given ? 1.0 : INFINITY;
+  if (k >= 6) spread = 1.4826 * median(normalized);
+  if (problem.noise_given) spread = std::max(spread, 1.0);
   for (std::size_t i = 0; i < k; ++i) {
-    const double limit = problem.noise_given ? options.angle_mismatch_sigmas * sigma[i]
-                                             : (k >= 6 ? 2.0 * options.angle_mismatch_sigmas * robust_sigma
-                                                       : INFINITY);
-    if (mismatch[i] > std::max(limit, 1e-9)) {
+    const double scale = problem.noise_given ? sigma[i] : 1.0;
+    const double limit = std::max(options.angle_mismatch_sigmas * spread * scale, 1e-9);
+    const double mismatch = normalized[i] * scale;
+    if (mismatch > limit) {
       throw HandEyeError(
           ErrorCode::AngleMismatch,
-          "robot and camera rotation angles differ by " + fmt(degrees(mismatch[i])) + " deg (" +
+          "robot and camera rotation angles differ by " + fmt(degrees(mismatch)) + " deg (" +
               fmt(degrees(d.alpha[i].norm())) + " vs " + fmt(degrees(d.beta[i].norm())) +
-              " deg), far beyond the noise (limit " + fmt(degrees(std::max(limit, 1e-9))) + " deg)",
-          problem.labels[i],
+              " deg), far beyond the noise and the other motions (limit " + fmt(degrees(limit)) + " deg)",
+          problem.label(i),
           "the two poses of this motion were not taken at the same time, or the pattern detection "
           "is wrong; remove the sample, or check that the effector and pattern poses are paired");
     }
@@ -565,6 +609,9 @@ MeasurementNoise noise_for(const std::optional<MeasurementNoise>& item,
 
 Problem build(const MotionSet& set) {
   Problem p;
+  p.A.reserve(set.motions.size());
+  p.B.reserve(set.motions.size());
+  p.inputs.reserve(2 * set.motions.size());
   p.noise_given = set.noise.has_value();
   if (set.noise) check_noise_block(*set.noise, "noise");
   for (std::size_t i = 0; i < set.motions.size(); ++i) {
@@ -575,14 +622,13 @@ Problem build(const MotionSet& set) {
     const MeasurementNoise noise = noise_for(motion.noise, set.noise, where);
     p.A.push_back(motion.A);
     p.B.push_back(motion.B);
-    p.labels.push_back(where);
     NoiseInput robot, camera;
     robot.covariance = noise.robot;
     robot.robot = true;
-    robot.add({static_cast<int>(i), true, Matrix6d::Identity()});
+    robot.add({static_cast<int>(i), true, -1});
     camera.covariance = noise.camera;
     camera.robot = false;
-    camera.add({static_cast<int>(i), false, Matrix6d::Identity()});
+    camera.add({static_cast<int>(i), false, -1});
     p.inputs.push_back(robot);
     p.inputs.push_back(camera);
   }
@@ -591,6 +637,10 @@ Problem build(const MotionSet& set) {
 
 Problem build(const SampleSet& set) {
   Problem p;
+  p.A.reserve(set.samples.size());
+  p.B.reserve(set.samples.size());
+  p.inputs.reserve(2 * set.samples.size());
+  p.jacobians.reserve(4 * set.samples.size());
   p.noise_given = set.noise.has_value();
   p.samples = static_cast<int>(set.samples.size());
   if (set.noise) check_noise_block(*set.noise, "noise");
@@ -604,7 +654,6 @@ Problem build(const SampleSet& set) {
     const MotionPair motion = motion_between(set.setup, set.samples[i], set.samples[i + 1]);
     p.A.push_back(motion.A);
     p.B.push_back(motion.B);
-    p.labels.push_back("samples[" + std::to_string(i) + "] -> samples[" + std::to_string(i + 1) + "]");
   }
   const bool in_hand = set.setup == Setup::EyeInHand;
   for (std::size_t s = 0; s < n; ++s) {
@@ -626,8 +675,8 @@ Problem build(const SampleSet& set) {
       // eye_in_hand A = E^-1 E_prev; eye_to_hand A = E E_prev^-1; B = P P_prev^-1.
       const Matrix6d dA = in_hand ? compose_jacobian_left(E.inverse(), E_prev) * inverse_jacobian(E)
                                   : compose_jacobian_left(E, E_prev.inverse());
-      effector.add({m, true, dA});
-      pattern.add({m, false, compose_jacobian_left(P, P_prev.inverse())});
+      effector.add({m, true, p.add_jacobian(dA)});
+      pattern.add({m, false, p.add_jacobian(compose_jacobian_left(P, P_prev.inverse()))});
     }
     if (s + 1 < n) {
       const int m = static_cast<int>(s);
@@ -635,8 +684,8 @@ Problem build(const SampleSet& set) {
       const Isometry3d& P_next = set.samples[s + 1].T_camera_pattern;
       const Matrix6d dA = in_hand ? compose_jacobian_right(E_next.inverse())
                                   : compose_jacobian_right(E_next) * inverse_jacobian(E);
-      effector.add({m, true, dA});
-      pattern.add({m, false, compose_jacobian_right(P_next) * inverse_jacobian(P)});
+      effector.add({m, true, p.add_jacobian(dA)});
+      pattern.add({m, false, p.add_jacobian(compose_jacobian_right(P_next) * inverse_jacobian(P))});
     }
     p.inputs.push_back(effector);
     p.inputs.push_back(pattern);
@@ -687,9 +736,9 @@ StageSolution solve_stages(const Problem& problem, RotationData& d, const Matrix
   const RotationResult rotation = solve_rotation(R0, d, problem, options);
   s.R = rotation.R;
   s.rotation_stage = rotation.diagnostics;
-  s.gains = rotation_gains(s.R, d, problem);
+  s.gains = rotation_gains(s.R, rotation.linearization, d);
   s.sigma_R = rotation_covariance(problem, scale, s.gains);
-  s.per_pair_rotation_covariance = linearize_rotation(s.R, d, problem).information.inverse();
+  s.per_pair_rotation_covariance = rotation.linearization.information.inverse();
   s.translation = solve_translation(unweighted_translation(s.R, problem), s.R, s.sigma_R, m,
                                     problem, options);
   return s;

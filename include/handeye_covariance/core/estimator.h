@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/measurements.h"
 
 namespace handeye {
@@ -29,9 +30,9 @@ namespace handeye {
 struct SolverOptions {
   int max_iterations = 50;
   /// Stop when the step's squared Mahalanobis length under the current
-  /// information matrix falls below this: the step is then ~1e-6 sigma, a
+  /// information matrix falls below this: the step is then ~1e-5 sigma, a
   /// relative criterion that works at every noise level.
-  double step_tolerance = 1e-12;
+  double step_tolerance = 1e-10;
   /// ... or when the relative change of the weighted cost falls below this.
   double cost_tolerance = 1e-14;
   /// A motion counts as rotating when both its angles exceed this ...

@@ -1,0 +1,52 @@
+// Solve-plus-covariance time, all sizes in one process so the ratios are fair.
+// Regenerate BENCHMARKS.md figures with:  ./scripts/bench
+#include <benchmark/benchmark.h>
+
+#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/simulation.h"
+
+namespace {
+
+using namespace handeye;
+
+// Independent motion pairs, the paper's protocol at lambda = 1e-4.
+void BM_SolveMotions(benchmark::State& state) {
+  Rng rng(1);
+  const MotionSet set = simulate_motions(rng, random_pose(rng, 0.5), static_cast<int>(state.range(0)), paper_noise(1e-4));
+  for (auto _ : state) {
+    Calibration c = solve(set);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_SolveMotions)->Arg(30)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
+
+// A pose stream of k+1 samples (k motions), with the correlated covariance.
+void BM_SolveSamples(benchmark::State& state) {
+  Rng rng(2);
+  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                              static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
+  for (auto _ : state) {
+    Calibration c = solve(s.samples);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_SolveSamples)->Arg(30)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
+
+// No noise block: the noise is estimated from the residuals (several solves).
+void BM_SolveSamplesEstimatedNoise(benchmark::State& state) {
+  Rng rng(3);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
+  s.samples.noise.reset();
+  for (auto _ : state) {
+    Calibration c = solve(s.samples);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+}
+BENCHMARK(BM_SolveSamplesEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,68 @@
+// The package's file formats (yaml-cpp; no ROS). See README "Files".
+//
+//  samples file:  setup, frames?, noise? {effector, pattern}, samples: [{effector, pattern, stamp?, noise?}]
+//  motions file:  setup?, noise? {A, B}, motions: [{A, B, noise?}]
+//  result file:   setup, parent, child, translation, rotation, covariance {rotation, translation, pose},
+//                 samples_used, transformation {x, y, z, qx, qy, qz, qw}, plus diagnostics
+//
+// Poses are {translation: [x, y, z], rotation: [qx, qy, qz, qw]}; covariances are
+// 9 numbers row-major (rad^2, m^2); the pose covariance is 36 numbers row-major in
+// ROS order (x, y, z, rx, ry, rz). Readers throw HandEyeError naming the field.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <variant>
+
+#include "handeye_covariance/core/estimator.h"
+
+namespace handeye {
+namespace io {
+
+/// Parse from text; `source` names the file in error messages.
+SampleSet parse_samples(const std::string& text, const std::string& source);
+MotionSet parse_motions(const std::string& text, const std::string& source);
+
+SampleSet read_samples(const std::string& path);
+MotionSet read_motions(const std::string& path);
+
+/// A file holding either samples or motions (told apart by its top-level key).
+using Input = std::variant<SampleSet, MotionSet>;
+Input read_input(const std::string& path);
+
+std::string format_samples(const SampleSet& samples);
+std::string format_motions(const MotionSet& motions);
+
+/// What the result file says besides the calibration itself.
+struct ResultContext {
+  std::optional<Setup> setup;  // absent for motion input without a setup key
+  std::string parent, child;   // frame names, empty when unknown
+};
+
+ResultContext context_of(const SampleSet& samples);
+ResultContext context_of(const MotionSet& motions);
+
+std::string format_result(const Calibration& calibration, const ResultContext& context);
+
+/// Only the result keys (no solver diagnostics): for a known truth, or a pose
+/// with covariance from elsewhere. `read_result` reads it.
+std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& context);
+
+/// A result file read back: X with its covariance and the frames.
+struct CalibrationFile {
+  ResultContext context;
+  PoseWithCovariance T_parent_camera;
+  int samples_used = 0;
+};
+CalibrationFile parse_result(const std::string& text, const std::string& source);
+CalibrationFile read_result(const std::string& path);
+
+/// Write to `path.tmp-<pid>` then rename, so a reader never sees half a file
+/// and a failure leaves no file behind. Creates missing parent directories.
+void write_file_atomically(const std::string& path, const std::string& content);
+
+/// Whole file as text; HandEyeError(IoError) when it cannot be read.
+std::string read_file(const std::string& path);
+
+}  // namespace io
+}  // namespace handeye

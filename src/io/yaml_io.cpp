@@ -1,0 +1,470 @@
+#include "handeye_covariance/io/yaml_io.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include "handeye_covariance/core/validation.h"
+
+namespace handeye {
+namespace io {
+
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+// ---------------------------------------------------------------- reading
+
+/// Where we are in a file, for messages: "samples.yaml: samples[3].pattern.rotation".
+struct Location {
+  std::string source;
+  std::string path;
+  Location operator/(const std::string& key) const {
+    return {source, path.empty() ? key : path + "." + key};
+  }
+  Location operator[](std::size_t index) const {
+    return {source, path + "[" + std::to_string(index) + "]"};
+  }
+  std::string str() const { return source + ": " + (path.empty() ? "top level" : path); }
+};
+
+YAML::Node require(const YAML::Node& map, const std::string& key, const Location& at,
+                   const std::string& hint) {
+  if (!map.IsMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a mapping with key `" + key + "`",
+                       at.str(), hint);
+  }
+  const YAML::Node node = map[key];
+  if (!node) throw HandEyeError(ErrorCode::MissingKey, "missing key `" + key + "`", at.str(), hint);
+  return node;
+}
+
+double as_double(const YAML::Node& node, const Location& at) {
+  try {
+    if (!node.IsScalar()) throw YAML::BadConversion(node.Mark());
+    return node.as<double>();
+  } catch (const YAML::Exception&) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a number", at.str(),
+                       "write a plain number (e.g. 0.125); NaN and Inf are refused");
+  }
+}
+
+template <std::size_t N>
+std::array<double, N> as_numbers(const YAML::Node& node, const Location& at, const std::string& what) {
+  if (!node.IsSequence()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a list of " + std::to_string(N) + " numbers (" + what + ")",
+                       at.str(), "write it as [a, b, ...]");
+  }
+  if (node.size() != N) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       "expected " + std::to_string(N) + " numbers (" + what + "), got " +
+                           std::to_string(node.size()),
+                       at.str(), "give exactly " + std::to_string(N) + " numbers");
+  }
+  std::array<double, N> values;
+  for (std::size_t i = 0; i < N; ++i) {
+    values[i] = as_double(node[i], at[i]);
+    if (!std::isfinite(values[i])) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf (" + what + ")", at[i].str(),
+                         "drop this entry or fix the source that produced it");
+    }
+  }
+  return values;
+}
+
+Isometry3d read_pose(const YAML::Node& node, const Location& at) {
+  const std::string hint = "a pose is {translation: [x, y, z], rotation: [qx, qy, qz, qw]}";
+  const auto t = as_numbers<3>(require(node, "translation", at, hint), at / "translation", "translation x, y, z in m");
+  const auto q = as_numbers<4>(require(node, "rotation", at, hint), at / "rotation", "quaternion qx, qy, qz, qw");
+  const Eigen::Quaterniond unit =
+      checked_unit_quaternion(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), (at / "rotation").str());
+  return se3::make_pose(unit.toRotationMatrix(), Vector3d(t[0], t[1], t[2]));
+}
+
+DecoupledCovariance read_covariance(const YAML::Node& node, const Location& at) {
+  const std::string hint = "a noise entry is {rotation: [9 numbers, rad^2], translation: [9 numbers, m^2]}, row-major";
+  DecoupledCovariance c;
+  c.rotation = from_row_major_3x3(as_numbers<9>(require(node, "rotation", at, hint), at / "rotation", "3x3 covariance, rad^2"));
+  c.translation = from_row_major_3x3(as_numbers<9>(require(node, "translation", at, hint), at / "translation", "3x3 covariance, m^2"));
+  check_covariance(c, at.str());
+  return c;
+}
+
+/// `noise: {robot_key: {...}, camera_key: {...}}` (effector/pattern or A/B).
+MeasurementNoise read_noise(const YAML::Node& node, const Location& at, const char* robot_key,
+                            const char* camera_key) {
+  const std::string hint = std::string("noise is {") + robot_key + ": {rotation, translation}, " +
+                           camera_key + ": {rotation, translation}}";
+  MeasurementNoise noise;
+  noise.robot = read_covariance(require(node, robot_key, at, hint), at / robot_key);
+  noise.camera = read_covariance(require(node, camera_key, at, hint), at / camera_key);
+  return noise;
+}
+
+std::optional<MeasurementNoise> optional_noise(const YAML::Node& map, const Location& at,
+                                               const char* robot_key, const char* camera_key) {
+  const YAML::Node node = map["noise"];
+  if (!node || node.IsNull()) return std::nullopt;
+  return read_noise(node, at / "noise", robot_key, camera_key);
+}
+
+Setup read_setup(const YAML::Node& node, const Location& at) {
+  const std::string value = node.IsScalar() ? node.Scalar() : "";
+  if (value == "eye_in_hand") return Setup::EyeInHand;
+  if (value == "eye_to_hand") return Setup::EyeToHand;
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + value + "`", at.str(),
+                     "write `setup: eye_in_hand` (camera on the flange) or `setup: eye_to_hand` (camera fixed)");
+}
+
+YAML::Node load(const std::string& text, const std::string& source) {
+  try {
+    YAML::Node root = YAML::Load(text);
+    if (!root.IsMap()) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the file is not a YAML mapping", source,
+                         "see the README section `Files` for the format");
+    }
+    return root;
+  } catch (const YAML::ParserException& e) {
+    throw HandEyeError(ErrorCode::MalformedFile, std::string("YAML syntax error: ") + e.msg,
+                       source + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1),
+                       "fix the YAML syntax at that line");
+  }
+}
+
+YAML::Node require_list(const YAML::Node& root, const std::string& key, const Location& at) {
+  const YAML::Node list = require(root, key, at, "the file needs a `" + key + ":` list");
+  if (!list.IsSequence()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`" + key + "` must be a list", (at / key).str(),
+                       "write `" + key + ":` followed by `- ...` entries");
+  }
+  return list;
+}
+
+// ---------------------------------------------------------------- writing
+
+void emit_numbers(YAML::Emitter& out, const double* values, std::size_t n) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (std::size_t i = 0; i < n; ++i) out << values[i];
+  out << YAML::EndSeq;
+}
+
+void emit_pose(YAML::Emitter& out, const Isometry3d& pose) {
+  const Vector3d t = pose.translation();
+  Eigen::Quaterniond q(pose.linear());
+  if (q.w() < 0) q.coeffs() *= -1.0;  // one canonical sign, w >= 0
+  const double quaternion[4] = {q.x(), q.y(), q.z(), q.w()};
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_numbers(out, t.data(), 3);
+  out << YAML::Key << "rotation" << YAML::Value;
+  emit_numbers(out, quaternion, 4);
+}
+
+void emit_covariance3(YAML::Emitter& out, const Matrix3d& covariance) {
+  const auto values = to_row_major_3x3(covariance);
+  emit_numbers(out, values.data(), values.size());
+}
+
+void emit_decoupled(YAML::Emitter& out, const DecoupledCovariance& c) {
+  out << YAML::BeginMap;
+  out << YAML::Key << "rotation" << YAML::Value;
+  emit_covariance3(out, c.rotation);
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_covariance3(out, c.translation);
+  out << YAML::EndMap;
+}
+
+void emit_noise(YAML::Emitter& out, const MeasurementNoise& noise, const char* robot_key,
+                const char* camera_key) {
+  out << YAML::BeginMap;
+  out << YAML::Key << robot_key << YAML::Value;
+  emit_decoupled(out, noise.robot);
+  out << YAML::Key << camera_key << YAML::Value;
+  emit_decoupled(out, noise.camera);
+  out << YAML::EndMap;
+}
+
+YAML::Emitter& new_emitter(YAML::Emitter& out) {
+  out.SetDoublePrecision(17);  // round-trips every double exactly
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- samples
+
+SampleSet parse_samples(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  SampleSet set;
+  set.setup = read_setup(require(root, "setup", top, "add `setup: eye_in_hand` or `setup: eye_to_hand`"),
+                         top / "setup");
+  if (const YAML::Node frames = root["frames"]; frames && frames.IsMap()) {
+    auto name = [&](const char* key) { return frames[key] ? frames[key].as<std::string>() : std::string(); };
+    set.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
+  }
+  set.noise = optional_noise(root, top, "effector", "pattern");
+  const YAML::Node list = require_list(root, "samples", top);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Location at = (top / "samples")[i];
+    const YAML::Node node = list[i];
+    const std::string hint = "a sample is {effector: pose, pattern: pose, stamp?, noise?}";
+    PoseSample sample;
+    sample.T_base_effector = read_pose(require(node, "effector", at, hint), at / "effector");
+    sample.T_camera_pattern = read_pose(require(node, "pattern", at, hint), at / "pattern");
+    if (node["stamp"]) sample.stamp = as_double(node["stamp"], at / "stamp");
+    sample.noise = optional_noise(node, at, "effector", "pattern");
+    set.samples.push_back(sample);
+  }
+  return set;
+}
+
+SampleSet read_samples(const std::string& path) { return parse_samples(read_file(path), path); }
+
+std::string format_samples(const SampleSet& set) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  out << YAML::Key << "setup" << YAML::Value << to_string(set.setup);
+  const FrameNames& f = set.frames;
+  if (!(f.base.empty() && f.effector.empty() && f.camera.empty() && f.pattern.empty())) {
+    out << YAML::Key << "frames" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "base" << YAML::Value << f.base << YAML::Key << "effector" << YAML::Value
+        << f.effector << YAML::Key << "camera" << YAML::Value << f.camera << YAML::Key << "pattern"
+        << YAML::Value << f.pattern << YAML::EndMap;
+  }
+  if (set.noise) {
+    out << YAML::Key << "noise" << YAML::Value;
+    emit_noise(out, *set.noise, "effector", "pattern");
+  }
+  out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
+  for (const PoseSample& s : set.samples) {
+    out << YAML::BeginMap;
+    out << YAML::Key << "effector" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    emit_pose(out, s.T_base_effector);
+    out << YAML::EndMap;
+    out << YAML::Key << "pattern" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    emit_pose(out, s.T_camera_pattern);
+    out << YAML::EndMap;
+    if (s.stamp) out << YAML::Key << "stamp" << YAML::Value << *s.stamp;
+    if (s.noise) {
+      out << YAML::Key << "noise" << YAML::Value;
+      emit_noise(out, *s.noise, "effector", "pattern");
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+// ---------------------------------------------------------------- motions
+
+MotionSet parse_motions(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  MotionSet set;
+  set.noise = optional_noise(root, top, "A", "B");
+  const YAML::Node list = require_list(root, "motions", top);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Location at = (top / "motions")[i];
+    const std::string hint = "a motion is {A: pose, B: pose, noise?}";
+    MotionPair pair;
+    pair.A = read_pose(require(list[i], "A", at, hint), at / "A");
+    pair.B = read_pose(require(list[i], "B", at, hint), at / "B");
+    pair.noise = optional_noise(list[i], at, "A", "B");
+    set.motions.push_back(pair);
+  }
+  return set;
+}
+
+MotionSet read_motions(const std::string& path) { return parse_motions(read_file(path), path); }
+
+std::string format_motions(const MotionSet& set) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  if (set.noise) {
+    out << YAML::Key << "noise" << YAML::Value;
+    emit_noise(out, *set.noise, "A", "B");
+  }
+  out << YAML::Key << "motions" << YAML::Value << YAML::BeginSeq;
+  for (const MotionPair& m : set.motions) {
+    out << YAML::BeginMap;
+    out << YAML::Key << "A" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    emit_pose(out, m.A);
+    out << YAML::EndMap;
+    out << YAML::Key << "B" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    emit_pose(out, m.B);
+    out << YAML::EndMap;
+    if (m.noise) {
+      out << YAML::Key << "noise" << YAML::Value;
+      emit_noise(out, *m.noise, "A", "B");
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+Input read_input(const std::string& path) {
+  const std::string text = read_file(path);
+  const YAML::Node root = load(text, path);
+  if (root["samples"]) return parse_samples(text, path);
+  if (root["motions"]) return parse_motions(text, path);
+  throw HandEyeError(ErrorCode::MissingKey, "the file has neither a `samples` nor a `motions` list", path,
+                     "give a samples file (robot and pattern poses) or a motions file (A, B pairs); "
+                     "see the README section `Files`");
+}
+
+// ---------------------------------------------------------------- results
+
+ResultContext context_of(const SampleSet& samples) {
+  ResultContext c;
+  c.setup = samples.setup;
+  c.parent = samples.setup == Setup::EyeInHand ? samples.frames.effector : samples.frames.base;
+  c.child = samples.frames.camera;
+  return c;
+}
+
+ResultContext context_of(const MotionSet&) { return {}; }
+
+namespace {
+/// The keys every result file has: frames, X, its covariance, the sample count
+/// and easy_handeye's `transformation` block.
+void emit_result_head(YAML::Emitter& out, const PoseWithCovariance& X, int samples_used,
+                      const ResultContext& context) {
+  if (context.setup) out << YAML::Key << "setup" << YAML::Value << to_string(*context.setup);
+  out << YAML::Key << "parent" << YAML::Value << context.parent;
+  out << YAML::Key << "child" << YAML::Value << context.child;
+  emit_pose(out, X.pose);
+  out << YAML::Key << "covariance" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rotation" << YAML::Value;
+  emit_covariance3(out, X.covariance.bottomRightCorner<3, 3>());
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_covariance3(out, X.covariance.topLeftCorner<3, 3>());
+  out << YAML::Key << "pose" << YAML::Value;
+  const auto pose = to_row_major_6x6(X.covariance);
+  emit_numbers(out, pose.data(), pose.size());
+  out << YAML::EndMap;
+  out << YAML::Key << "samples_used" << YAML::Value << samples_used;
+
+  Eigen::Quaterniond q(X.pose.linear());
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  out << YAML::Key << "transformation" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "x" << YAML::Value << X.pose.translation().x();
+  out << YAML::Key << "y" << YAML::Value << X.pose.translation().y();
+  out << YAML::Key << "z" << YAML::Value << X.pose.translation().z();
+  out << YAML::Key << "qx" << YAML::Value << q.x() << YAML::Key << "qy" << YAML::Value << q.y();
+  out << YAML::Key << "qz" << YAML::Value << q.z() << YAML::Key << "qw" << YAML::Value << q.w();
+  out << YAML::EndMap;
+}
+}  // namespace
+
+std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& context) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  emit_result_head(out, X, 0, context);
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string format_result(const Calibration& calibration, const ResultContext& context) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  emit_result_head(out, {calibration.T_parent_camera, calibration.pose_covariance}, calibration.samples_used, context);
+  out << YAML::Key << "motions_used" << YAML::Value << calibration.motions_used;
+
+  const bool samples = context.setup.has_value();
+  out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "origin" << YAML::Value
+      << (calibration.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals");
+  out << YAML::Key << "model" << YAML::Value;
+  emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
+  out << YAML::EndMap;
+
+  out << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, stage] : {std::pair<const char*, const StageDiagnostics*>{"rotation", &calibration.rotation_stage},
+                                    {"translation", &calibration.translation_stage}}) {
+    out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "iterations" << YAML::Value << stage->iterations;
+    out << YAML::Key << "stop_reason" << YAML::Value << to_string(stage->stop_reason);
+    out << YAML::Key << "chi2" << YAML::Value << stage->chi2;
+    out << YAML::Key << "dof" << YAML::Value << stage->dof;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << calibration.warnings;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+CalibrationFile parse_result(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  CalibrationFile file;
+  if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
+  if (root["parent"] && root["parent"].IsScalar()) file.context.parent = root["parent"].Scalar();
+  if (root["child"] && root["child"].IsScalar()) file.context.child = root["child"].Scalar();
+  file.T_parent_camera.pose = read_pose(root, top);
+  const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
+  const YAML::Node covariance = require(root, "covariance", top, hint);
+  file.T_parent_camera.covariance =
+      from_row_major_6x6(as_numbers<36>(require(covariance, "pose", top / "covariance", hint),
+                                        top / "covariance" / "pose", "6x6 covariance, ROS order"));
+  if (root["samples_used"]) file.samples_used = static_cast<int>(as_double(root["samples_used"], top / "samples_used"));
+  return file;
+}
+
+CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
+
+// ---------------------------------------------------------------- files
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw HandEyeError(ErrorCode::IoError, std::string("cannot open: ") + std::strerror(errno), path,
+                       "check the path and the permissions");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void write_file_atomically(const std::string& path, const std::string& content) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  std::error_code ec;
+  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
+  const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  bool ok = fd >= 0;
+  for (std::size_t written = 0; ok && written < content.size();) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) written += static_cast<std::size_t>(n);
+  }
+  ok = ok && ::fsync(fd) == 0;  // the data is on disk before the name points at it
+  if (fd >= 0) ok = (::close(fd) == 0) && ok;
+  if (!ok) {
+    const std::string reason = std::strerror(errno);
+    std::remove(temporary.c_str());
+    throw HandEyeError(ErrorCode::IoError, "cannot write: " + reason, path,
+                       "check that the directory is writable and the disk is not full");
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(temporary.c_str());
+    throw HandEyeError(ErrorCode::IoError, "cannot rename the temporary file into place: " + reason, path,
+                       "check the permissions of the target directory");
+  }
+}
+
+}  // namespace io
+}  // namespace handeye

@@ -1,0 +1,162 @@
+#include "cli.h"
+
+#include <boost/program_options.hpp>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <map>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/io/summary.h"
+
+namespace handeye {
+namespace cli {
+
+namespace po = boost::program_options;
+
+namespace {
+
+constexpr int kOk = 0;
+constexpr int kInternal = 1;
+constexpr int kBadInput = 2;
+
+struct Command {
+  const char* summary;
+  std::function<int(const std::vector<std::string>&, std::ostream&, std::ostream&)> run;
+};
+
+/// Parses `args` against `options`; prints help and returns false on --help.
+bool parse(const std::string& name, const std::string& usage, const po::options_description& options,
+           const std::vector<std::string>& args, po::variables_map& vm, std::ostream& out) {
+  po::store(po::command_line_parser(args).options(options).run(), vm);
+  if (vm.count("help")) {
+    out << "usage: handeye " << name << " " << usage << "\n\n" << options << "\n";
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
+std::string default_result_path(const std::string& input) {
+  return std::filesystem::path(input).stem().string() + "_result.yaml";
+}
+
+int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  std::string input, output;
+  po::options_description options("solve: AX = XB with the covariance of X");
+  options.add_options()("help,h", "show this help")(
+      "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
+      "output,o", po::value(&output),
+      "result file (YAML); default: <input stem>_result.yaml in the current directory");
+  po::variables_map vm;
+  if (!parse("solve", "--input FILE [--output FILE]", options, args, vm, out)) return kOk;
+  if (output.empty()) output = default_result_path(input);
+
+  const io::Input data = io::read_input(input);
+  const bool from_samples = std::holds_alternative<SampleSet>(data);
+  const Calibration calibration = from_samples ? solve(std::get<SampleSet>(data)) : solve(std::get<MotionSet>(data));
+  const io::ResultContext context =
+      from_samples ? io::context_of(std::get<SampleSet>(data)) : io::context_of(std::get<MotionSet>(data));
+  io::write_file_atomically(output, io::format_result(calibration, context));
+  out << io::human_summary(calibration, context);
+  out << "  result written to     " << output << "\n";
+  (void)err;
+  return kOk;
+}
+
+int sim_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  std::string output, truth, setup_name = "eye_in_hand";
+  int samples = 20;
+  unsigned seed = 1;
+  double rotation_deg = 0.05, translation_mm = 0.5, robot_rotation_deg = 0.01, robot_translation_mm = 0.05;
+  bool omit_noise = false;
+  po::options_description options("sim: a simulated calibration session with known truth");
+  options.add_options()("help,h", "show this help")(
+      "output,o", po::value(&output)->required(), "samples file to write (YAML)")(
+      "truth", po::value(&truth), "also write the true X as a result file")(
+      "setup", po::value(&setup_name), "eye_in_hand (default) or eye_to_hand")(
+      "samples,n", po::value(&samples), "number of robot poses (default 20)")(
+      "seed", po::value(&seed), "random seed (default 1)")(
+      "pattern-rotation-noise-deg", po::value(&rotation_deg), "1 sigma per axis of the pattern pose rotation (default 0.05)")(
+      "pattern-translation-noise-mm", po::value(&translation_mm), "1 sigma per axis of the pattern pose translation (default 0.5)")(
+      "robot-rotation-noise-deg", po::value(&robot_rotation_deg), "1 sigma per axis of the flange rotation (default 0.01)")(
+      "robot-translation-noise-mm", po::value(&robot_translation_mm), "1 sigma per axis of the flange translation (default 0.05)")(
+      "omit-noise-block", po::bool_switch(&omit_noise), "leave the noise out of the file, so `solve` estimates it");
+  po::variables_map vm;
+  if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
+  if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
+    throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + setup_name + "`", "--setup",
+                       "use eye_in_hand or eye_to_hand");
+  }
+  if (samples < 3) {
+    throw HandEyeError(ErrorCode::TooFewMotions, "--samples must be at least 3", "--samples", "ask for more samples");
+  }
+  const Setup setup = setup_name == "eye_in_hand" ? Setup::EyeInHand : Setup::EyeToHand;
+  const double deg = M_PI / 180.0, mm = 1e-3;
+  MeasurementNoise noise;
+  noise.robot.rotation = std::pow(robot_rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.translation = std::pow(robot_translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.translation = std::pow(translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
+  Rng rng(seed);
+  SimulatedSession session = simulate_session(rng, setup, typical_X(setup), samples, noise);
+  if (omit_noise) session.samples.noise.reset();
+  io::write_file_atomically(output, io::format_samples(session.samples));
+  out << "wrote " << samples << " simulated " << setup_name << " samples to " << output << "\n";
+  if (!truth.empty()) {
+    io::write_file_atomically(truth, io::format_pose_file({session.X, Matrix6d::Zero()}, io::context_of(session.samples)));
+    out << "wrote the true X to " << truth << "\n";
+  }
+  return kOk;
+}
+
+const std::map<std::string, Command>& commands() {
+  static const std::map<std::string, Command> table = {
+      {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
+                 solve_command}},
+      {"sim", {"write a simulated samples file with known truth, to try the tools", sim_command}},
+  };
+  return table;
+}
+
+void print_help(std::ostream& out) {
+  out << "usage: handeye <command> [options]    (handeye <command> --help for its options)\n\n"
+         "Hand-eye calibration AX = XB with the covariance of X.\n\ncommands:\n";
+  for (const auto& [name, command] : commands()) out << "  " << name << std::string(8 - name.size(), ' ') << command.summary << "\n";
+  out << "\nexit codes: 0 success, 2 bad or degenerate input (reason on stderr, nothing written), "
+         "1 internal error\n";
+}
+
+}  // namespace
+
+int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ||
+      std::string(argv[1]) == "help") {
+    print_help(out);
+    return argc < 2 ? kBadInput : kOk;
+  }
+  const std::string name = argv[1];
+  const auto command = commands().find(name);
+  if (command == commands().end()) {
+    err << "handeye: unknown command `" << name << "`\n\n";
+    print_help(err);
+    return kBadInput;
+  }
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  try {
+    return command->second.run(args, out, err);
+  } catch (const HandEyeError& e) {
+    err << "handeye " << name << ": error: " << e.what() << "\n";
+    return kBadInput;
+  } catch (const po::error& e) {
+    err << "handeye " << name << ": " << e.what() << " (see `handeye " << name << " --help`)\n";
+    return kBadInput;
+  } catch (const std::exception& e) {
+    err << "handeye " << name << ": internal error: " << e.what() << "\n";
+    return kInternal;
+  }
+}
+
+}  // namespace cli
+}  // namespace handeye

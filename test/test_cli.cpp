@@ -1,0 +1,104 @@
+// Runs the real `handeye` binary as a user would and checks output and exit codes.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <sys/wait.h>
+
+#include "handeye_covariance/io/yaml_io.h"
+
+namespace {
+
+struct CliRun {
+  int exit_code;
+  std::string out, err;
+};
+
+CliRun run(const std::string& args) {
+  const std::string dir = ::testing::TempDir();
+  const std::string out_file = dir + "/cli_stdout", err_file = dir + "/cli_stderr";
+  const std::string command = std::string(HANDEYE_CLI) + " " + args + " >" + out_file + " 2>" + err_file;
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, handeye::io::read_file(out_file),
+          handeye::io::read_file(err_file)};
+}
+
+std::string temp(const std::string& name) {
+  const std::string path = ::testing::TempDir() + "/cli_" + name;
+  std::filesystem::remove(path);
+  return path;
+}
+
+TEST(Cli, HelpListsTheSubcommands) {
+  const CliRun r = run("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("solve"), std::string::npos);
+  EXPECT_NE(r.out.find("sim"), std::string::npos);
+  EXPECT_EQ(run("solve --help").exit_code, 0);
+  EXPECT_NE(run("solve --help").out.find("--input"), std::string::npos);
+}
+
+TEST(Cli, SimThenSolveRecoversTheTruthWithin3Sigma) {
+  const std::string samples = temp("samples.yaml"), truth = temp("truth.yaml"), result = temp("result.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --truth " + truth + " --samples 25 --seed 3").exit_code, 0);
+  const CliRun r = run("solve --input " + samples + " --output " + result);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("1 sigma [mm]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1 sigma [deg]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("T_tool0_camera_optical_frame"), std::string::npos) << r.out;
+  const auto estimate = handeye::io::read_result(result);
+  const auto exact = handeye::io::read_result(truth);
+  const Eigen::Vector3d error = estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation();
+  const Eigen::Matrix3d covariance = estimate.T_parent_camera.covariance.topLeftCorner<3, 3>();
+  const double mahalanobis = std::sqrt(error.dot(covariance.inverse() * error));
+  EXPECT_LT(mahalanobis, 3.0 * std::sqrt(3.0));
+  EXPECT_GT(covariance.trace(), 0.0);
+}
+
+TEST(Cli, EstimatedNoiseIsAnnounced) {
+  const std::string samples = temp("nonoise.yaml"), result = temp("nonoise_result.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --omit-noise-block --samples 20").exit_code, 0);
+  const CliRun r = run("solve --input " + samples + " --output " + result);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("ESTIMATED from the residuals"), std::string::npos) << r.out;
+  EXPECT_NE(handeye::io::read_file(result).find("estimated_from_residuals"), std::string::npos);
+}
+
+TEST(Cli, DegenerateInputExits2WithReasonAndWritesNothing) {
+  const std::string input = temp("degenerate.yaml"), result = temp("degenerate_result.yaml");
+  // Three samples of a robot that only translates.
+  handeye::io::write_file_atomically(input, R"(setup: eye_in_hand
+samples:
+  - {effector: {translation: [0.1, 0, 0.5], rotation: [0, 0, 0, 1]}, pattern: {translation: [0, 0, 0.5], rotation: [1, 0, 0, 0]}}
+  - {effector: {translation: [0.2, 0, 0.5], rotation: [0, 0, 0, 1]}, pattern: {translation: [-0.1, 0, 0.5], rotation: [1, 0, 0, 0]}}
+  - {effector: {translation: [0.2, 0.1, 0.5], rotation: [0, 0, 0, 1]}, pattern: {translation: [-0.1, 0.1, 0.5], rotation: [1, 0, 0, 0]}}
+  - {effector: {translation: [0.1, 0.1, 0.4], rotation: [0, 0, 0, 1]}, pattern: {translation: [0, 0.1, 0.6], rotation: [1, 0, 0, 0]}}
+)");
+  const CliRun r = run("solve --input " + input + " --output " + result);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("PureTranslation"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(result));
+}
+
+TEST(Cli, BadInvocationsExit2) {
+  EXPECT_EQ(run("").exit_code, 2);
+  EXPECT_EQ(run("frobnicate").exit_code, 2);
+  const CliRun missing = run("solve --input /nonexistent/samples.yaml --output " + temp("x.yaml"));
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("IoError"), std::string::npos) << missing.err;
+  const CliRun no_input = run("solve");
+  EXPECT_EQ(no_input.exit_code, 2);
+  EXPECT_NE(no_input.err.find("input"), std::string::npos) << no_input.err;
+}
+
+TEST(Cli, ShippedExampleSolves) {
+  const std::string result = temp("example_result.yaml");
+  const CliRun r = run(std::string("solve --input ") + HANDEYE_SOURCE_DIR + "/config/examples/eye_in_hand_samples.yaml --output " + result);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto estimate = handeye::io::read_result(result);
+  const auto exact = handeye::io::read_result(std::string(HANDEYE_SOURCE_DIR) + "/config/examples/eye_in_hand_truth.yaml");
+  EXPECT_LT((estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation()).norm(), 0.003);
+}
+
+}  // namespace

@@ -1,0 +1,156 @@
+#include <gtest/gtest.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+
+#include "handeye_covariance/io/yaml_io.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+
+void expect_same_pose(const Isometry3d& a, const Isometry3d& b) {
+  EXPECT_LE((a.matrix() - b.matrix()).norm(), 1e-15);
+}
+
+void expect_parse_error(const std::string& text, ErrorCode code, const std::string& mentions) {
+  try {
+    io::parse_samples(text, "test.yaml");
+    ADD_FAILURE() << "expected " << to_string(code);
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), code) << e.what();
+    EXPECT_NE(std::string(e.what()).find(mentions), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Fix:"), std::string::npos) << e.what();
+  }
+}
+
+const char* kValid = R"(setup: eye_in_hand
+samples:
+  - effector: {translation: [0.1, 0.2, 0.3], rotation: [0, 0, 0, 1]}
+    pattern: {translation: [0, 0, 0.5], rotation: [1, 0, 0, 0]}
+)";
+
+TEST(YamlIo, SamplesRoundTripExactly) {
+  Rng rng(1);
+  SimulatedSession s = simulate_session(rng, Setup::EyeToHand, typical_X(Setup::EyeToHand), 7, paper_noise(1e-5));
+  s.samples.samples[2].noise = paper_noise(1e-3);
+  const SampleSet back = io::parse_samples(io::format_samples(s.samples), "memory");
+  EXPECT_EQ(back.setup, Setup::EyeToHand);
+  EXPECT_EQ(back.frames.camera, "camera_optical_frame");
+  ASSERT_EQ(back.samples.size(), 7u);
+  for (std::size_t i = 0; i < 7; ++i) {
+    expect_same_pose(back.samples[i].T_base_effector, s.samples.samples[i].T_base_effector);
+    expect_same_pose(back.samples[i].T_camera_pattern, s.samples.samples[i].T_camera_pattern);
+    EXPECT_EQ(*back.samples[i].stamp, *s.samples.samples[i].stamp);
+  }
+  ASSERT_TRUE(back.noise.has_value());
+  EXPECT_EQ(back.noise->camera.rotation, s.samples.noise->camera.rotation);
+  ASSERT_TRUE(back.samples[2].noise.has_value());
+  EXPECT_EQ(back.samples[2].noise->robot.translation, paper_noise(1e-3).robot.translation);
+  EXPECT_FALSE(back.samples[3].noise.has_value());
+}
+
+TEST(YamlIo, MotionsRoundTripExactly) {
+  Rng rng(2);
+  const MotionSet set = simulate_motions(rng, random_pose(rng, 0.5), 5, paper_noise(1e-4));
+  const MotionSet back = io::parse_motions(io::format_motions(set), "memory");
+  ASSERT_EQ(back.motions.size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) {
+    expect_same_pose(back.motions[i].A, set.motions[i].A);
+    expect_same_pose(back.motions[i].B, set.motions[i].B);
+  }
+  EXPECT_EQ(back.noise->robot.rotation, set.noise->robot.rotation);
+}
+
+TEST(YamlIo, ResultFileHasTheDocumentedLayout) {
+  Rng rng(3);
+  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, paper_noise(1e-5));
+  const Calibration c = solve(s.samples);
+  const std::string text = io::format_result(c, io::context_of(s.samples));
+  const YAML::Node root = YAML::Load(text);
+  EXPECT_EQ(root["setup"].as<std::string>(), "eye_in_hand");
+  EXPECT_EQ(root["parent"].as<std::string>(), "tool0");
+  EXPECT_EQ(root["child"].as<std::string>(), "camera_optical_frame");
+  EXPECT_EQ(root["covariance"]["rotation"].size(), 9u);
+  EXPECT_EQ(root["covariance"]["translation"].size(), 9u);
+  EXPECT_EQ(root["covariance"]["pose"].size(), 36u);
+  EXPECT_EQ(root["samples_used"].as<int>(), 12);
+  EXPECT_NEAR(root["transformation"]["x"].as<double>(), c.T_parent_camera.translation().x(), 1e-15);
+  // Row-major: entry 1 of `pose` is (x, y); entry 5 is (x, rz), the R-t cross block.
+  EXPECT_EQ(root["covariance"]["pose"][1].as<double>(), c.pose_covariance(0, 1));
+  EXPECT_EQ(root["covariance"]["pose"][5].as<double>(), c.pose_covariance(0, 5));
+  EXPECT_EQ(root["covariance"]["pose"][30].as<double>(), c.pose_covariance(5, 0));
+  EXPECT_EQ(root["noise"]["origin"].as<std::string>(), "given");
+
+  const io::CalibrationFile back = io::parse_result(text, "memory");
+  expect_same_pose(back.T_parent_camera.pose, c.T_parent_camera);
+  EXPECT_EQ(back.T_parent_camera.covariance, c.pose_covariance);
+  EXPECT_EQ(back.context.parent, "tool0");
+}
+
+TEST(YamlIo, ValidMinimalFileParses) {
+  const SampleSet set = io::parse_samples(kValid, "test.yaml");
+  EXPECT_EQ(set.samples.size(), 1u);
+  EXPECT_FALSE(set.noise.has_value());
+  EXPECT_NEAR(set.samples[0].T_camera_pattern.linear()(1, 1), -1.0, 1e-15);
+}
+
+TEST(YamlIo, NamedErrorsSayWhereAndHowToFix) {
+  expect_parse_error("setup: eye_in_hand\nsamples: [\n", ErrorCode::MalformedFile, "test.yaml:");
+  expect_parse_error("samples: []\n", ErrorCode::MissingKey, "setup");
+  expect_parse_error("setup: eye_on_hand\nsamples: []\n", ErrorCode::MalformedFile, "eye_on_hand");
+  expect_parse_error("setup: eye_in_hand\n", ErrorCode::MissingKey, "samples");
+  std::string text = kValid;
+  expect_parse_error(text.replace(text.find("[0.1, 0.2, 0.3]"), 15, "[0.1, 0.2]"), ErrorCode::WrongLength,
+                     "samples[0].effector.translation");
+  text = kValid;
+  expect_parse_error(text.replace(text.find("0.2, 0.3"), 3, ".nan"), ErrorCode::NonFinite,
+                     "samples[0].effector.translation[1]");
+  text = kValid;
+  expect_parse_error(text.replace(text.find("[1, 0, 0, 0]"), 12, "[1.5, 0, 0, 0]"), ErrorCode::QuaternionNotUnit,
+                     "samples[0].pattern.rotation");
+  text = kValid;
+  expect_parse_error(text.replace(text.find("0.5]"), 3, "abc"), ErrorCode::MalformedFile, "expected a number");
+  text = kValid;
+  expect_parse_error(text.replace(text.find("    pattern"), 57, ""), ErrorCode::MissingKey, "pattern");
+  expect_parse_error(std::string(kValid) + "noise: {effector: {rotation: [1,0,0,0,1,0,0,0,1]}}\n",
+                     ErrorCode::MissingKey, "noise.effector");
+  expect_parse_error(std::string(kValid) +
+                         "noise:\n  effector: {rotation: [-1,0,0,0,1,0,0,0,1], translation: [1,0,0,0,1,0,0,0,1]}\n"
+                         "  pattern: {rotation: [1,0,0,0,1,0,0,0,1], translation: [1,0,0,0,1,0,0,0,1]}\n",
+                     ErrorCode::InvalidNoise, "noise.effector.rotation");
+}
+
+TEST(YamlIo, ReadInputTellsSamplesFromMotions) {
+  const std::string dir = ::testing::TempDir();
+  io::write_file_atomically(dir + "/s.yaml", kValid);
+  EXPECT_TRUE(std::holds_alternative<SampleSet>(io::read_input(dir + "/s.yaml")));
+  Rng rng(4);
+  io::write_file_atomically(dir + "/m.yaml", io::format_motions(simulate_motions(rng, Isometry3d::Identity(), 3, paper_noise(1e-6))));
+  EXPECT_TRUE(std::holds_alternative<MotionSet>(io::read_input(dir + "/m.yaml")));
+  io::write_file_atomically(dir + "/x.yaml", "foo: 1\n");
+  EXPECT_THROW(io::read_input(dir + "/x.yaml"), HandEyeError);
+  try {
+    io::read_input(dir + "/does_not_exist.yaml");
+    ADD_FAILURE();
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), ErrorCode::IoError);
+  }
+}
+
+TEST(YamlIo, AtomicWriteLeavesNoTemporaryAndCreatesDirectories) {
+  const std::string dir = ::testing::TempDir() + "/atomic/nested";
+  std::filesystem::remove_all(::testing::TempDir() + "/atomic");
+  io::write_file_atomically(dir + "/out.yaml", "a: 1\n");
+  io::write_file_atomically(dir + "/out.yaml", "a: 2\n");
+  EXPECT_EQ(io::read_file(dir + "/out.yaml"), "a: 2\n");
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.is_regular_file() ? 1 : 0;
+  EXPECT_EQ(files, 1);
+}
+
+}  // namespace
+}  // namespace handeye
