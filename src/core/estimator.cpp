@@ -115,27 +115,37 @@ Marginals marginals(const Problem& problem, const NoiseScale& scale) {
 }
 
 /// Sum over inputs of (sum over influences of gain * J) Sigma (...)^T: the exact
-/// first-order covariance of an estimate whose sensitivity to each motion's A
-/// and B perturbation is `gain(motion, on_robot)` (Rows x 6).
-template <int Rows, typename Gain>
+/// first-order covariance of an estimate whose sensitivity (Rows x 6, to a
+/// ROS-order perturbation) to motion i's A or B is written by
+/// `gain(i, on_robot, out)`. Gains are made on the fly: storing them costs
+/// megabytes at large k, and fresh pages are expensive on some kernels.
+template <int Rows, typename GainFn>
 Eigen::Matrix<double, Rows, Rows> propagate(const Problem& problem, const NoiseScale& scale,
-                                            const Gain& gain) {
+                                            const GainFn& gain) {
+  using Total = Eigen::Matrix<double, Rows, 6>;
   Eigen::Matrix<double, Rows, Rows> covariance = Eigen::Matrix<double, Rows, Rows>::Zero();
+  Total G, one;
   for (const NoiseInput& input : problem.inputs) {
-    Eigen::Matrix<double, Rows, 6> total = Eigen::Matrix<double, Rows, 6>::Zero();
-    for (int j = 0; j < input.count; ++j) {
-      const Influence& inf = input.influences[j];
-      if (inf.jacobian < 0) {
-        total += gain(inf.motion, inf.on_robot);
-      } else {
-        total += gain(inf.motion, inf.on_robot) * problem.jacobians[inf.jacobian];
+    const Influence& first = input.influences[0];
+    if (input.count == 1 && first.jacobian < 0) {  // a motion's own noise
+      gain(first.motion, first.on_robot, G);
+    } else {  // a sample's noise: chain through the Jacobians of both motions it touches
+      G.setZero();
+      for (int j = 0; j < input.count; ++j) {
+        const Influence& inf = input.influences[j];
+        gain(inf.motion, inf.on_robot, one);
+        if (inf.jacobian < 0) {
+          G += one;
+        } else {
+          G.noalias() += one * problem.jacobians[inf.jacobian];
+        }
       }
     }
     // The input covariance is block-diagonal (translation, rotation).
-    covariance += scale.translation * total.template leftCols<3>() * input.covariance.translation *
-                      total.template leftCols<3>().transpose() +
-                  scale.rotation * total.template rightCols<3>() * input.covariance.rotation *
-                      total.template rightCols<3>().transpose();
+    covariance.noalias() += scale.translation * G.template leftCols<3>() * input.covariance.translation *
+                                G.template leftCols<3>().transpose();
+    covariance.noalias() += scale.rotation * G.template rightCols<3>() * input.covariance.rotation *
+                                G.template rightCols<3>().transpose();
   }
   return 0.5 * (covariance + covariance.transpose());
 }
@@ -263,7 +273,7 @@ RotationResult solve_rotation(const Matrix3d& R0, const RotationData& d, const P
     Vector3d xi = -lin.information.ldlt().solve(lin.gradient);
     const double step = xi.dot(lin.information * xi);
     if (step < options.step_tolerance) {
-      // ~1e-5 sigma: take it; the current linearisation is as good to first order.
+      // < 1e-4 sigma: take it; the current linearisation is as good to first order.
       result.R = so3::exp(xi) * result.R;
       result.diagnostics.stop_reason = StopReason::StepBelowTolerance;
       break;
@@ -310,10 +320,9 @@ RotationGains rotation_gains(const Matrix3d& R, const RotationLinearization& lin
 
 Matrix3d rotation_covariance(const Problem& problem, const NoiseScale& scale,
                              const RotationGains& g) {
-  return propagate<3>(problem, scale, [&](int motion, bool on_robot) {
-    Eigen::Matrix<double, 3, 6> gain = Eigen::Matrix<double, 3, 6>::Zero();
-    gain.rightCols<3>() = on_robot ? g.from_robot[motion] : g.from_camera[motion];
-    return gain;
+  return propagate<3>(problem, scale, [&](int i, bool on_robot, Eigen::Matrix<double, 3, 6>& out) {
+    out.leftCols<3>().setZero();
+    out.rightCols<3>() = on_robot ? g.from_robot[i] : g.from_camera[i];
   });
 }
 
@@ -336,9 +345,31 @@ struct TranslationState {
   std::vector<Vector3d> adjustment;  // xi_RAi of eq. (41)
 };
 
+/// What the translation stage needs per motion that does not change while R is fixed.
+struct TranslationConstants {
+  std::vector<Vector3d> q;        // q_i = R t_Bi - t_Ai  (eq. 36)
+  std::vector<Matrix3d> sigma_q;  // eq. (37): Sigma_tA + R Sigma_tB R^T + [R t_B] Sigma_R [R t_B]^T
+};
+
+TranslationConstants translation_constants(const Matrix3d& R, const Matrix3d& sigma_R, const Marginals& m,
+                                           const Problem& problem) {
+  const std::size_t k = problem.size();
+  TranslationConstants c;
+  c.q.resize(k);
+  c.sigma_q.resize(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    const Vector3d RtB = R * problem.B[i].translation();
+    const Matrix3d lever_B = so3::hat(RtB);
+    c.q[i] = RtB - problem.A[i].translation();
+    c.sigma_q[i] = m.A_translation[i] + R * m.B_translation[i] * R.transpose() +
+                   lever_B * sigma_R * lever_B.transpose();
+  }
+  return c;
+}
+
 /// Fills `lin` in place (see linearize_rotation).
-void linearize_translation(const TranslationState& s, const Matrix3d& R, const Matrix3d& sigma_R,
-                           const Marginals& m, const Problem& problem, TranslationLinearization& lin) {
+void linearize_translation(const TranslationState& s, const TranslationConstants& c, const Marginals& m,
+                           const Problem& problem, TranslationLinearization& lin) {
   lin.information.setZero();
   lin.rhs.setZero();
   lin.cost = 0.0;
@@ -350,20 +381,14 @@ void linearize_translation(const TranslationState& s, const Matrix3d& R, const M
   for (std::size_t i = 0; i < k; ++i) {
     const Matrix3d R_A = s.adjustment[i].isZero(0.0) ? problem.A[i].linear()
                                                      : Matrix3d(so3::exp(s.adjustment[i]) * problem.A[i].linear());
-    const Vector3d RtB = R * problem.B[i].translation();
-    const Vector3d q = RtB - problem.A[i].translation();  // eq. (36)
-    const Matrix3d lever_B = so3::hat(RtB);
     const Matrix3d lever_A = so3::hat(R_A * s.t);
-    // eq. (37): Sigma_q = Sigma_tA + R Sigma_tB R^T + [R t_B] Sigma_R [R t_B]^T, plus the
-    // eliminated R_Ai block [R_A t] Sigma_RA [R_A t]^T (eq. 47 via Schur).
-    const Matrix3d C = m.A_translation[i] + R * m.B_translation[i] * R.transpose() +
-                       lever_B * sigma_R * lever_B.transpose() +
-                       lever_A * m.A_rotation[i] * lever_A.transpose();
+    // Sigma_q (eq. 37) plus the eliminated R_Ai block [R_A t] Sigma_RA [R_A t]^T (eq. 47 via Schur).
+    const Matrix3d C = c.sigma_q[i] + lever_A * m.A_rotation[i] * lever_A.transpose();
     lin.M[i] = R_A - Matrix3d::Identity();
     lin.lever_A[i] = lever_A;
     lin.C_inverse[i] = inverse_spd(C, i, problem);
     // Linearised residual of q_i with the adjustment folded in (see solve_translation).
-    lin.reduced_residual[i] = q - lin.M[i] * s.t - lever_A * s.adjustment[i];
+    lin.reduced_residual[i] = c.q[i] - lin.M[i] * s.t - lever_A * s.adjustment[i];
     lin.information += lin.M[i].transpose() * lin.C_inverse[i] * lin.M[i];
     lin.rhs += lin.M[i].transpose() * lin.C_inverse[i] * lin.reduced_residual[i];
     lin.cost += lin.reduced_residual[i].dot(lin.C_inverse[i] * lin.reduced_residual[i]);
@@ -385,7 +410,8 @@ TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const
   TranslationResult result;
   result.state.t = t0;
   result.state.adjustment.assign(problem.size(), Vector3d::Zero());
-  linearize_translation(result.state, R, sigma_R, m, problem, result.linearization);
+  const TranslationConstants constants = translation_constants(R, sigma_R, m, problem);
+  linearize_translation(result.state, constants, m, problem, result.linearization);
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     result.diagnostics.iterations = iteration;
     const TranslationLinearization& lin = result.linearization;
@@ -402,7 +428,7 @@ TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const
     }
     result.state.t += dt;  // eq. (40)
     const double previous_cost = lin.cost;
-    linearize_translation(result.state, R, sigma_R, m, problem, result.linearization);
+    linearize_translation(result.state, constants, m, problem, result.linearization);
     if (converged_by_cost(previous_cost, result.linearization.cost, options.cost_tolerance)) {
       result.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
       break;
@@ -442,19 +468,18 @@ Matrix6d pose_covariance(const Problem& problem, const NoiseScale& scale, const 
     D += N[i] * so3::hat(R * problem.B[i].translation());
   }
   const Vector3d& t = translation.state.t;
-  return propagate<6>(problem, scale, [&](int i, bool on_robot) {
-    Matrix6d gain = Matrix6d::Zero();
+  return propagate<6>(problem, scale, [&](int i, bool on_robot, Matrix6d& out) {
+    out.bottomLeftCorner<3, 3>().setZero();
     if (on_robot) {
-      gain.topLeftCorner<3, 3>() = -N[i];
-      gain.topRightCorner<3, 3>() =
-          N[i] * so3::hat(problem.A[i].linear() * t) - D * g.from_robot[i];
-      gain.bottomRightCorner<3, 3>() = g.from_robot[i];
+      out.topLeftCorner<3, 3>() = -N[i];
+      out.topRightCorner<3, 3>().noalias() = N[i] * so3::hat(problem.A[i].linear() * t);
+      out.topRightCorner<3, 3>().noalias() -= D * g.from_robot[i];
+      out.bottomRightCorner<3, 3>() = g.from_robot[i];
     } else {
-      gain.topLeftCorner<3, 3>() = N[i] * R;
-      gain.topRightCorner<3, 3>() = -D * g.from_camera[i];
-      gain.bottomRightCorner<3, 3>() = g.from_camera[i];
+      out.topLeftCorner<3, 3>().noalias() = N[i] * R;
+      out.topRightCorner<3, 3>().noalias() = -D * g.from_camera[i];
+      out.bottomRightCorner<3, 3>() = g.from_camera[i];
     }
-    return gain;
   });
 }
 

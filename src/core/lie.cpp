@@ -9,6 +9,9 @@ namespace {
 // Below this angle the closed forms lose digits to cancellation; the Taylor
 // series used instead is accurate to ~1e-17 there.
 constexpr double kSmallAngle = 1e-4;
+// exp's series to theta^6 is exact in double precision below 1e-2 (the next
+// term is < 1e-21) and avoids sin/cos for noise-sized rotations.
+constexpr double kSeriesAngle = 1e-2;
 }  // namespace
 
 Eigen::Matrix3d hat(const Eigen::Vector3d& w) {
@@ -28,9 +31,9 @@ Eigen::Matrix3d exp(const Eigen::Vector3d& phi) {
   const double theta = std::sqrt(theta2);
   const Eigen::Matrix3d K = hat(phi);
   double a, b;  // R = I + a [phi] + b [phi]^2
-  if (theta < kSmallAngle) {
-    a = 1.0 - theta2 / 6.0;
-    b = 0.5 - theta2 / 24.0;
+  if (theta < kSeriesAngle) {
+    a = 1.0 - theta2 / 6.0 * (1.0 - theta2 / 20.0 * (1.0 - theta2 / 42.0));
+    b = 0.5 - theta2 / 24.0 * (1.0 - theta2 / 30.0 * (1.0 - theta2 / 56.0));
   } else {
     a = std::sin(theta) / theta;
     b = (1.0 - std::cos(theta)) / theta2;

@@ -30,9 +30,9 @@ namespace handeye {
 struct SolverOptions {
   int max_iterations = 50;
   /// Stop when the step's squared Mahalanobis length under the current
-  /// information matrix falls below this: the step is then ~1e-5 sigma, a
-  /// relative criterion that works at every noise level.
-  double step_tolerance = 1e-10;
+  /// information matrix falls below this: the step is then < 1e-4 sigma, a
+  /// relative criterion that works at every noise level and every k.
+  double step_tolerance = 1e-8;
   /// ... or when the relative change of the weighted cost falls below this.
   double cost_tolerance = 1e-14;
   /// A motion counts as rotating when both its angles exceed this ...
