@@ -237,6 +237,12 @@ void linearize_rotation(const Matrix3d& R, const RotationData& d, const Problem&
   }
 }
 
+/// The weighted residual sum of squares at the solution and its dof (3k - 3).
+void finish(StageDiagnostics& diagnostics, double cost, const Problem& problem) {
+  diagnostics.chi2 = cost;
+  diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
+}
+
 bool converged_by_cost(double previous, double current, double tolerance) {
   return std::abs(previous - current) <= tolerance * std::max(previous, 1e-300);
 }
@@ -294,8 +300,7 @@ RotationResult solve_rotation(const Matrix3d& R0, const RotationData& d, const P
       break;
     }
   }
-  result.diagnostics.chi2 = result.linearization.cost;
-  result.diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
+  finish(result.diagnostics, result.linearization.cost, problem);
   return result;
 }
 
@@ -434,8 +439,7 @@ TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const
       break;
     }
   }
-  result.diagnostics.chi2 = result.linearization.cost;
-  result.diagnostics.dof = 3 * static_cast<int>(problem.size()) - 3;
+  finish(result.diagnostics, result.linearization.cost, problem);
   return result;
 }
 

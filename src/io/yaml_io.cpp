@@ -168,6 +168,13 @@ void emit_pose(YAML::Emitter& out, const Isometry3d& pose) {
   emit_numbers(out, quaternion, 4);
 }
 
+/// `key: {translation: [...], rotation: [...]}` on one line.
+void emit_keyed_pose(YAML::Emitter& out, const char* key, const Isometry3d& pose) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+  emit_pose(out, pose);
+  out << YAML::EndMap;
+}
+
 void emit_covariance3(YAML::Emitter& out, const Matrix3d& covariance) {
   const auto values = to_row_major_3x3(covariance);
   emit_numbers(out, values.data(), values.size());
@@ -247,12 +254,8 @@ std::string format_samples(const SampleSet& set) {
   out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
   for (const PoseSample& s : set.samples) {
     out << YAML::BeginMap;
-    out << YAML::Key << "effector" << YAML::Value << YAML::Flow << YAML::BeginMap;
-    emit_pose(out, s.T_base_effector);
-    out << YAML::EndMap;
-    out << YAML::Key << "pattern" << YAML::Value << YAML::Flow << YAML::BeginMap;
-    emit_pose(out, s.T_camera_pattern);
-    out << YAML::EndMap;
+    emit_keyed_pose(out, "effector", s.T_base_effector);
+    emit_keyed_pose(out, "pattern", s.T_camera_pattern);
     if (s.stamp) out << YAML::Key << "stamp" << YAML::Value << *s.stamp;
     if (s.noise) {
       out << YAML::Key << "noise" << YAML::Value;
@@ -296,12 +299,8 @@ std::string format_motions(const MotionSet& set) {
   out << YAML::Key << "motions" << YAML::Value << YAML::BeginSeq;
   for (const MotionPair& m : set.motions) {
     out << YAML::BeginMap;
-    out << YAML::Key << "A" << YAML::Value << YAML::Flow << YAML::BeginMap;
-    emit_pose(out, m.A);
-    out << YAML::EndMap;
-    out << YAML::Key << "B" << YAML::Value << YAML::Flow << YAML::BeginMap;
-    emit_pose(out, m.B);
-    out << YAML::EndMap;
+    emit_keyed_pose(out, "A", m.A);
+    emit_keyed_pose(out, "B", m.B);
     if (m.noise) {
       out << YAML::Key << "noise" << YAML::Value;
       emit_noise(out, *m.noise, "A", "B");
