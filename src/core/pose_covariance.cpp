@@ -96,6 +96,12 @@ DecoupledPose inverse_decoupled(const DecoupledPose& T) {
   return result;
 }
 
+Matrix3d point_covariance(const PoseWithCovariance& T, const Eigen::Vector3d& p_child) {
+  Eigen::Matrix<double, 3, 6> J;
+  J << Matrix3d::Identity(), -so3::hat(T.pose.linear() * p_child);
+  return J * T.covariance * J.transpose();
+}
+
 Matrix6d from_row_major_6x6(const std::array<double, 36>& values) {
   return Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(values.data());
 }

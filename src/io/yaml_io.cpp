@@ -236,6 +236,14 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
 
 SampleSet read_samples(const std::string& path) { return parse_samples(read_file(path), path); }
 
+MeasurementNoise read_noise_file(const std::string& path) {
+  const YAML::Node root = load(read_file(path), path);
+  const Location top{path, ""};
+  return read_noise(require(root, "noise", top, "the file needs a `noise: {effector: {rotation, translation}, "
+                                                 "pattern: {rotation, translation}}` block"),
+                    top / "noise", "effector", "pattern");
+}
+
 std::string format_samples(const SampleSet& set) {
   YAML::Emitter out;
   new_emitter(out) << YAML::BeginMap;

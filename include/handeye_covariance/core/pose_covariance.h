@@ -56,6 +56,10 @@ DecoupledPose compose_decoupled(const DecoupledPose& T1, const DecoupledPose& T2
 /// Sigma_t' = R^T (Sigma_t + [t] Sigma_R [t]^T) R (the cross term is dropped).
 DecoupledPose inverse_decoupled(const DecoupledPose& T);
 
+/// Covariance of the point T * p_child (in T's parent frame), to first order:
+/// J = [I, -[R p_child]] on the ROS-order perturbation (dt, xi_R).
+Eigen::Matrix3d point_covariance(const PoseWithCovariance& T, const Eigen::Vector3d& p_child);
+
 /// ROS covariance arrays are row-major; read and write them only through these.
 Matrix6d from_row_major_6x6(const std::array<double, 36>& values);
 std::array<double, 36> to_row_major_6x6(const Matrix6d& covariance);

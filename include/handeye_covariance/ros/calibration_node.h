@@ -1,0 +1,89 @@
+// The calibration node: TF + pattern detections in, stamp-matched samples,
+// /calibrate out as PoseWithCovarianceStamped, a static TF and a YAML file.
+// The logic lives in the ROS-free core (Sampler, solve); this class is glue.
+#pragma once
+
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/core/sampler.h"
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+
+namespace handeye {
+
+class CalibrationNode {
+ public:
+  /// Reads ~parameters (see config/calibration_defaults.yaml), advertises
+  /// everything and, with ~resume, reloads the session file.
+  explicit CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node);
+  ~CalibrationNode();
+
+ private:
+  struct Config {
+    Setup setup = Setup::EyeInHand;
+    FrameNames frames;
+    std::string detection_input;  // tags | pose_with_covariance | pose | tf
+    std::vector<int> tag_ids;
+    std::optional<MeasurementNoise> noise;
+    bool publish_tf = true;
+    std::string calibration_file, session_file;
+    double tf_timeout = 0.5;
+    double working_distance = 0.7;
+    double target_tolerance_mm = 1.0;
+  };
+
+  // Inputs: each gives the pattern pose in some frame at a stamp.
+  void on_tags(const TagDetectionArray::ConstPtr& msg);
+  void on_pose_with_covariance(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg);
+  void on_tf_poll(const ros::TimerEvent&);
+  void observe(const ros::Time& stamp, const std::string& frame, const geometry_msgs::Pose& pose,
+               const boost::array<double, 36>* covariance);
+
+  bool calibrate(Calibrate::Request&, Calibrate::Response&);
+  bool take_sample(TakeSample::Request&, TakeSample::Response&);
+  bool remove_sample(RemoveSample::Request&, RemoveSample::Response&);
+  bool list_samples(ListSamples::Request&, ListSamples::Response&);
+  bool reset(Reset::Request&, Reset::Response&);
+  bool save_samples(SaveSamples::Request&, SaveSamples::Response&);
+  bool load_samples(LoadSamples::Request&, LoadSamples::Response&);
+  bool save_calibration(SaveCalibration::Request&, SaveCalibration::Response&);
+
+  /// After the samples changed (lock held): persist, re-estimate, publish status.
+  void samples_changed(const std::string& event);
+  void refuse(const std::string& reason);
+  void publish_status();
+  SampleSet sample_set() const;
+  std::string parent_frame() const;
+
+  Config config_;
+  ros::NodeHandle node_, private_node_, detection_node_;
+  ros::CallbackQueue detection_queue_;  // detections in order, on their own thread
+  std::unique_ptr<ros::AsyncSpinner> detection_spinner_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  ros::Subscriber detections_;
+  ros::Timer tf_poll_, status_timer_;
+  ros::Publisher calibration_pub_, status_pub_;
+  std::vector<ros::ServiceServer> services_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  Sampler sampler_;
+  std::optional<Calibration> estimate_;    // from the accepted samples, for ~status
+  std::optional<Calibration> calibration_; // from the last successful /calibrate
+  std::string last_event_ = "started";
+  ros::Time last_tf_stamp_;
+};
+
+}  // namespace handeye

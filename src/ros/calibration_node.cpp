@@ -1,0 +1,438 @@
+#include "handeye_covariance/ros/calibration_node.h"
+
+#include <tf2/exceptions.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+
+namespace handeye {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+template <typename T>
+T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
+  T value;
+  return nh.getParam(name, value) ? value : fallback;
+}
+
+std::string expand_home(const std::string& path) {
+  if (path.rfind("~/", 0) != 0) return path;
+  const char* home = std::getenv("HOME");
+  return std::string(home ? home : ".") + path.substr(1);
+}
+
+std::string fmt(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+
+}  // namespace
+
+CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node)
+    : node_(node),
+      private_node_(private_node),
+      detection_node_(node),
+      tf_listener_(tf_buffer_),
+      sampler_([&] {
+        SamplerOptions o;
+        o.auto_sample = param(private_node, "auto_sample", true);
+        o.still_window = param(private_node, "still_window", 1.0);
+        o.still_translation = param(private_node, "still_translation_mm", 0.5) * 1e-3;
+        o.still_rotation = param(private_node, "still_rotation_deg", 0.1) * kDeg;
+        o.pattern_still_translation = param(private_node, "pattern_still_translation_mm", 5.0) * 1e-3;
+        o.pattern_still_rotation = param(private_node, "pattern_still_rotation_deg", 1.0) * kDeg;
+        o.max_gap = param(private_node, "max_gap", 0.5);
+        o.min_translation = param(private_node, "min_translation_mm", 10.0) * 1e-3;
+        o.min_rotation = param(private_node, "min_rotation_deg", 2.0) * kDeg;
+        o.max_age = param(private_node, "max_age", 1.0);
+        return o;
+      }()) {
+  config_.setup = param(private_node_, "eye_on_hand", true) ? Setup::EyeInHand : Setup::EyeToHand;
+  config_.frames.base = param<std::string>(private_node_, "robot_base_frame", "base_link");
+  config_.frames.effector = param<std::string>(private_node_, "robot_effector_frame", "tool0");
+  config_.frames.camera = param<std::string>(private_node_, "tracking_base_frame", "camera_optical_frame");
+  config_.frames.pattern = param<std::string>(private_node_, "tracking_marker_frame", "tag_0");
+  config_.detection_input = param<std::string>(private_node_, "detection_input", "tags");
+  config_.tag_ids = param(private_node_, "tag_ids", std::vector<int>{});
+  config_.publish_tf = param(private_node_, "publish_tf", true);
+  config_.tf_timeout = param(private_node_, "tf_timeout", 0.5);
+  config_.working_distance = param(private_node_, "working_distance", 0.7);
+  config_.target_tolerance_mm = param(private_node_, "target_tolerance_mm", 1.0);
+  const std::string name = param<std::string>(private_node_, "namespace_prefix", "handeye") +
+                           (config_.setup == Setup::EyeInHand ? "_eye_on_hand" : "_eye_on_base");
+  config_.calibration_file =
+      expand_home(param<std::string>(private_node_, "calibration_file", "~/.ros/handeye_covariance/" + name + ".yaml"));
+  config_.session_file = expand_home(
+      param<std::string>(private_node_, "session_file", "~/.ros/handeye_covariance/" + name + "_samples.yaml"));
+
+  const std::string noise_config = param<std::string>(private_node_, "noise_config", "");
+  if (!noise_config.empty()) {
+    config_.noise = io::read_noise_file(noise_config);
+  }
+
+  if (param(private_node_, "resume", false) && std::filesystem::exists(config_.session_file)) {
+    sampler_.set_samples(io::read_samples(config_.session_file).samples);
+    ROS_INFO("resumed %zu samples from %s", sampler_.samples().size(), config_.session_file.c_str());
+    last_event_ = "resumed " + std::to_string(sampler_.samples().size()) + " samples";
+  }
+
+  calibration_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("calibration", 1, true);
+  status_pub_ = private_node_.advertise<CalibrationStatus>("status", 10, true);
+  services_ = {
+      node_.advertiseService("calibrate", &CalibrationNode::calibrate, this),
+      node_.advertiseService("take_sample", &CalibrationNode::take_sample, this),
+      node_.advertiseService("remove_sample", &CalibrationNode::remove_sample, this),
+      node_.advertiseService("list_samples", &CalibrationNode::list_samples, this),
+      node_.advertiseService("reset", &CalibrationNode::reset, this),
+      node_.advertiseService("save_samples", &CalibrationNode::save_samples, this),
+      node_.advertiseService("load_samples", &CalibrationNode::load_samples, this),
+      node_.advertiseService("save_calibration", &CalibrationNode::save_calibration, this),
+  };
+
+  detection_node_.setCallbackQueue(&detection_queue_);
+  const std::string topic = param<std::string>(private_node_, "detections_topic", "tag_detections");
+  if (config_.detection_input == "tags") {
+    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_tags, this);
+  } else if (config_.detection_input == "pose_with_covariance") {
+    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_pose_with_covariance, this);
+  } else if (config_.detection_input == "pose") {
+    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_pose, this);
+  } else if (config_.detection_input == "tf") {
+    tf_poll_ = detection_node_.createTimer(ros::Duration(1.0 / param(private_node_, "tf_poll_rate", 30.0)),
+                                           &CalibrationNode::on_tf_poll, this);
+  } else {
+    throw std::invalid_argument("~detection_input must be tags, pose_with_covariance, pose or tf, not `" +
+                                config_.detection_input + "`");
+  }
+  detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
+  detection_spinner_->start();
+  status_timer_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    publish_status();
+  });
+
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (sampler_.samples().size() >= 3) samples_changed(last_event_);
+  ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples",
+           to_string(config_.setup), parent_frame().c_str(), config_.frames.camera.c_str(),
+           config_.detection_input.c_str(), config_.detection_input == "tf" ? config_.frames.pattern.c_str() : topic.c_str(),
+           sampler_.samples().size());
+}
+
+CalibrationNode::~CalibrationNode() {
+  if (detection_spinner_) detection_spinner_->stop();
+}
+
+std::string CalibrationNode::parent_frame() const {
+  return config_.setup == Setup::EyeInHand ? config_.frames.effector : config_.frames.base;
+}
+
+// ------------------------------------------------------------------ inputs
+
+void CalibrationNode::on_tags(const TagDetectionArray::ConstPtr& msg) {
+  const TagDetection* chosen = nullptr;
+  const std::set<int> wanted(config_.tag_ids.begin(), config_.tag_ids.end());
+  for (const TagDetection& d : msg->detections) {
+    if (wanted.empty() ? msg->detections.size() == 1 : std::set<int>(d.id.begin(), d.id.end()) == wanted) {
+      chosen = &d;
+      break;
+    }
+  }
+  if (!chosen) {
+    if (!msg->detections.empty()) {
+      refuse(wanted.empty() ? "several detections in one message and ~tag_ids is empty; set ~tag_ids to the pattern's id(s)"
+                            : "no detection with the configured ~tag_ids in this message");
+    }
+    return;
+  }
+  const std::string& frame = chosen->pose.header.frame_id.empty() ? msg->header.frame_id : chosen->pose.header.frame_id;
+  const ros::Time stamp = chosen->pose.header.stamp.isZero() ? msg->header.stamp : chosen->pose.header.stamp;
+  observe(stamp, frame, chosen->pose.pose.pose, &chosen->pose.pose.covariance);
+}
+
+void CalibrationNode::on_pose_with_covariance(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+  observe(msg->header.stamp, msg->header.frame_id, msg->pose.pose, &msg->pose.covariance);
+}
+
+void CalibrationNode::on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
+  observe(msg->header.stamp, msg->header.frame_id, msg->pose, nullptr);
+}
+
+void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
+  geometry_msgs::TransformStamped latest;
+  try {
+    // The latest camera -> pattern transform; its own stamp is then used for the robot.
+    latest = tf_buffer_.lookupTransform(config_.frames.camera, config_.frames.pattern, ros::Time(0));
+  } catch (const tf2::TransformException&) {
+    return;  // pattern not seen (yet)
+  }
+  if (latest.header.stamp <= last_tf_stamp_) return;  // nothing new
+  last_tf_stamp_ = latest.header.stamp;
+  geometry_msgs::Pose pose;
+  pose.position.x = latest.transform.translation.x;
+  pose.position.y = latest.transform.translation.y;
+  pose.position.z = latest.transform.translation.z;
+  pose.orientation = latest.transform.rotation;
+  observe(latest.header.stamp, config_.frames.camera, pose, nullptr);
+}
+
+void CalibrationNode::observe(const ros::Time& stamp, const std::string& frame, const geometry_msgs::Pose& pose,
+                              const boost::array<double, 36>* covariance) {
+  if (stamp.isZero()) return refuse("a detection has a zero stamp; the detector must stamp with the image time");
+  const double norm = conversions::quaternion_norm(pose.orientation);
+  if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
+    return refuse("a detection's quaternion has norm " + fmt(norm) + "; expected a unit quaternion");
+  }
+  Eigen::Isometry3d T_camera_pattern = conversions::to_eigen(pose);
+  Eigen::Isometry3d T_base_effector;
+  try {
+    // The robot pose AT THE DETECTION'S STAMP, waiting for TF to catch up; never Time(0).
+    const ros::Duration timeout(config_.tf_timeout);
+    T_base_effector = conversions::to_eigen(
+        tf_buffer_.lookupTransform(config_.frames.base, config_.frames.effector, stamp, timeout).transform);
+    if (!frame.empty() && frame != config_.frames.camera) {
+      T_camera_pattern = conversions::to_eigen(
+                             tf_buffer_.lookupTransform(config_.frames.camera, frame, stamp, timeout).transform) *
+                         T_camera_pattern;
+    }
+  } catch (const tf2::TransformException& e) {
+    return refuse("no TF " + config_.frames.base + " -> " + config_.frames.effector + " at the detection stamp " +
+                  std::to_string(stamp.toSec()) + " (waited " + fmt(config_.tf_timeout) + " s): " + e.what() +
+                  ". Is the robot state publisher running, and are the clocks in sync?");
+  }
+  Observation observation;
+  observation.stamp = stamp.toSec();
+  observation.T_base_effector = T_base_effector;
+  observation.T_camera_pattern = T_camera_pattern;
+  if (covariance) observation.pattern_noise = conversions::decoupled_if_nonzero(*covariance);
+
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::optional<SampleOutcome> outcome = sampler_.observe(observation);
+  if (!outcome) return;
+  if (outcome->accepted) {
+    samples_changed(outcome->message);
+  } else {
+    ROS_WARN("%s", outcome->message.c_str());
+    last_event_ = outcome->message;
+    publish_status();
+  }
+}
+
+void CalibrationNode::refuse(const std::string& reason) {
+  ROS_WARN_THROTTLE(2.0, "sample refused: %s", reason.c_str());
+  std::lock_guard<std::mutex> lock(mutex_);
+  last_event_ = "refused: " + reason;
+}
+
+// ------------------------------------------------------------------ state
+
+SampleSet CalibrationNode::sample_set() const {
+  return make_sample_set(config_.setup, config_.frames, config_.noise, sampler_.samples());
+}
+
+void CalibrationNode::samples_changed(const std::string& event) {
+  last_event_ = event;
+  ROS_INFO("%s (%zu samples)", event.c_str(), sampler_.samples().size());
+  try {
+    io::write_file_atomically(config_.session_file, io::format_samples(sample_set()));
+  } catch (const HandEyeError& e) {
+    ROS_ERROR("could not save the session: %s", e.what());
+  }
+  estimate_.reset();
+  if (sampler_.samples().size() >= 3) {
+    try {
+      estimate_ = solve(sample_set());
+    } catch (const HandEyeError& e) {
+      last_event_ = event + "; no estimate yet: " + e.what();
+    }
+  }
+  publish_status();
+}
+
+void CalibrationNode::publish_status() {  // called with mutex_ held
+  CalibrationStatus status;
+  status.header.stamp = ros::Time::now();
+  status.samples = static_cast<int>(sampler_.samples().size());
+  status.samples_needed = 3;
+  status.last_event = last_event_;
+  status.state = to_string(sampler_.state());
+  status.parent_frame = parent_frame();
+  status.child_frame = config_.frames.camera;
+  status.working_distance = config_.working_distance;
+  status.target_tolerance_mm = config_.target_tolerance_mm;
+  if (estimate_) {
+    const PoseWithCovariance X{estimate_->T_parent_camera, estimate_->pose_covariance};
+    status.has_estimate = true;
+    status.estimate = conversions::to_msg(X);
+    for (int i = 0; i < 3; ++i) {
+      status.sigma_translation_mm[i] = std::sqrt(std::max(0.0, X.covariance(i, i))) * 1e3;
+      status.sigma_rotation_deg[i] = std::sqrt(std::max(0.0, X.covariance(i + 3, i + 3))) / kDeg;
+    }
+    // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
+    status.object_error_mm =
+        max_sigma(point_covariance(X, Eigen::Vector3d(0, 0, config_.working_distance))) * 1e3;
+    status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
+  }
+  status_pub_.publish(status);
+}
+
+// ------------------------------------------------------------------ services
+
+bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const SampleSet set = sample_set();
+  try {
+    calibration_ = solve(set);
+  } catch (const HandEyeError& e) {
+    res.success = false;
+    res.message = e.what();
+    res.samples_used = static_cast<int>(set.samples.size());
+    ROS_WARN("calibrate: %s", e.what());
+    return true;
+  }
+  const Calibration& c = *calibration_;
+  res.success = true;
+  res.calibration.header.stamp = ros::Time::now();
+  res.calibration.header.frame_id = parent_frame();
+  res.calibration.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
+  res.rotation_covariance = conversions::to_msg_array(c.rotation_covariance);
+  res.translation_covariance = conversions::to_msg_array(c.translation_covariance);
+  res.samples_used = c.samples_used;
+  res.rotation_iterations = c.rotation_stage.iterations;
+  res.translation_iterations = c.translation_stage.iterations;
+  res.rotation_stop_reason = to_string(c.rotation_stage.stop_reason);
+  res.translation_stop_reason = to_string(c.translation_stage.stop_reason);
+  res.rotation_chi2_per_dof = c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof);
+  res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
+  res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
+  res.warnings = c.warnings;
+  res.message = "X = T_" + parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
+                " samples; worst-axis 1 sigma " + fmt(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
+                fmt(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+
+  calibration_pub_.publish(res.calibration);
+  if (config_.publish_tf) {
+    geometry_msgs::TransformStamped tf;
+    tf.header = res.calibration.header;
+    tf.child_frame_id = config_.frames.camera;
+    tf.transform = conversions::to_transform_msg(c.T_parent_camera);
+    static_broadcaster_.sendTransform(tf);
+  }
+  try {
+    io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(set)));
+    res.calibration_file = config_.calibration_file;
+  } catch (const HandEyeError& e) {
+    res.message += "; but the result file could not be written: " + std::string(e.what());
+  }
+  ROS_INFO("calibrate: %s", res.message.c_str());
+  return true;
+}
+
+bool CalibrationNode::take_sample(TakeSample::Request&, TakeSample::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const SampleOutcome outcome = sampler_.take_sample(ros::Time::now().toSec());
+  res.success = outcome.accepted;
+  res.message = outcome.message;
+  if (outcome.accepted) {
+    samples_changed(outcome.message);
+  } else {
+    last_event_ = outcome.message;
+  }
+  res.samples = static_cast<int>(sampler_.samples().size());
+  return true;
+}
+
+bool CalibrationNode::remove_sample(RemoveSample::Request& req, RemoveSample::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::size_t count = sampler_.samples().size();
+  res.success = req.index >= 0 && sampler_.remove(static_cast<std::size_t>(req.index));
+  res.message = res.success ? "removed sample " + std::to_string(req.index)
+                            : "no sample " + std::to_string(req.index) + ": valid indices are 0.." +
+                                  std::to_string(static_cast<long>(count) - 1) + " (see list_samples)";
+  if (res.success) samples_changed(res.message);
+  res.samples = static_cast<int>(sampler_.samples().size());
+  return true;
+}
+
+bool CalibrationNode::list_samples(ListSamples::Request&, ListSamples::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const PoseSample& s : sampler_.samples()) {
+    res.effector_poses.push_back(conversions::to_pose_msg(s.T_base_effector));
+    res.pattern_poses.push_back(conversions::to_pose_msg(s.T_camera_pattern));
+    res.stamps.push_back(s.stamp.value_or(0.0));
+  }
+  res.samples = static_cast<int>(sampler_.samples().size());
+  return true;
+}
+
+bool CalibrationNode::reset(Reset::Request&, Reset::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  sampler_.reset();
+  samples_changed("reset: all samples dropped");
+  res.success = true;
+  res.message = "all samples dropped";
+  return true;
+}
+
+bool CalibrationNode::save_samples(SaveSamples::Request& req, SaveSamples::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    io::write_file_atomically(expand_home(req.path), io::format_samples(sample_set()));
+    res.success = true;
+    res.message = "saved " + std::to_string(sampler_.samples().size()) + " samples to " + expand_home(req.path);
+  } catch (const HandEyeError& e) {
+    res.success = false;
+    res.message = e.what();
+  }
+  return true;
+}
+
+bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    const SampleSet loaded = io::read_samples(expand_home(req.path));
+    if (loaded.setup != config_.setup) {
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         std::string("the file is ") + to_string(loaded.setup) + " but this node is " +
+                             to_string(config_.setup),
+                         req.path, "load a file recorded with the same setup");
+    }
+    sampler_.set_samples(loaded.samples);
+    res.success = true;
+    res.message = "loaded " + std::to_string(loaded.samples.size()) + " samples from " + req.path;
+    samples_changed(res.message);
+  } catch (const HandEyeError& e) {
+    res.success = false;
+    res.message = e.what();  // the current samples are kept
+  }
+  res.samples = static_cast<int>(sampler_.samples().size());
+  return true;
+}
+
+bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibration::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  res.path = req.path.empty() ? config_.calibration_file : expand_home(req.path);
+  if (!calibration_) {
+    res.success = false;
+    res.message = "no calibration yet: call calibrate first";
+    return true;
+  }
+  try {
+    io::write_file_atomically(res.path, io::format_result(*calibration_, io::context_of(sample_set())));
+    res.success = true;
+    res.message = "saved to " + res.path;
+  } catch (const HandEyeError& e) {
+    res.success = false;
+    res.message = e.what();
+  }
+  return true;
+}
+
+}  // namespace handeye

@@ -1,0 +1,169 @@
+// A simulated calibration rig with a known X, for trying the node without a robot
+// and for the rostests. The robot holds a pose for ~pause_time, then moves to the
+// next in ~move_time. The base -> flange TF is published at ~tf_rate, with a static
+// flange -> tool0 offset. Pattern detections come at ~detection_rate, stamped with
+// the capture time and published ~latency later, with per-frame noise.
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <ros/ros.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+
+namespace handeye {
+namespace {
+
+template <typename T>
+T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
+  T value;
+  return nh.getParam(name, value) ? value : fallback;
+}
+
+class RigSimulator {
+ public:
+  RigSimulator(ros::NodeHandle node, ros::NodeHandle pn) : rng_(param(pn, "seed", 1)) {
+    setup_ = param(pn, "eye_on_hand", true) ? Setup::EyeInHand : Setup::EyeToHand;
+    base_ = param<std::string>(pn, "robot_base_frame", "base_link");
+    effector_ = param<std::string>(pn, "robot_effector_frame", "tool0");
+    camera_ = param<std::string>(pn, "tracking_base_frame", "camera_optical_frame");
+    pattern_frame_ = param<std::string>(pn, "tracking_marker_frame", "tag_0");
+    output_ = param<std::string>(pn, "output", "tags");
+    publish_robot_tf_ = param(pn, "publish_robot_tf", true);
+    detection_covariance_ = param(pn, "detection_covariance", false);
+    move_time_ = param(pn, "move_time", 1.0);
+    pause_time_ = param(pn, "pause_time", 2.0);
+    latency_ = param(pn, "latency", 0.05);
+    tag_ids_ = param(pn, "tag_ids", std::vector<int>{0});
+    const double rotation_sigma = param(pn, "pattern_rotation_noise_deg", 0.05) * M_PI / 180.0;
+    const double translation_sigma = param(pn, "pattern_translation_noise_mm", 0.3) * 1e-3;
+    noise_.rotation = rotation_sigma * rotation_sigma * Eigen::Matrix3d::Identity();
+    noise_.translation = translation_sigma * translation_sigma * Eigen::Matrix3d::Identity();
+
+    const std::vector<double> truth = param(pn, "truth", std::vector<double>{});
+    X_ = truth.size() == 7 ? se3::make_pose(Eigen::Quaterniond(truth[6], truth[3], truth[4], truth[5]).normalized().toRotationMatrix(),
+                                            Eigen::Vector3d(truth[0], truth[1], truth[2]))
+                           : typical_X(setup_);
+    const MeasurementNoise none;
+    const SimulatedSession session = simulate_session(rng_, setup_, X_, param(pn, "poses", 12), none);
+    Y_ = session.T_world_pattern;
+    for (const PoseSample& s : session.samples.samples) poses_.push_back(s.T_base_effector);
+    flange_T_tool_ = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
+
+    truth_pub_ = pn.advertise<geometry_msgs::PoseStamped>("truth", 1, true);
+    geometry_msgs::PoseStamped truth_msg;
+    truth_msg.header.frame_id = setup_ == Setup::EyeInHand ? effector_ : base_;
+    truth_msg.pose = conversions::to_pose_msg(X_);
+    truth_pub_.publish(truth_msg);
+
+    const std::string topic = param<std::string>(pn, "detections_topic", "tag_detections");
+    if (output_ == "tags") detections_ = node.advertise<TagDetectionArray>(topic, 10);
+    if (output_ == "pose_with_covariance") detections_ = node.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 10);
+    if (output_ == "pose") detections_ = node.advertise<geometry_msgs::PoseStamped>(topic, 10);
+
+    geometry_msgs::TransformStamped offset;
+    offset.header.stamp = ros::Time::now();
+    offset.header.frame_id = "flange";
+    offset.child_frame_id = effector_;
+    offset.transform = conversions::to_transform_msg(flange_T_tool_);
+    if (publish_robot_tf_) static_broadcaster_.sendTransform(offset);
+
+    start_ = ros::Time::now();
+    tf_timer_ = node.createTimer(ros::Duration(1.0 / param(pn, "tf_rate", 200.0)), &RigSimulator::publish_tf, this);
+    detection_timer_ =
+        node.createTimer(ros::Duration(1.0 / param(pn, "detection_rate", 20.0)), &RigSimulator::publish_detection, this);
+    ROS_INFO("rig simulator: %s, %zu poses, %.1f s pause, %.1f s move, detections as `%s`", to_string(setup_),
+             poses_.size(), pause_time_, move_time_, output_.c_str());
+  }
+
+ private:
+  /// T_base_effector at time t: hold each pose, then a smooth move to the next.
+  Eigen::Isometry3d effector_at(const ros::Time& t) const {
+    const double period = pause_time_ + move_time_;
+    const double elapsed = std::max(0.0, (t - start_).toSec());
+    const std::size_t i = static_cast<std::size_t>(elapsed / period);
+    if (i + 1 >= poses_.size()) return poses_.back();  // done: stay at the last pose
+    const double u = std::max(0.0, (elapsed - i * period - pause_time_) / move_time_);
+    const double s = u * u * (3.0 - 2.0 * u);  // smoothstep
+    const Eigen::Quaterniond q0(poses_[i].linear()), q1(poses_[i + 1].linear());
+    return se3::make_pose(q0.slerp(s, q1).toRotationMatrix(),
+                          (1.0 - s) * poses_[i].translation() + s * poses_[i + 1].translation());
+  }
+
+  Eigen::Isometry3d pattern_at(const ros::Time& t) const {
+    const Eigen::Isometry3d E = effector_at(t);
+    // eye_in_hand: E X P = Y;  eye_to_hand: E Y = X P.
+    return setup_ == Setup::EyeInHand ? X_.inverse() * E.inverse() * Y_ : X_.inverse() * E * Y_;
+  }
+
+  void publish_tf(const ros::TimerEvent&) {
+    if (!publish_robot_tf_) return;
+    const ros::Time now = ros::Time::now();
+    geometry_msgs::TransformStamped tf;
+    tf.header.stamp = now;
+    tf.header.frame_id = base_;
+    tf.child_frame_id = "flange";
+    tf.transform = conversions::to_transform_msg(effector_at(now) * flange_T_tool_.inverse());
+    broadcaster_.sendTransform(tf);
+  }
+
+  void publish_detection(const ros::TimerEvent&) {
+    const ros::Time capture = ros::Time::now() - ros::Duration(latency_);
+    const Eigen::Isometry3d P = perturb(rng_, pattern_at(capture), noise_);
+    geometry_msgs::PoseWithCovarianceStamped pose;
+    pose.header.stamp = capture;
+    pose.header.frame_id = camera_;
+    pose.pose.pose = conversions::to_pose_msg(P);
+    if (detection_covariance_) pose.pose.covariance = conversions::to_msg(PoseWithCovariance{P, noise_.as_pose_covariance()}).covariance;
+    if (output_ == "tags") {
+      TagDetectionArray array;
+      array.header = pose.header;
+      TagDetection detection;
+      detection.id = tag_ids_;
+      detection.size.assign(tag_ids_.size(), 0.1);
+      detection.pose = pose;
+      array.detections.push_back(detection);
+      detections_.publish(array);
+    } else if (output_ == "pose_with_covariance") {
+      detections_.publish(pose);
+    } else if (output_ == "pose") {
+      geometry_msgs::PoseStamped plain;
+      plain.header = pose.header;
+      plain.pose = pose.pose.pose;
+      detections_.publish(plain);
+    } else {  // tf
+      geometry_msgs::TransformStamped tf;
+      tf.header = pose.header;
+      tf.child_frame_id = pattern_frame_;
+      tf.transform = conversions::to_transform_msg(P);
+      broadcaster_.sendTransform(tf);
+    }
+  }
+
+  Rng rng_;
+  Setup setup_;
+  std::string base_, effector_, camera_, pattern_frame_, output_;
+  bool publish_robot_tf_, detection_covariance_;
+  double move_time_, pause_time_, latency_;
+  std::vector<int> tag_ids_;
+  DecoupledCovariance noise_;
+  Eigen::Isometry3d X_, Y_, flange_T_tool_;
+  std::vector<Eigen::Isometry3d> poses_;
+  ros::Time start_;
+  ros::Publisher truth_pub_, detections_;
+  ros::Timer tf_timer_, detection_timer_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+};
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "rig_simulator");
+  handeye::RigSimulator rig(ros::NodeHandle(), ros::NodeHandle("~"));
+  ros::spin();
+  return 0;
+}

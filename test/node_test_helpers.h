@@ -1,0 +1,50 @@
+// Helpers for the rostest clients: waiting on topics and services with deadlines.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include <functional>
+
+#include "handeye_covariance/ros/messages.h"
+
+namespace handeye {
+namespace test {
+
+/// Spins until `done()` or `seconds` of wall time pass; returns done().
+inline bool wait_for(const std::function<bool()>& done, double seconds) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && !done() && ros::WallTime::now() < deadline) {
+    ros::spinOnce();
+    ros::WallDuration(0.02).sleep();
+  }
+  return done();
+}
+
+/// Keeps the latest ~status message.
+struct StatusWatcher {
+  CalibrationStatus latest;
+  bool received = false;
+  ros::Subscriber subscriber;
+  explicit StatusWatcher(const std::string& topic) {
+    ros::NodeHandle nh;
+    subscriber = nh.subscribe<CalibrationStatus>(topic, 10, [this](const CalibrationStatus::ConstPtr& msg) {
+      latest = *msg;
+      received = true;
+    });
+  }
+};
+
+template <typename Service>
+bool call(const std::string& name, Service& srv) {
+  if (!ros::service::waitForService(name, ros::Duration(20.0))) {
+    ADD_FAILURE() << "service " << name << " did not come up";
+    return false;
+  }
+  const bool ok = ros::service::call(name, srv);
+  EXPECT_TRUE(ok) << "call to " << name << " failed";
+  return ok;
+}
+
+}  // namespace test
+}  // namespace handeye

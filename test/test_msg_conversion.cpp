@@ -1,0 +1,51 @@
+// Round trips across the only ROS <-> Eigen seam.
+#include <gtest/gtest.h>
+
+#include "handeye_covariance/ros/msg_conversion.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+TEST(MsgConversion, PoseAndTransformRoundTrip) {
+  Rng rng(1);
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Isometry3d T = random_pose(rng, 2.0);
+    EXPECT_LE((conversions::to_eigen(conversions::to_pose_msg(T)).matrix() - T.matrix()).norm(), 1e-14);
+    EXPECT_LE((conversions::to_eigen(conversions::to_transform_msg(T)).matrix() - T.matrix()).norm(), 1e-14);
+  }
+}
+
+TEST(MsgConversion, CovarianceIsRowMajorInRosOrder) {
+  PoseWithCovariance p;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) p.covariance(r, c) = 10 * r + c;
+  const geometry_msgs::PoseWithCovariance msg = conversions::to_msg(p);
+  EXPECT_EQ(msg.covariance[1], 1.0);   // (x, y)
+  EXPECT_EQ(msg.covariance[6], 10.0);  // (y, x)
+  EXPECT_EQ(msg.covariance[35], 55.0); // (rz, rz)
+  EXPECT_EQ(conversions::to_core(msg).covariance, p.covariance);
+}
+
+TEST(MsgConversion, DecoupledBlocksOnlyWhenNonZero) {
+  boost::array<double, 36> zeros{};
+  EXPECT_FALSE(conversions::decoupled_if_nonzero(zeros).has_value());
+  boost::array<double, 36> c{};
+  c[0] = 1e-6;   // x x
+  c[35] = 4e-6;  // rz rz
+  c[5] = 9.0;    // x-rz cross term: not part of either block
+  const auto blocks = conversions::decoupled_if_nonzero(c);
+  ASSERT_TRUE(blocks.has_value());
+  EXPECT_EQ(blocks->translation(0, 0), 1e-6);
+  EXPECT_EQ(blocks->rotation(2, 2), 4e-6);
+  EXPECT_EQ(blocks->translation(0, 2), 0.0);
+}
+
+TEST(MsgConversion, QuaternionNorm) {
+  geometry_msgs::Quaternion q;
+  q.w = 2.0;
+  EXPECT_DOUBLE_EQ(conversions::quaternion_norm(q), 2.0);
+}
+
+}  // namespace
+}  // namespace handeye

@@ -1,0 +1,152 @@
+// Client of calibration_node.test: the rig moves through 12 poses; the node
+// auto-samples; /calibrate must return the rig's X with an honest covariance.
+#include <geometry_msgs/PoseStamped.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <filesystem>
+
+#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+#include "node_test_helpers.h"
+
+namespace handeye {
+namespace {
+
+const std::string kNs = "/test_eye_on_hand/";
+
+TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
+  ros::NodeHandle nh;
+  geometry_msgs::PoseStamped truth;
+  bool have_truth = false;
+  auto truth_sub = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1, [&](const auto& msg) {
+    truth = *msg;
+    have_truth = true;
+  });
+  geometry_msgs::PoseWithCovarianceStamped published;
+  bool have_published = false;
+  auto calibration_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+      kNs + "handeye_calibration/calibration", 1, [&](const auto& msg) {
+        published = *msg;
+        have_published = true;
+      });
+  test::StatusWatcher status(kNs + "handeye_calibration/status");
+  ASSERT_TRUE(test::wait_for([&] { return have_truth; }, 20.0)) << "no truth from the rig";
+
+  // 12 poses, 1.7 s each: the node must take a sample at (nearly) every pause.
+  ASSERT_TRUE(test::wait_for([&] { return status.received && status.latest.samples >= 10; }, 60.0))
+      << "samples: " << status.latest.samples << ", last event: " << status.latest.last_event;
+  EXPECT_TRUE(status.latest.has_estimate) << status.latest.last_event;
+  EXPECT_GT(status.latest.object_error_mm, 0.0);
+  EXPECT_EQ(status.latest.parent_frame, "tool0");
+
+  Calibrate calibrate;
+  ASSERT_TRUE(test::call(kNs + "calibrate", calibrate));
+  ASSERT_TRUE(calibrate.response.success) << calibrate.response.message;
+  EXPECT_EQ(calibrate.response.calibration.header.frame_id, "tool0");
+  EXPECT_GE(calibrate.response.samples_used, 10);
+  EXPECT_EQ(calibrate.response.noise_origin, "estimated_from_residuals");
+
+  // Within the predicted uncertainty of the truth: 6-dof Mahalanobis below the
+  // chi2(6) 99.9% quantile, and a few millimetres at most.
+  const PoseWithCovariance X = conversions::to_core(calibrate.response.calibration.pose);
+  const Vector6d error = pose_error(X.pose, conversions::to_eigen(truth.pose));
+  const double nees = error.dot(X.covariance.ldlt().solve(error));
+  EXPECT_LT(nees, 22.46) << "error " << error.transpose();
+  EXPECT_LT(error.head<3>().norm(), 0.003);
+  EXPECT_GT(X.covariance.trace(), 0.0);
+
+  // The latched message, the TF and the file say the same.
+  ASSERT_TRUE(test::wait_for([&] { return have_published; }, 5.0));
+  EXPECT_LE((conversions::to_eigen(published.pose.pose).matrix() - X.pose.matrix()).norm(), 1e-9);
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  ASSERT_TRUE(test::wait_for([&] { return buffer.canTransform("tool0", "camera_optical_frame", ros::Time(0)); }, 5.0));
+  const Eigen::Isometry3d tf = conversions::to_eigen(buffer.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)).transform);
+  EXPECT_LE((tf.matrix() - X.pose.matrix()).norm(), 1e-9);
+  const io::CalibrationFile file = io::read_result(calibrate.response.calibration_file);
+  EXPECT_LE((file.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-12);
+  EXPECT_LE((file.T_parent_camera.covariance - X.covariance).norm(), 1e-18);
+
+  // Services, including bad input.
+  ListSamples list;
+  ASSERT_TRUE(test::call(kNs + "list_samples", list));
+  const int n = list.response.samples;
+  EXPECT_EQ(static_cast<int>(list.response.effector_poses.size()), n);
+
+  RemoveSample remove;
+  remove.request.index = 999;
+  ASSERT_TRUE(test::call(kNs + "remove_sample", remove));
+  EXPECT_FALSE(remove.response.success);
+  EXPECT_NE(remove.response.message.find("valid indices"), std::string::npos) << remove.response.message;
+  remove.request.index = -1;
+  ASSERT_TRUE(test::call(kNs + "remove_sample", remove));
+  EXPECT_FALSE(remove.response.success);
+  EXPECT_EQ(remove.response.samples, n);
+
+  SaveSamples save;
+  save.request.path = "/tmp/handeye_covariance_rostest/saved_samples.yaml";
+  ASSERT_TRUE(test::call(kNs + "save_samples", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+
+  remove.request.index = 0;
+  ASSERT_TRUE(test::call(kNs + "remove_sample", remove));
+  EXPECT_TRUE(remove.response.success);
+  EXPECT_EQ(remove.response.samples, n - 1);
+
+  Reset reset;
+  ASSERT_TRUE(test::call(kNs + "reset", reset));
+  Calibrate too_few;
+  ASSERT_TRUE(test::call(kNs + "calibrate", too_few));
+  EXPECT_FALSE(too_few.response.success);
+  EXPECT_NE(too_few.response.message.find("TooFewMotions"), std::string::npos) << too_few.response.message;
+
+  LoadSamples missing;
+  missing.request.path = "/nonexistent/samples.yaml";
+  ASSERT_TRUE(test::call(kNs + "load_samples", missing));
+  EXPECT_FALSE(missing.response.success);
+  EXPECT_NE(missing.response.message.find("IoError"), std::string::npos) << missing.response.message;
+
+  LoadSamples load;
+  load.request.path = save.request.path;
+  ASSERT_TRUE(test::call(kNs + "load_samples", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_EQ(load.response.samples, n);
+  Calibrate again;
+  ASSERT_TRUE(test::call(kNs + "calibrate", again));
+  ASSERT_TRUE(again.response.success) << again.response.message;
+  EXPECT_LE((conversions::to_eigen(again.response.calibration.pose.pose).matrix() - X.pose.matrix()).norm(), 1e-9)
+      << "save/load round trip changed the result";
+
+  // Manual sampling: once the robot stands still (at most ~2 s away), one sample
+  // may be taken; the same pose a second time is refused as a near duplicate.
+  TakeSample take;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        test::call(kNs + "take_sample", take);  // refused while moving or before fresh data
+        return take.response.success || take.response.message.find("too close") != std::string::npos;
+      },
+      30.0))
+      << take.response.message;
+  TakeSample again_same_pose;
+  ASSERT_TRUE(test::call(kNs + "take_sample", again_same_pose));
+  EXPECT_FALSE(again_same_pose.response.success);
+  EXPECT_NE(again_same_pose.response.message.find("too close"), std::string::npos) << again_same_pose.response.message;
+
+  SaveCalibration save_calibration;
+  save_calibration.request.path = "/tmp/handeye_covariance_rostest/explicit.yaml";
+  ASSERT_TRUE(test::call(kNs + "save_calibration", save_calibration));
+  EXPECT_TRUE(save_calibration.response.success) << save_calibration.response.message;
+  EXPECT_TRUE(std::filesystem::exists(save_calibration.request.path));
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_calibration_node");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
