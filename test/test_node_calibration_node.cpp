@@ -14,7 +14,8 @@
 namespace handeye {
 namespace {
 
-const std::string kNs = "/test_eye_on_hand/";
+// Set per launch file (private params of this test node).
+std::string kNs, kParent, kNoiseOrigin;
 
 TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ros::NodeHandle nh;
@@ -39,14 +40,14 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
       << "samples: " << status.latest.samples << ", last event: " << status.latest.last_event;
   EXPECT_TRUE(status.latest.has_estimate) << status.latest.last_event;
   EXPECT_GT(status.latest.object_error_mm, 0.0);
-  EXPECT_EQ(status.latest.parent_frame, "tool0");
+  EXPECT_EQ(status.latest.parent_frame, kParent);
 
   Calibrate calibrate;
   ASSERT_TRUE(test::call(kNs + "calibrate", calibrate));
   ASSERT_TRUE(calibrate.response.success) << calibrate.response.message;
-  EXPECT_EQ(calibrate.response.calibration.header.frame_id, "tool0");
+  EXPECT_EQ(calibrate.response.calibration.header.frame_id, kParent);
   EXPECT_GE(calibrate.response.samples_used, 10);
-  EXPECT_EQ(calibrate.response.noise_origin, "estimated_from_residuals");
+  EXPECT_EQ(calibrate.response.noise_origin, kNoiseOrigin);
 
   // Within the predicted uncertainty of the truth: 6-dof Mahalanobis below the
   // chi2(6) 99.9% quantile, and a few millimetres at most.
@@ -62,8 +63,8 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_LE((conversions::to_eigen(published.pose.pose).matrix() - X.pose.matrix()).norm(), 1e-9);
   tf2_ros::Buffer buffer;
   tf2_ros::TransformListener listener(buffer);
-  ASSERT_TRUE(test::wait_for([&] { return buffer.canTransform("tool0", "camera_optical_frame", ros::Time(0)); }, 5.0));
-  const Eigen::Isometry3d tf = conversions::to_eigen(buffer.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)).transform);
+  ASSERT_TRUE(test::wait_for([&] { return buffer.canTransform(kParent, "camera_optical_frame", ros::Time(0)); }, 5.0));
+  const Eigen::Isometry3d tf = conversions::to_eigen(buffer.lookupTransform(kParent, "camera_optical_frame", ros::Time(0)).transform);
   EXPECT_LE((tf.matrix() - X.pose.matrix()).norm(), 1e-9);
   const io::CalibrationFile file = io::read_result(calibrate.response.calibration_file);
   EXPECT_LE((file.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-12);
@@ -147,6 +148,9 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_calibration_node");
-  ros::NodeHandle nh;
+  ros::NodeHandle nh, pn("~");
+  handeye::kNs = pn.param<std::string>("namespace", "/test_eye_on_hand/");
+  handeye::kParent = pn.param<std::string>("parent_frame", "tool0");
+  handeye::kNoiseOrigin = pn.param<std::string>("noise_origin", "estimated_from_residuals");
   return RUN_ALL_TESTS();
 }
