@@ -1,5 +1,7 @@
 #include "handeye_covariance/core/errors.h"
 
+#include <cstdio>
+
 namespace handeye {
 
 const char* to_string(ErrorCode code) {
@@ -21,6 +23,12 @@ const char* to_string(ErrorCode code) {
     case ErrorCode::IoError: return "IoError";
   }
   return "Unknown";
+}
+
+std::string number_text(double value, int significant_digits) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.*g", significant_digits, value);
+  return buffer;
 }
 
 namespace {

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <sstream>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/validation.h"
@@ -26,13 +25,6 @@ namespace {
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
-
-std::string fmt(double value, int precision = 3) {
-  std::ostringstream out;
-  out.precision(precision);
-  out << value;
-  return out.str();
-}
 
 double degrees(double radians) { return radians * 180.0 / M_PI; }
 
@@ -536,9 +528,9 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
     if (mismatch > limit) {
       throw HandEyeError(
           ErrorCode::AngleMismatch,
-          "robot and camera rotation angles differ by " + fmt(degrees(mismatch)) + " deg (" +
-              fmt(degrees(d.alpha[i].norm())) + " vs " + fmt(degrees(d.beta[i].norm())) +
-              " deg), far beyond the noise and the other motions (limit " + fmt(degrees(limit)) + " deg)",
+          "robot and camera rotation angles differ by " + number_text(degrees(mismatch)) + " deg (" +
+              number_text(degrees(d.alpha[i].norm())) + " vs " + number_text(degrees(d.beta[i].norm())) +
+              " deg), far beyond the noise and the other motions (limit " + number_text(degrees(limit)) + " deg)",
           problem.label(i),
           "the two poses of this motion were not taken at the same time, or the pattern detection "
           "is wrong; remove the sample, or check that the effector and pattern poses are paired");
@@ -555,8 +547,8 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
   }
   if (above_floor == 0) {
     throw HandEyeError(ErrorCode::PureTranslation,
-                       "no motion rotates by more than " + fmt(degrees(options.min_rotation_angle)) +
-                           " deg (largest: " + fmt(degrees(largest_angle)) + " deg)",
+                       "no motion rotates by more than " + number_text(degrees(options.min_rotation_angle)) +
+                           " deg (largest: " + number_text(degrees(largest_angle)) + " deg)",
                        "input",
                        "the robot only translated; rotate the flange between samples, 10-30 deg about "
                        "at least two different axes");
@@ -564,7 +556,7 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
   if (informative.size() < 2 && above_floor >= 2) {
     throw HandEyeError(ErrorCode::RotationTooSmallForNoise,
                        std::to_string(above_floor - informative.size()) +
-                           " motion(s) rotate by less than " + fmt(options.min_rotation_sigmas) +
+                           " motion(s) rotate by less than " + number_text(options.min_rotation_sigmas) +
                            " sigma of the stated rotation noise; " + std::to_string(informative.size()) +
                            " usable motion(s) remain, 2 are needed",
                        "input", "use larger rotations between samples, or check the noise block (it holds variances, rad^2)");
@@ -595,7 +587,7 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
     throw HandEyeError(ErrorCode::ParallelRotationAxes,
                        "all " + std::to_string(informative.size()) +
                            " rotating motions turn about the same axis (widest spread " +
-                           fmt(degrees(widest)) + " deg, need > " + fmt(degrees(needed)) + " deg)",
+                           number_text(degrees(widest)) + " deg, need > " + number_text(degrees(needed)) + " deg)",
                        "input",
                        "the rotation about that axis and the translation along it are unobservable; "
                        "add samples that rotate the flange about a second, different axis");
@@ -836,7 +828,7 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   const double rotation_sigma = max_sigma(result.rotation_covariance);
   if (!(rotation_sigma <= options.max_rotation_sigma)) {
     throw HandEyeError(ErrorCode::PoorlyConstrained,
-                       "the motions constrain the rotation only to " + fmt(degrees(rotation_sigma)) +
+                       "the motions constrain the rotation only to " + number_text(degrees(rotation_sigma)) +
                            " deg (1 sigma); a first-order covariance is not valid there",
                        "input", "add samples with larger rotations about different axes, or reduce the noise");
   }
@@ -846,8 +838,8 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
       if (stage->dof >= 9 && ratio > 3.0) {
         result.warnings.push_back(
             std::string(stage == &result.rotation_stage ? "rotation" : "translation") +
-            " residuals are " + fmt(std::sqrt(ratio), 2) +
-            "x larger than the stated noise predicts (chi2/dof = " + fmt(ratio, 3) +
+            " residuals are " + number_text(std::sqrt(ratio), 2) +
+            "x larger than the stated noise predicts (chi2/dof = " + number_text(ratio, 3) +
             "); the covariance is likely optimistic. Check the noise block or estimate it "
             "(omit it, or use `handeye noise`).");
       }

@@ -1,7 +1,8 @@
 #include "handeye_covariance/core/sampler.h"
 
+#include "handeye_covariance/core/errors.h"
+
 #include <cmath>
-#include <sstream>
 
 namespace handeye {
 
@@ -30,13 +31,6 @@ bool close(const Observation& a, const Observation& reference, const SamplerOpti
          rotation_between(a.T_base_effector, reference.T_base_effector) <= o.still_rotation &&
          translation_between(a.T_camera_pattern, reference.T_camera_pattern) <= o.pattern_still_translation &&
          rotation_between(a.T_camera_pattern, reference.T_camera_pattern) <= o.pattern_still_rotation;
-}
-
-std::string fmt(double value) {
-  std::ostringstream out;
-  out.precision(3);
-  out << value;
-  return out.str();
 }
 
 }  // namespace
@@ -80,9 +74,9 @@ SampleOutcome Sampler::try_add(const Observation& observation) {
     const double dt = translation_between(observation.T_base_effector, samples_[i].T_base_effector);
     const double dR = rotation_between(observation.T_base_effector, samples_[i].T_base_effector);
     if (dt < options_.min_translation && dR < options_.min_rotation) {
-      return {false, "refused: too close to sample " + std::to_string(i) + " (" + fmt(dt * 1e3) + " mm, " +
-                         fmt(dR * 180.0 / M_PI) + " deg apart; need " + fmt(options_.min_translation * 1e3) +
-                         " mm or " + fmt(options_.min_rotation * 180.0 / M_PI) +
+      return {false, "refused: too close to sample " + std::to_string(i) + " (" + number_text(dt * 1e3) + " mm, " +
+                         number_text(dR * 180.0 / M_PI) + " deg apart; need " + number_text(options_.min_translation * 1e3) +
+                         " mm or " + number_text(options_.min_rotation * 180.0 / M_PI) +
                          " deg); move the robot to a new pose"};
     }
   }
@@ -106,11 +100,11 @@ SampleOutcome Sampler::take_sample(double now) {
   }
   const double age = now - history_.back().stamp;
   if (age > options_.max_age) {
-    return {false, "refused: the latest observation is " + fmt(age) + " s old (limit " + fmt(options_.max_age) +
+    return {false, "refused: the latest observation is " + number_text(age) + " s old (limit " + number_text(options_.max_age) +
                        " s); is the pattern still detected?"};
   }
   if (!still()) {
-    return {false, "refused: robot or pattern moved within the last " + fmt(options_.still_window) +
+    return {false, "refused: robot or pattern moved within the last " + number_text(options_.still_window) +
                        " s; hold still and call again"};
   }
   return try_add(history_.back());

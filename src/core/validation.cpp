@@ -2,18 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <sstream>
 
 namespace handeye {
-
-namespace {
-std::string describe(double value) {
-  std::ostringstream out;
-  out.precision(6);
-  out << value;
-  return out.str();
-}
-}  // namespace
 
 void check_pose(const Eigen::Isometry3d& pose, const std::string& where) {
   if (!pose.matrix().allFinite()) {
@@ -25,8 +15,8 @@ void check_pose(const Eigen::Isometry3d& pose, const std::string& where) {
   const double det = R.determinant();
   if (orthonormality > 1e-6 || std::abs(det - 1.0) > 1e-6) {
     throw HandEyeError(ErrorCode::RotationNotOrthonormal,
-                       "rotation is not orthonormal (|R^T R - I| = " + describe(orthonormality) +
-                           ", det = " + describe(det) + ")",
+                       "rotation is not orthonormal (|R^T R - I| = " + number_text(orthonormality, 6) +
+                           ", det = " + number_text(det, 6) + ")",
                        where, "pass a proper rotation matrix (re-orthonormalise it, or check the units and the row/column order)");
   }
 }
@@ -45,7 +35,7 @@ void check_covariance(const Eigen::Matrix3d& covariance, const std::string& wher
   if (eig.eigenvalues().minCoeff() < -1e-12 * std::max(scale, 1e-300)) {
     throw HandEyeError(ErrorCode::InvalidNoise,
                        "covariance is not positive semi-definite (smallest eigenvalue " +
-                           describe(eig.eigenvalues().minCoeff()) + ")",
+                           number_text(eig.eigenvalues().minCoeff(), 6) + ")",
                        where, "variances go on the diagonal and must be >= 0 (they are sigma^2, not sigma)");
   }
 }
@@ -63,7 +53,7 @@ Eigen::Quaterniond checked_unit_quaternion(const Eigen::Quaterniond& q, const st
   const double norm = q.norm();
   if (std::abs(norm - 1.0) > 1e-3) {
     throw HandEyeError(ErrorCode::QuaternionNotUnit,
-                       "quaternion norm is " + describe(norm) + ", not 1",
+                       "quaternion norm is " + number_text(norm, 6) + ", not 1",
                        where, "give a unit quaternion in the order [qx, qy, qz, qw]");
   }
   return q.normalized();

@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/ros/params.h"
 
 namespace handeye {
 
@@ -15,22 +16,10 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-template <typename T>
-T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
-  T value;
-  return nh.getParam(name, value) ? value : fallback;
-}
-
 std::string expand_home(const std::string& path) {
   if (path.rfind("~/", 0) != 0) return path;
   const char* home = std::getenv("HOME");
   return std::string(home ? home : ".") + path.substr(1);
-}
-
-std::string fmt(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", value);
-  return buffer;
 }
 
 }  // namespace
@@ -188,7 +177,7 @@ void CalibrationNode::observe(const ros::Time& stamp, const std::string& frame, 
   if (stamp.isZero()) return refuse("a detection has a zero stamp; the detector must stamp with the image time");
   const double norm = conversions::quaternion_norm(pose.orientation);
   if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
-    return refuse("a detection's quaternion has norm " + fmt(norm) + "; expected a unit quaternion");
+    return refuse("a detection's quaternion has norm " + number_text(norm) + "; expected a unit quaternion");
   }
   Eigen::Isometry3d T_camera_pattern = conversions::to_eigen(pose);
   Eigen::Isometry3d T_base_effector;
@@ -204,7 +193,7 @@ void CalibrationNode::observe(const ros::Time& stamp, const std::string& frame, 
     }
   } catch (const tf2::TransformException& e) {
     return refuse("no TF " + config_.frames.base + " -> " + config_.frames.effector + " at the detection stamp " +
-                  std::to_string(stamp.toSec()) + " (waited " + fmt(config_.tf_timeout) + " s): " + e.what() +
+                  std::to_string(stamp.toSec()) + " (waited " + number_text(config_.tf_timeout) + " s): " + e.what() +
                   ". Is the robot state publisher running, and are the clocks in sync?");
   }
   Observation observation;
@@ -314,8 +303,8 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
   res.warnings = c.warnings;
   res.message = "X = T_" + parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
-                " samples; worst-axis 1 sigma " + fmt(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
-                fmt(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+                " samples; worst-axis 1 sigma " + number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
+                number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
 
   calibration_pub_.publish(res.calibration);
   if (config_.publish_tf) {

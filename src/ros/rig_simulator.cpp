@@ -12,15 +12,10 @@
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/ros/params.h"
 
 namespace handeye {
 namespace {
-
-template <typename T>
-T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
-  T value;
-  return nh.getParam(name, value) ? value : fallback;
-}
 
 class RigSimulator {
  public:

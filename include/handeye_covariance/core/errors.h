@@ -25,6 +25,9 @@ enum class ErrorCode {
   IoError,                   // file cannot be read or written
 };
 
+/// A number for a message, with `significant_digits` digits ("0.0484", "1.2e-05").
+std::string number_text(double value, int significant_digits = 3);
+
 /// Stable name used in messages and in tests, e.g. "ParallelRotationAxes".
 const char* to_string(ErrorCode code);
 
