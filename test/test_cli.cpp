@@ -35,6 +35,7 @@ TEST(Cli, HelpListsTheSubcommands) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("solve"), std::string::npos);
   EXPECT_NE(r.out.find("sim"), std::string::npos);
+  EXPECT_NE(r.out.find("bag"), std::string::npos);
   EXPECT_EQ(run("solve --help").exit_code, 0);
   EXPECT_NE(run("solve --help").out.find("--input"), std::string::npos);
 }
@@ -90,6 +91,39 @@ TEST(Cli, BadInvocationsExit2) {
   const CliRun no_input = run("solve");
   EXPECT_EQ(no_input.exit_code, 2);
   EXPECT_NE(no_input.err.find("input"), std::string::npos) << no_input.err;
+}
+
+TEST(Cli, SimBagThenBagReplay) {
+  const std::string bag = temp("sim.bag"), truth = temp("sim_truth.yaml"), result = temp("sim_result.yaml"),
+                    samples = temp("sim_samples.yaml");
+  const CliRun sim = run("sim --output " + bag + " --truth " + truth + " --samples 12 --seed 5");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const CliRun r = run("bag --bag " + bag + " --output " + result + " --samples-out " + samples);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("samples accepted"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1 sigma [mm]"), std::string::npos) << r.out;
+  EXPECT_GE(handeye::io::read_samples(samples).samples.size(), 11u);
+  const auto estimate = handeye::io::read_result(result), exact = handeye::io::read_result(truth);
+  EXPECT_LT((estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation()).norm(), 0.005);
+}
+
+TEST(Cli, BadBagsExit2WithTheReasonAndWriteNothing) {
+  const std::string bag = temp("sim2.bag"), result = temp("bad_result.yaml");
+  ASSERT_EQ(run("sim --output " + bag + " --samples 5").exit_code, 0);
+  const std::string config = temp("wrong_topic.yaml");
+  handeye::io::write_file_atomically(config, "detections_topic: /nothing_here\n");
+  const CliRun wrong_topic = run("bag --bag " + bag + " --config " + config + " --output " + result);
+  EXPECT_EQ(wrong_topic.exit_code, 2);
+  EXPECT_NE(wrong_topic.err.find("NoData"), std::string::npos) << wrong_topic.err;
+  handeye::io::write_file_atomically(config, "detections_topik: /tag_detections\n");
+  const CliRun typo = run("bag --bag " + bag + " --config " + config + " --output " + result);
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.err.find("unknown setting `detections_topik`"), std::string::npos) << typo.err;
+  handeye::io::write_file_atomically(temp("garbage.bag"), "garbage");
+  const CliRun corrupt = run("bag --bag " + temp("garbage.bag") + " --output " + result);
+  EXPECT_EQ(corrupt.exit_code, 2);
+  EXPECT_NE(corrupt.err.find("IoError"), std::string::npos) << corrupt.err;
+  EXPECT_FALSE(std::filesystem::exists(result));
 }
 
 TEST(Cli, ShippedExampleSolves) {

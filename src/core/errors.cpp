@@ -20,6 +20,7 @@ const char* to_string(ErrorCode code) {
     case ErrorCode::AngleMismatch: return "AngleMismatch";
     case ErrorCode::NoiseUnidentifiable: return "NoiseUnidentifiable";
     case ErrorCode::PoorlyConstrained: return "PoorlyConstrained";
+    case ErrorCode::NoData: return "NoData";
     case ErrorCode::IoError: return "IoError";
   }
   return "Unknown";

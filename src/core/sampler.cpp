@@ -25,10 +25,14 @@ double translation_between(const Eigen::Isometry3d& a, const Eigen::Isometry3d& 
   return (a.translation() - b.translation()).norm();
 }
 
+bool robot_close(const Observation& a, const Observation& reference, const SamplerOptions& o) {
+  return translation_between(a.T_base_effector, reference.T_base_effector) <= o.still_translation &&
+         rotation_between(a.T_base_effector, reference.T_base_effector) <= o.still_rotation;
+}
+
 /// Robot and pattern both within the stillness thresholds of `reference`.
 bool close(const Observation& a, const Observation& reference, const SamplerOptions& o) {
-  return translation_between(a.T_base_effector, reference.T_base_effector) <= o.still_translation &&
-         rotation_between(a.T_base_effector, reference.T_base_effector) <= o.still_rotation &&
+  return robot_close(a, reference, o) &&
          translation_between(a.T_camera_pattern, reference.T_camera_pattern) <= o.pattern_still_translation &&
          rotation_between(a.T_camera_pattern, reference.T_camera_pattern) <= o.pattern_still_rotation;
 }
@@ -45,8 +49,10 @@ std::optional<SampleOutcome> Sampler::observe(const Observation& observation) {
   while (history_.size() > 1 && history_.front().stamp < observation.stamp - 2.0 * options_.still_window) {
     history_.pop_front();
   }
-  if (waiting_for_motion_ && anchor_ && !close(observation, *anchor_, options_)) {
-    waiting_for_motion_ = false;  // the robot moved on: the next still period may be sampled
+  if (waiting_for_motion_ && anchor_ && !robot_close(observation, *anchor_, options_)) {
+    // The robot moved on: the next still period may be sampled. (A wrong
+    // detection alone does not re-arm: only the robot's own motion does.)
+    waiting_for_motion_ = false;
   }
   if (!options_.auto_sample || waiting_for_motion_ || !still()) return std::nullopt;
   return try_add(observation);

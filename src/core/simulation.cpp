@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 
 namespace handeye {
 
@@ -113,6 +114,36 @@ SimulatedSession simulate_session(Rng& rng, Setup setup, const Isometry3d& X, in
     session.samples.samples.push_back(sample);
   }
   return session;
+}
+
+Isometry3d RigTrajectory::effector_at(double t) const {
+  const double period = pause + move;
+  const double elapsed = std::max(0.0, t);
+  const std::size_t i = static_cast<std::size_t>(elapsed / period);
+  if (i + 1 >= poses.size()) return poses.back();
+  const double u = std::clamp((elapsed - static_cast<double>(i) * period - pause) / move, 0.0, 1.0);
+  const double s = u * u * (3.0 - 2.0 * u);  // smoothstep: no jerk at the pauses
+  const Eigen::Quaterniond q0(poses[i].linear()), q1(poses[i + 1].linear());
+  return se3::make_pose(q0.slerp(s, q1).toRotationMatrix(), (1.0 - s) * poses[i].translation() + s * poses[i + 1].translation());
+}
+
+Isometry3d RigTrajectory::pattern_at(double t) const {
+  const Isometry3d E = effector_at(t);
+  // eye_in_hand: E X P = Y;  eye_to_hand: E Y = X P.
+  return setup == Setup::EyeInHand ? X.inverse() * E.inverse() * T_world_pattern : X.inverse() * E * T_world_pattern;
+}
+
+RigTrajectory make_rig_trajectory(Rng& rng, Setup setup, const Isometry3d& X, int n, double pause, double move,
+                                  const ViewpointOptions& views) {
+  const SimulatedSession session = simulate_session(rng, setup, X, n, MeasurementNoise{}, views);
+  RigTrajectory trajectory;
+  trajectory.setup = setup;
+  trajectory.X = X;
+  trajectory.T_world_pattern = session.T_world_pattern;
+  for (const PoseSample& sample : session.samples.samples) trajectory.poses.push_back(sample.T_base_effector);
+  trajectory.pause = pause;
+  trajectory.move = move;
+  return trajectory;
 }
 
 }  // namespace handeye

@@ -61,7 +61,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                 "camera rotation %.4f deg, translation %.3f mm (1 sigma per axis, robot taken as exact)",
                 std::sqrt(c.noise.camera.rotation(0, 0)) * kDeg, std::sqrt(c.noise.camera.translation(0, 0)) * 1e3);
   } else {
-    out += line("  noise                 as given in the input file");
+    out += line("  noise                 given (the noise block, or the detections' covariances)");
   }
   out += line("  solver                rotation %d it (%s, chi2/dof %.2f), translation %d it (%s, chi2/dof %.2f)",
               c.rotation_stage.iterations, to_string(c.rotation_stage.stop_reason),

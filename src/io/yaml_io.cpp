@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <set>
+#include <type_traits>
 #include <fstream>
 #include <sstream>
 #include <fcntl.h>
@@ -429,6 +431,37 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
 }
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
+
+// ---------------------------------------------------------------- session config
+
+void read_session_config(const std::string& path, SessionConfig& config) {
+  const YAML::Node root = load(read_file(path), path);
+  const Location top{path, ""};
+  std::set<std::string> known;
+  for_each_setting(config, [&](const char* key, auto& member, double scale) {
+    known.insert(key);
+    const YAML::Node node = root[key];
+    if (!node || node.IsNull()) return;
+    using T = std::decay_t<decltype(member)>;
+    try {
+      if constexpr (std::is_same_v<T, double>) {
+        member = as_double(node, top / key) * scale;
+      } else {
+        member = node.as<T>();
+      }
+    } catch (const YAML::Exception&) {
+      throw HandEyeError(ErrorCode::MalformedFile, std::string("`") + key + "` has the wrong type", (top / key).str(),
+                         "see config/calibration_defaults.yaml for the expected value");
+    }
+  });
+  for (const auto& entry : root) {
+    const std::string key = entry.first.as<std::string>();
+    if (!known.count(key)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "unknown setting `" + key + "`", path,
+                         "use the node's parameter names (config/calibration_defaults.yaml, launch/calibrate.launch)");
+    }
+  }
+}
 
 // ---------------------------------------------------------------- files
 

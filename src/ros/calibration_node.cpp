@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/ros/params.h"
 
 namespace handeye {
@@ -25,48 +26,16 @@ std::string expand_home(const std::string& path) {
 }  // namespace
 
 CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node)
-    : node_(node),
-      private_node_(private_node),
-      detection_node_(node),
-      tf_listener_(tf_buffer_),
-      sampler_([&] {
-        SamplerOptions o;
-        o.auto_sample = param(private_node, "auto_sample", true);
-        o.still_window = param(private_node, "still_window", 1.0);
-        o.still_translation = param(private_node, "still_translation_mm", 0.5) * 1e-3;
-        o.still_rotation = param(private_node, "still_rotation_deg", 0.1) * kDeg;
-        o.pattern_still_translation = param(private_node, "pattern_still_translation_mm", 5.0) * 1e-3;
-        o.pattern_still_rotation = param(private_node, "pattern_still_rotation_deg", 1.0) * kDeg;
-        o.max_gap = param(private_node, "max_gap", 0.5);
-        o.min_translation = param(private_node, "min_translation_mm", 10.0) * 1e-3;
-        o.min_rotation = param(private_node, "min_rotation_deg", 2.0) * kDeg;
-        o.max_age = param(private_node, "max_age", 1.0);
-        return o;
-      }()) {
-  config_.setup = param(private_node_, "eye_on_hand", true) ? Setup::EyeInHand : Setup::EyeToHand;
-  config_.frames.base = param<std::string>(private_node_, "robot_base_frame", "base_link");
-  config_.frames.effector = param<std::string>(private_node_, "robot_effector_frame", "tool0");
-  config_.frames.camera = param<std::string>(private_node_, "tracking_base_frame", "camera_optical_frame");
-  config_.frames.pattern = param<std::string>(private_node_, "tracking_marker_frame", "tag_0");
-  config_.detection_input = param<std::string>(private_node_, "detection_input", "tags");
-  config_.tag_ids = param(private_node_, "tag_ids", std::vector<int>{});
-  config_.publish_tf = param(private_node_, "publish_tf", true);
-  config_.tf_timeout = param(private_node_, "tf_timeout", 0.5);
-  config_.working_distance = param(private_node_, "working_distance", 0.7);
-  config_.target_tolerance_mm = param(private_node_, "target_tolerance_mm", 1.0);
-  const std::string name = param<std::string>(private_node_, "namespace_prefix", "handeye") +
-                           (config_.setup == Setup::EyeInHand ? "_eye_on_hand" : "_eye_on_base");
-  config_.calibration_file =
-      expand_home(param<std::string>(private_node_, "calibration_file", "~/.ros/handeye_covariance/" + name + ".yaml"));
-  config_.session_file = expand_home(
-      param<std::string>(private_node_, "session_file", "~/.ros/handeye_covariance/" + name + "_samples.yaml"));
+    : node_(node), private_node_(private_node), detection_node_(node), tf_listener_(tf_buffer_) {
+  load_session_config(private_node_, config_);
+  sampler_ = Sampler(config_.sampler);
+  if (config_.calibration_file.empty()) config_.calibration_file = "~/.ros/handeye_covariance/" + config_.name() + ".yaml";
+  if (config_.session_file.empty()) config_.session_file = "~/.ros/handeye_covariance/" + config_.name() + "_samples.yaml";
+  config_.calibration_file = expand_home(config_.calibration_file);
+  config_.session_file = expand_home(config_.session_file);
+  if (!config_.noise_config.empty()) noise_ = io::read_noise_file(expand_home(config_.noise_config));
 
-  const std::string noise_config = param<std::string>(private_node_, "noise_config", "");
-  if (!noise_config.empty()) {
-    config_.noise = io::read_noise_file(noise_config);
-  }
-
-  if (param(private_node_, "resume", false) && std::filesystem::exists(config_.session_file)) {
+  if (config_.resume && std::filesystem::exists(config_.session_file)) {
     sampler_.set_samples(io::read_samples(config_.session_file).samples);
     ROS_INFO("resumed %zu samples from %s", sampler_.samples().size(), config_.session_file.c_str());
     last_event_ = "resumed " + std::to_string(sampler_.samples().size()) + " samples";
@@ -86,16 +55,19 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   };
 
   detection_node_.setCallbackQueue(&detection_queue_);
-  const std::string topic = param<std::string>(private_node_, "detections_topic", "tag_detections");
+  const std::string& topic = config_.detections_topic;
+  using geometry_msgs::PoseStamped;
+  using geometry_msgs::PoseWithCovarianceStamped;
   if (config_.detection_input == "tags") {
     detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_tags, this);
   } else if (config_.detection_input == "pose_with_covariance") {
-    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_pose_with_covariance, this);
+    detections_ = detection_node_.subscribe<PoseWithCovarianceStamped>(
+        topic, 50, [this](const PoseWithCovarianceStamped::ConstPtr& msg) { observe(detection_of(*msg)); });
   } else if (config_.detection_input == "pose") {
-    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_pose, this);
+    detections_ = detection_node_.subscribe<PoseStamped>(
+        topic, 50, [this](const PoseStamped::ConstPtr& msg) { observe(detection_of(*msg)); });
   } else if (config_.detection_input == "tf") {
-    tf_poll_ = detection_node_.createTimer(ros::Duration(1.0 / param(private_node_, "tf_poll_rate", 30.0)),
-                                           &CalibrationNode::on_tf_poll, this);
+    tf_poll_ = detection_node_.createTimer(ros::Duration(1.0 / config_.tf_poll_rate), &CalibrationNode::on_tf_poll, this);
   } else {
     throw std::invalid_argument("~detection_input must be tags, pose_with_covariance, pose or tf, not `" +
                                 config_.detection_input + "`");
@@ -110,7 +82,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   std::lock_guard<std::mutex> lock(mutex_);
   if (sampler_.samples().size() >= 3) samples_changed(last_event_);
   ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples",
-           to_string(config_.setup), parent_frame().c_str(), config_.frames.camera.c_str(),
+           to_string(config_.setup()), config_.parent_frame().c_str(), config_.frames.camera.c_str(),
            config_.detection_input.c_str(), config_.detection_input == "tf" ? config_.frames.pattern.c_str() : topic.c_str(),
            sampler_.samples().size());
 }
@@ -119,39 +91,13 @@ CalibrationNode::~CalibrationNode() {
   if (detection_spinner_) detection_spinner_->stop();
 }
 
-std::string CalibrationNode::parent_frame() const {
-  return config_.setup == Setup::EyeInHand ? config_.frames.effector : config_.frames.base;
-}
-
 // ------------------------------------------------------------------ inputs
 
 void CalibrationNode::on_tags(const TagDetectionArray::ConstPtr& msg) {
-  const TagDetection* chosen = nullptr;
-  const std::set<int> wanted(config_.tag_ids.begin(), config_.tag_ids.end());
-  for (const TagDetection& d : msg->detections) {
-    if (wanted.empty() ? msg->detections.size() == 1 : std::set<int>(d.id.begin(), d.id.end()) == wanted) {
-      chosen = &d;
-      break;
-    }
-  }
-  if (!chosen) {
-    if (!msg->detections.empty()) {
-      refuse(wanted.empty() ? "several detections in one message and ~tag_ids is empty; set ~tag_ids to the pattern's id(s)"
-                            : "no detection with the configured ~tag_ids in this message");
-    }
-    return;
-  }
-  const std::string& frame = chosen->pose.header.frame_id.empty() ? msg->header.frame_id : chosen->pose.header.frame_id;
-  const ros::Time stamp = chosen->pose.header.stamp.isZero() ? msg->header.stamp : chosen->pose.header.stamp;
-  observe(stamp, frame, chosen->pose.pose.pose, &chosen->pose.pose.covariance);
-}
-
-void CalibrationNode::on_pose_with_covariance(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
-  observe(msg->header.stamp, msg->header.frame_id, msg->pose.pose, &msg->pose.covariance);
-}
-
-void CalibrationNode::on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
-  observe(msg->header.stamp, msg->header.frame_id, msg->pose, nullptr);
+  std::optional<Refusal> refusal;
+  const std::optional<Detection> detection = select_detection(*msg, config_.tag_ids, refusal);
+  if (refusal) refuse(refusal->message);
+  if (detection) observe(*detection);
 }
 
 void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
@@ -164,46 +110,20 @@ void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
   }
   if (latest.header.stamp <= last_tf_stamp_) return;  // nothing new
   last_tf_stamp_ = latest.header.stamp;
-  geometry_msgs::Pose pose;
-  pose.position.x = latest.transform.translation.x;
-  pose.position.y = latest.transform.translation.y;
-  pose.position.z = latest.transform.translation.z;
-  pose.orientation = latest.transform.rotation;
-  observe(latest.header.stamp, config_.frames.camera, pose, nullptr);
+  observe(detection_of(latest));
 }
 
-void CalibrationNode::observe(const ros::Time& stamp, const std::string& frame, const geometry_msgs::Pose& pose,
-                              const boost::array<double, 36>* covariance) {
-  if (stamp.isZero()) return refuse("a detection has a zero stamp; the detector must stamp with the image time");
-  const double norm = conversions::quaternion_norm(pose.orientation);
-  if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
-    return refuse("a detection's quaternion has norm " + number_text(norm) + "; expected a unit quaternion");
+void CalibrationNode::observe(const Detection& detection) {
+  // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.
+  if (!detection.stamp.isZero()) {
+    tf_buffer_.canTransform(config_.frames.base, config_.frames.effector, detection.stamp,
+                            ros::Duration(config_.tf_timeout));
   }
-  Eigen::Isometry3d T_camera_pattern = conversions::to_eigen(pose);
-  Eigen::Isometry3d T_base_effector;
-  try {
-    // The robot pose AT THE DETECTION'S STAMP, waiting for TF to catch up; never Time(0).
-    const ros::Duration timeout(config_.tf_timeout);
-    T_base_effector = conversions::to_eigen(
-        tf_buffer_.lookupTransform(config_.frames.base, config_.frames.effector, stamp, timeout).transform);
-    if (!frame.empty() && frame != config_.frames.camera) {
-      T_camera_pattern = conversions::to_eigen(
-                             tf_buffer_.lookupTransform(config_.frames.camera, frame, stamp, timeout).transform) *
-                         T_camera_pattern;
-    }
-  } catch (const tf2::TransformException& e) {
-    return refuse("no TF " + config_.frames.base + " -> " + config_.frames.effector + " at the detection stamp " +
-                  std::to_string(stamp.toSec()) + " (waited " + number_text(config_.tf_timeout) + " s): " + e.what() +
-                  ". Is the robot state publisher running, and are the clocks in sync?");
-  }
-  Observation observation;
-  observation.stamp = stamp.toSec();
-  observation.T_base_effector = T_base_effector;
-  observation.T_camera_pattern = T_camera_pattern;
-  if (covariance) observation.pattern_noise = conversions::decoupled_if_nonzero(*covariance);
+  const ObservationResult result = make_observation(tf_buffer_, config_, detection);
+  if (result.refusal) return refuse(result.refusal->message);
 
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::optional<SampleOutcome> outcome = sampler_.observe(observation);
+  const std::optional<SampleOutcome> outcome = sampler_.observe(*result.observation);
   if (!outcome) return;
   if (outcome->accepted) {
     samples_changed(outcome->message);
@@ -223,7 +143,7 @@ void CalibrationNode::refuse(const std::string& reason) {
 // ------------------------------------------------------------------ state
 
 SampleSet CalibrationNode::sample_set() const {
-  return make_sample_set(config_.setup, config_.frames, config_.noise, sampler_.samples());
+  return make_sample_set(config_.setup(), config_.frames, noise_, sampler_.samples());
 }
 
 void CalibrationNode::samples_changed(const std::string& event) {
@@ -252,7 +172,7 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
   status.samples_needed = 3;
   status.last_event = last_event_;
   status.state = to_string(sampler_.state());
-  status.parent_frame = parent_frame();
+  status.parent_frame = config_.parent_frame();
   status.child_frame = config_.frames.camera;
   status.working_distance = config_.working_distance;
   status.target_tolerance_mm = config_.target_tolerance_mm;
@@ -289,7 +209,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   const Calibration& c = *calibration_;
   res.success = true;
   res.calibration.header.stamp = ros::Time::now();
-  res.calibration.header.frame_id = parent_frame();
+  res.calibration.header.frame_id = config_.parent_frame();
   res.calibration.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
   res.rotation_covariance = conversions::to_msg_array(c.rotation_covariance);
   res.translation_covariance = conversions::to_msg_array(c.translation_covariance);
@@ -302,7 +222,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
   res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
   res.warnings = c.warnings;
-  res.message = "X = T_" + parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
+  res.message = "X = T_" + config_.parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
                 " samples; worst-axis 1 sigma " + number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
 
@@ -387,10 +307,10 @@ bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Respo
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     const SampleSet loaded = io::read_samples(expand_home(req.path));
-    if (loaded.setup != config_.setup) {
+    if (loaded.setup != config_.setup()) {
       throw HandEyeError(ErrorCode::MalformedFile,
                          std::string("the file is ") + to_string(loaded.setup) + " but this node is " +
-                             to_string(config_.setup),
+                             to_string(config_.setup()),
                          req.path, "load a file recorded with the same setup");
     }
     sampler_.set_samples(loaded.samples);

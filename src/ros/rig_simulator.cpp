@@ -28,8 +28,6 @@ class RigSimulator {
     output_ = param<std::string>(pn, "output", "tags");
     publish_robot_tf_ = param(pn, "publish_robot_tf", true);
     detection_covariance_ = param(pn, "detection_covariance", false);
-    move_time_ = param(pn, "move_time", 1.0);
-    pause_time_ = param(pn, "pause_time", 2.0);
     latency_ = param(pn, "latency", 0.05);
     tag_ids_ = param(pn, "tag_ids", std::vector<int>{0});
     const double rotation_sigma = param(pn, "pattern_rotation_noise_deg", 0.05) * M_PI / 180.0;
@@ -38,19 +36,18 @@ class RigSimulator {
     noise_.translation = translation_sigma * translation_sigma * Eigen::Matrix3d::Identity();
 
     const std::vector<double> truth = param(pn, "truth", std::vector<double>{});
-    X_ = truth.size() == 7 ? se3::make_pose(Eigen::Quaterniond(truth[6], truth[3], truth[4], truth[5]).normalized().toRotationMatrix(),
-                                            Eigen::Vector3d(truth[0], truth[1], truth[2]))
-                           : typical_X(setup_);
-    const MeasurementNoise none;
-    const SimulatedSession session = simulate_session(rng_, setup_, X_, param(pn, "poses", 12), none);
-    Y_ = session.T_world_pattern;
-    for (const PoseSample& s : session.samples.samples) poses_.push_back(s.T_base_effector);
+    const Eigen::Isometry3d X =
+        truth.size() == 7 ? se3::make_pose(Eigen::Quaterniond(truth[6], truth[3], truth[4], truth[5]).normalized().toRotationMatrix(),
+                                           Eigen::Vector3d(truth[0], truth[1], truth[2]))
+                          : typical_X(setup_);
+    trajectory_ = make_rig_trajectory(rng_, setup_, X, param(pn, "poses", 12), param(pn, "pause_time", 2.0),
+                                      param(pn, "move_time", 1.0));
     flange_T_tool_ = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
 
     truth_pub_ = pn.advertise<geometry_msgs::PoseStamped>("truth", 1, true);
     geometry_msgs::PoseStamped truth_msg;
     truth_msg.header.frame_id = setup_ == Setup::EyeInHand ? effector_ : base_;
-    truth_msg.pose = conversions::to_pose_msg(X_);
+    truth_msg.pose = conversions::to_pose_msg(trajectory_.X);
     truth_pub_.publish(truth_msg);
 
     const std::string topic = param<std::string>(pn, "detections_topic", "tag_detections");
@@ -70,28 +67,11 @@ class RigSimulator {
     detection_timer_ =
         node.createTimer(ros::Duration(1.0 / param(pn, "detection_rate", 20.0)), &RigSimulator::publish_detection, this);
     ROS_INFO("rig simulator: %s, %zu poses, %.1f s pause, %.1f s move, detections as `%s`", to_string(setup_),
-             poses_.size(), pause_time_, move_time_, output_.c_str());
+             trajectory_.poses.size(), trajectory_.pause, trajectory_.move, output_.c_str());
   }
 
  private:
-  /// T_base_effector at time t: hold each pose, then a smooth move to the next.
-  Eigen::Isometry3d effector_at(const ros::Time& t) const {
-    const double period = pause_time_ + move_time_;
-    const double elapsed = std::max(0.0, (t - start_).toSec());
-    const std::size_t i = static_cast<std::size_t>(elapsed / period);
-    if (i + 1 >= poses_.size()) return poses_.back();  // done: stay at the last pose
-    const double u = std::max(0.0, (elapsed - i * period - pause_time_) / move_time_);
-    const double s = u * u * (3.0 - 2.0 * u);  // smoothstep
-    const Eigen::Quaterniond q0(poses_[i].linear()), q1(poses_[i + 1].linear());
-    return se3::make_pose(q0.slerp(s, q1).toRotationMatrix(),
-                          (1.0 - s) * poses_[i].translation() + s * poses_[i + 1].translation());
-  }
-
-  Eigen::Isometry3d pattern_at(const ros::Time& t) const {
-    const Eigen::Isometry3d E = effector_at(t);
-    // eye_in_hand: E X P = Y;  eye_to_hand: E Y = X P.
-    return setup_ == Setup::EyeInHand ? X_.inverse() * E.inverse() * Y_ : X_.inverse() * E * Y_;
-  }
+  double elapsed(const ros::Time& t) const { return (t - start_).toSec(); }
 
   void publish_tf(const ros::TimerEvent&) {
     if (!publish_robot_tf_) return;
@@ -100,13 +80,13 @@ class RigSimulator {
     tf.header.stamp = now;
     tf.header.frame_id = base_;
     tf.child_frame_id = "flange";
-    tf.transform = conversions::to_transform_msg(effector_at(now) * flange_T_tool_.inverse());
+    tf.transform = conversions::to_transform_msg(trajectory_.effector_at(elapsed(now)) * flange_T_tool_.inverse());
     broadcaster_.sendTransform(tf);
   }
 
   void publish_detection(const ros::TimerEvent&) {
     const ros::Time capture = ros::Time::now() - ros::Duration(latency_);
-    const Eigen::Isometry3d P = perturb(rng_, pattern_at(capture), noise_);
+    const Eigen::Isometry3d P = perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_);
     geometry_msgs::PoseWithCovarianceStamped pose;
     pose.header.stamp = capture;
     pose.header.frame_id = camera_;
@@ -141,11 +121,11 @@ class RigSimulator {
   Setup setup_;
   std::string base_, effector_, camera_, pattern_frame_, output_;
   bool publish_robot_tf_, detection_covariance_;
-  double move_time_, pause_time_, latency_;
+  double latency_;
   std::vector<int> tag_ids_;
   DecoupledCovariance noise_;
-  Eigen::Isometry3d X_, Y_, flange_T_tool_;
-  std::vector<Eigen::Isometry3d> poses_;
+  RigTrajectory trajectory_;
+  Eigen::Isometry3d flange_T_tool_;
   ros::Time start_;
   ros::Publisher truth_pub_, detections_;
   ros::Timer tf_timer_, detection_timer_;

@@ -5,10 +5,12 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <unistd.h>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/ros/bag.h"
 
 namespace handeye {
 namespace cli {
@@ -71,7 +73,8 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
   unsigned seed = 1;
   double rotation_deg = 0.05, translation_mm = 0.5, robot_rotation_deg = 0.01, robot_translation_mm = 0.05;
   bool omit_noise = false;
-  po::options_description options("sim: a simulated calibration session with known truth");
+  BagSimulationOptions bag_options;
+  po::options_description options("sim: a simulated calibration session with known truth (a samples file, or a rosbag when --output ends in .bag)");
   options.add_options()("help,h", "show this help")(
       "output,o", po::value(&output)->required(), "samples file to write (YAML)")(
       "truth", po::value(&truth), "also write the true X as a result file")(
@@ -82,7 +85,14 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
       "pattern-translation-noise-mm", po::value(&translation_mm), "1 sigma per axis of the pattern pose translation (default 0.5)")(
       "robot-rotation-noise-deg", po::value(&robot_rotation_deg), "1 sigma per axis of the flange rotation (default 0.01)")(
       "robot-translation-noise-mm", po::value(&robot_translation_mm), "1 sigma per axis of the flange translation (default 0.05)")(
-      "omit-noise-block", po::bool_switch(&omit_noise), "leave the noise out of the file, so `solve` estimates it");
+      "omit-noise-block", po::bool_switch(&omit_noise), "leave the noise out of the file, so `solve` estimates it")(
+      "pause", po::value(&bag_options.pause), "bag: s the robot holds each pose (default 2)")(
+      "move", po::value(&bag_options.move), "bag: s between poses (default 1)")(
+      "depth-noise-mm", po::value(&bag_options.depth_noise_mm), "bag: 1 sigma of the pattern's depth (default 1.5)")(
+      "tilt-noise-deg", po::value(&bag_options.tilt_noise_deg), "bag: 1 sigma of the pattern's tilt (default 0.15)")(
+      "dropout", po::value(&bag_options.dropout), "bag: share of frames without a detection (default 0.05)")(
+      "wrong-detections", po::value(&bag_options.wrong_detections), "bag: share of flipped poses (default 0.005)")(
+      "latency", po::value(&bag_options.latency), "bag: s from capture to message (default 0.05)");
   po::variables_map vm;
   if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
   if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
@@ -93,6 +103,26 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
     throw HandEyeError(ErrorCode::TooFewMotions, "--samples must be at least 3", "--samples", "ask for more samples");
   }
   const Setup setup = setup_name == "eye_in_hand" ? Setup::EyeInHand : Setup::EyeToHand;
+  if (std::filesystem::path(output).extension() == ".bag") {
+    bag_options.setup = setup;
+    bag_options.poses = samples;
+    bag_options.seed = seed;
+    if (vm.count("pattern-translation-noise-mm")) bag_options.lateral_noise_mm = translation_mm;
+    if (vm.count("pattern-rotation-noise-deg")) bag_options.roll_noise_deg = rotation_deg;
+    bag_options.detection_covariance = !omit_noise;
+    const SimulatedBag bag = write_simulated_bag(output, bag_options);
+    out << "wrote a " << bag.duration << " s simulated " << setup_name << " bag to " << output << ": "
+        << bag.tf_messages << " /tf, " << bag.detections << " detections (" << bag.wrong_detections << " wrong)\n";
+    if (!truth.empty()) {
+      io::ResultContext context;
+      context.setup = setup;
+      context.parent = setup == Setup::EyeInHand ? bag.frames.effector : bag.frames.base;
+      context.child = bag.frames.camera;
+      io::write_file_atomically(truth, io::format_pose_file({bag.X, Matrix6d::Zero()}, context));
+      out << "wrote the true X to " << truth << "\n";
+    }
+    return kOk;
+  }
   const double deg = M_PI / 180.0, mm = 1e-3;
   MeasurementNoise noise;
   noise.robot.rotation = std::pow(robot_rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
@@ -111,11 +141,67 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
   return kOk;
 }
 
+/// A progress bar on stderr, for bags longer than a few seconds.
+class ProgressBar {
+ public:
+  ProgressBar(std::ostream& err, bool enabled) : err_(err), enabled_(enabled) {}
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(100.0 * fraction);
+    if (!enabled_ || percent == last_) return;
+    last_ = percent;
+    const int filled = percent / 4;
+    err_ << "\rreading the bag [" << std::string(filled, '#') << std::string(25 - filled, '.') << "] " << percent << "%"
+         << (percent >= 100 ? "\n" : "") << std::flush;
+  }
+
+ private:
+  std::ostream& err_;
+  bool enabled_;
+  int last_ = -1;
+};
+
+int bag_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  std::string bag_path, config_path, output, samples_out;
+  po::options_description options("bag: calibrate from a rosbag, without a roscore");
+  options.add_options()("help,h", "show this help")(
+      "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections)")(
+      "config,c", po::value(&config_path), "YAML with the node's settings (config/calibration_defaults.yaml keys)")(
+      "output,o", po::value(&output), "result file; default: <bag stem>_result.yaml in the current directory")(
+      "samples-out", po::value(&samples_out), "also write the samples taken (the samples file format)");
+  po::variables_map vm;
+  if (!parse("bag", "--bag FILE [--config YAML] [--output FILE] [--samples-out FILE]", options, args, vm, out)) return kOk;
+  if (output.empty()) output = default_result_path(bag_path);
+
+  SessionConfig config;
+  if (!config_path.empty()) io::read_session_config(config_path, config);
+  std::optional<MeasurementNoise> noise;
+  if (!config.noise_config.empty()) noise = io::read_noise_file(config.noise_config);
+  ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
+  const BagReplay replay = replay_bag(bag_path, config, noise, [&](double f) { progress(f); });
+  const Calibration calibration = solve(replay.samples);  // before writing anything
+
+  out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
+  for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
+  out << "\n  detections " << replay.detections << ", paired with a robot pose " << replay.observations
+      << ", samples accepted " << replay.samples.samples.size() << "\n";
+  for (const auto& [kind, count] : replay.refusals) {
+    out << "  refused " << count << " x " << kind << ": " << replay.refusal_examples.at(kind) << "\n";
+  }
+  const io::ResultContext context = io::context_of(replay.samples);
+  io::write_file_atomically(output, io::format_result(calibration, context));
+  if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(replay.samples));
+  out << io::human_summary(calibration, context);
+  out << "  result written to     " << output << "\n";
+  if (!samples_out.empty()) out << "  samples written to    " << samples_out << "\n";
+  return kOk;
+}
+
 const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
                  solve_command}},
-      {"sim", {"write a simulated samples file with known truth, to try the tools", sim_command}},
+      {"sim", {"write a simulated session with known truth: a samples file, or a rosbag (--output x.bag)", sim_command}},
+      {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore", bag_command}},
   };
   return table;
 }

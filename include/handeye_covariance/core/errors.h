@@ -22,6 +22,7 @@ enum class ErrorCode {
   AngleMismatch,             // |angle(A) - angle(B)| far beyond the noise: not the same motion
   NoiseUnidentifiable,       // no noise given and too few motions to estimate it
   PoorlyConstrained,         // solved, but the rotation sigma is too large for a first-order covariance
+  NoData,                    // a bag or stream without usable detections or samples
   IoError,                   // file cannot be read or written
 };
 

@@ -52,6 +52,28 @@ struct SimulatedSession {
 SimulatedSession simulate_session(Rng& rng, Setup setup, const Eigen::Isometry3d& X, int n,
                                   const MeasurementNoise& noise, const ViewpointOptions& views = {});
 
+/// A robot that holds each pose for `pause` seconds, then moves smoothly to the
+/// next in `move` seconds (slerp + lerp with a smoothstep), and stays at the
+/// last pose. Shared by the simulated rig node and the simulated bags.
+struct RigTrajectory {
+  Setup setup = Setup::EyeInHand;
+  Eigen::Isometry3d X;                // truth
+  Eigen::Isometry3d T_world_pattern;  // see SimulatedSession
+  std::vector<Eigen::Isometry3d> poses;  // T_base_effector at each pause
+  double pause = 2.0, move = 1.0;     // s
+
+  /// T_base_effector at t seconds from the start.
+  Eigen::Isometry3d effector_at(double t) const;
+  /// The true T_camera_pattern at t.
+  Eigen::Isometry3d pattern_at(double t) const;
+  /// Time until the robot reaches its last pose, plus one pause.
+  double duration() const { return static_cast<double>(poses.size()) * (pause + move) - move; }
+};
+
+/// n poses from random viewpoints (as simulate_session) around a truth X.
+RigTrajectory make_rig_trajectory(Rng& rng, Setup setup, const Eigen::Isometry3d& X, int n, double pause, double move,
+                                  const ViewpointOptions& views = {});
+
 /// A plausible X for demos and tests: a camera 10 cm off the flange (eye-in-hand),
 /// or 1.2 m from the base looking at the workspace (eye-to-hand).
 Eigen::Isometry3d typical_X(Setup setup);

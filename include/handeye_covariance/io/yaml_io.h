@@ -15,6 +15,7 @@
 #include <variant>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/session_config.h"
 
 namespace handeye {
 namespace io {
@@ -60,6 +61,11 @@ struct CalibrationFile {
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
+
+/// Session settings from a YAML file with the node's parameter names (the
+/// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
+/// from the file keep their value in `config`. Unknown keys are refused (typos).
+void read_session_config(const std::string& path, SessionConfig& config);
 
 /// Write to `path.tmp-<pid>` then rename, so a reader never sees half a file
 /// and a failure leaves no file behind. Creates missing parent directories.

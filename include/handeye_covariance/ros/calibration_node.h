@@ -14,7 +14,9 @@
 #include <optional>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/core/sampler.h"
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -29,26 +31,10 @@ class CalibrationNode {
   ~CalibrationNode();
 
  private:
-  struct Config {
-    Setup setup = Setup::EyeInHand;
-    FrameNames frames;
-    std::string detection_input;  // tags | pose_with_covariance | pose | tf
-    std::vector<int> tag_ids;
-    std::optional<MeasurementNoise> noise;
-    bool publish_tf = true;
-    std::string calibration_file, session_file;
-    double tf_timeout = 0.5;
-    double working_distance = 0.7;
-    double target_tolerance_mm = 1.0;
-  };
-
-  // Inputs: each gives the pattern pose in some frame at a stamp.
+  // Inputs: each gives a detection of the pattern (observations.h).
   void on_tags(const TagDetectionArray::ConstPtr& msg);
-  void on_pose_with_covariance(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
-  void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg);
   void on_tf_poll(const ros::TimerEvent&);
-  void observe(const ros::Time& stamp, const std::string& frame, const geometry_msgs::Pose& pose,
-               const boost::array<double, 36>* covariance);
+  void observe(const Detection& detection);
 
   bool calibrate(Calibrate::Request&, Calibrate::Response&);
   bool take_sample(TakeSample::Request&, TakeSample::Response&);
@@ -64,9 +50,9 @@ class CalibrationNode {
   void refuse(const std::string& reason);
   void publish_status();
   SampleSet sample_set() const;
-  std::string parent_frame() const;
 
-  Config config_;
+  SessionConfig config_;
+  std::optional<MeasurementNoise> noise_;  // from config_.noise_config
   ros::NodeHandle node_, private_node_, detection_node_;
   ros::CallbackQueue detection_queue_;  // detections in order, on their own thread
   std::unique_ptr<ros::AsyncSpinner> detection_spinner_;

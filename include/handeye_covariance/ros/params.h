@@ -3,7 +3,11 @@
 
 #include <ros/node_handle.h>
 
+#include <type_traits>
+
 #include <string>
+
+#include "handeye_covariance/core/session_config.h"
 
 namespace handeye {
 
@@ -11,6 +15,21 @@ template <typename T>
 T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
   T value;
   return nh.getParam(name, value) ? value : fallback;
+}
+
+/// The session settings from private parameters (same keys as the YAML config).
+inline void load_session_config(const ros::NodeHandle& nh, SessionConfig& config) {
+  for_each_setting(config, [&](const char* key, auto& member, double scale) {
+    using T = std::decay_t<decltype(member)>;
+    T value;
+    if (nh.getParam(key, value)) {
+      if constexpr (std::is_same_v<T, double>) {
+        member = value * scale;
+      } else {
+        member = value;
+      }
+    }
+  });
 }
 
 }  // namespace handeye

@@ -1,0 +1,73 @@
+// The settings of a calibration session, shared by the node (ROS parameters) and
+// the offline bag replay (a YAML file): one table of keys, so both read the same
+// names in the same units. See config/calibration_defaults.yaml.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/sampler.h"
+
+namespace handeye {
+
+struct SessionConfig {
+  bool eye_on_hand = true;
+  FrameNames frames{"base_link", "tool0", "camera_optical_frame", "tag_0"};
+  std::string detection_input = "tags";  // tags | pose_with_covariance | pose | tf
+  std::string detections_topic = "/tag_detections";
+  std::vector<int> tag_ids;              // empty: a lone detection is taken
+  std::string noise_config;              // YAML with a `noise:` block; empty: estimated
+  bool publish_tf = true;
+  bool resume = false;
+  std::string namespace_prefix = "handeye";
+  std::string calibration_file, session_file;  // empty: ~/.ros/handeye_covariance/<namespace>[_samples].yaml
+  double tf_timeout = 0.5;               // s
+  double tf_poll_rate = 30.0;            // Hz
+  double working_distance = 0.7;         // m
+  double target_tolerance_mm = 1.0;
+  SamplerOptions sampler;
+
+  Setup setup() const { return eye_on_hand ? Setup::EyeInHand : Setup::EyeToHand; }
+  /// <namespace_prefix>_eye_on_hand or _eye_on_base, as easy_handeye names it.
+  std::string name() const { return namespace_prefix + (eye_on_hand ? "_eye_on_hand" : "_eye_on_base"); }
+  /// X = T_parent_camera: the effector (eye-in-hand) or the base (eye-to-hand).
+  const std::string& parent_frame() const { return eye_on_hand ? frames.effector : frames.base; }
+};
+
+/// Calls `visit(key, member, scale)` for every setting: the value under `key`
+/// (in the units its name says: _mm, _deg, s, m) times `scale` is the member's
+/// SI value. Member types: bool, int, double, std::string, std::vector<int>.
+template <typename Visitor>
+void for_each_setting(SessionConfig& c, Visitor&& visit) {
+  constexpr double mm = 1e-3, deg = M_PI / 180.0;
+  visit("eye_on_hand", c.eye_on_hand, 1.0);
+  visit("robot_base_frame", c.frames.base, 1.0);
+  visit("robot_effector_frame", c.frames.effector, 1.0);
+  visit("tracking_base_frame", c.frames.camera, 1.0);
+  visit("tracking_marker_frame", c.frames.pattern, 1.0);
+  visit("detection_input", c.detection_input, 1.0);
+  visit("detections_topic", c.detections_topic, 1.0);
+  visit("tag_ids", c.tag_ids, 1.0);
+  visit("noise_config", c.noise_config, 1.0);
+  visit("publish_tf", c.publish_tf, 1.0);
+  visit("resume", c.resume, 1.0);
+  visit("namespace_prefix", c.namespace_prefix, 1.0);
+  visit("calibration_file", c.calibration_file, 1.0);
+  visit("session_file", c.session_file, 1.0);
+  visit("tf_timeout", c.tf_timeout, 1.0);
+  visit("tf_poll_rate", c.tf_poll_rate, 1.0);
+  visit("working_distance", c.working_distance, 1.0);
+  visit("target_tolerance_mm", c.target_tolerance_mm, 1.0);
+  visit("auto_sample", c.sampler.auto_sample, 1.0);
+  visit("still_window", c.sampler.still_window, 1.0);
+  visit("still_translation_mm", c.sampler.still_translation, mm);
+  visit("still_rotation_deg", c.sampler.still_rotation, deg);
+  visit("pattern_still_translation_mm", c.sampler.pattern_still_translation, mm);
+  visit("pattern_still_rotation_deg", c.sampler.pattern_still_rotation, deg);
+  visit("max_gap", c.sampler.max_gap, 1.0);
+  visit("max_age", c.sampler.max_age, 1.0);
+  visit("min_translation_mm", c.sampler.min_translation, mm);
+  visit("min_rotation_deg", c.sampler.min_rotation, deg);
+}
+
+}  // namespace handeye

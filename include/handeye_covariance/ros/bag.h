@@ -1,0 +1,64 @@
+// Offline: simulated calibration bags, and calibrating from a bag without a
+// roscore (rosbag::View + an offline tf2::BufferCore, the node's Sampler).
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/core/simulation.h"
+
+namespace handeye {
+
+struct BagSimulationOptions {
+  Setup setup = Setup::EyeInHand;
+  int poses = 15;
+  unsigned seed = 1;
+  double pause = 2.0, move = 1.0;   // s at and between poses
+  double tf_rate = 100.0;           // Hz, /tf
+  double detection_rate = 20.0;     // Hz
+  double latency = 0.05;            // s from capture (the stamp) to the recorded message
+  double latency_jitter = 0.01;     // s, uniform +-
+  // Detector noise in the camera frame: depth-heavy, as a monocular tag detector's.
+  double lateral_noise_mm = 0.3, depth_noise_mm = 1.5;
+  double tilt_noise_deg = 0.15, roll_noise_deg = 0.05;  // about camera x/y, about the optical axis
+  double dropout = 0.05;            // share of frames without a detection
+  double wrong_detections = 0.005;  // share of frames with a wrong (flipped) pose
+  bool detection_covariance = true; // put the noise covariance in each detection
+  bool robot_tf = true;             // false: a bag with a missing TF link (for tests)
+  bool detections = true;           // false: a bag with no detections (for tests)
+  std::string detections_topic = "/tag_detections";
+  double start_time = 1700000000.0; // s, the first stamp
+};
+
+struct SimulatedBag {
+  Eigen::Isometry3d X;  // the truth
+  FrameNames frames;
+  int tf_messages = 0, detections = 0, wrong_detections = 0;
+  double duration = 0.0;
+};
+
+/// Writes the bag; the true X is returned (write it with io::format_pose_file).
+SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOptions& options);
+
+struct BagReplay {
+  std::map<std::string, int> messages;  // per topic read
+  int detections = 0;                   // detection messages of the configured input
+  int observations = 0;                 // detections paired with a robot pose
+  std::map<std::string, int> refusals;  // by kind: no_robot_tf, too_close, other_tags, ...
+  std::map<std::string, std::string> refusal_examples;  // kind -> one full message
+  SampleSet samples;                    // with the noise model, ready to solve
+  double duration = 0.0;                // s of bag
+};
+
+/// `progress(fraction)` is called as the detections are read, for bags longer
+/// than 5 s (may be empty).
+/// Throws HandEyeError: IoError (unreadable, truncated or corrupt bag) or
+/// NoData (topic missing, no detections, or no sample could be taken).
+BagReplay replay_bag(const std::string& path, const SessionConfig& config,
+                     const std::optional<MeasurementNoise>& noise,
+                     std::function<void(double)> progress = {});
+
+}  // namespace handeye

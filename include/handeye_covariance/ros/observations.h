@@ -1,0 +1,50 @@
+// From a detection message to a stamp-matched observation: shared by the node
+// (tf2_ros::Buffer, filled live) and the bag replay (tf2::BufferCore, filled
+// from the bag), so both take and refuse exactly the same samples.
+#pragma once
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <tf2/buffer_core.h>
+
+#include <optional>
+#include <string>
+
+#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/ros/messages.h"
+
+namespace handeye {
+
+/// The pattern pose as a detector reported it.
+struct Detection {
+  ros::Time stamp;
+  std::string frame;  // empty: the camera frame
+  geometry_msgs::Pose pose;
+  std::optional<DecoupledCovariance> covariance;  // when the detector sent a non-zero one
+};
+
+/// Why a detection gave no observation: `kind` is short and stable (for counts),
+/// `message` is the full reason with the fix.
+struct Refusal {
+  std::string kind;
+  std::string message;
+};
+
+/// The detection of the configured pattern (`tag_ids`, or the lone detection
+/// when tag_ids is empty), or a refusal; nothing at all for an empty message.
+std::optional<Detection> select_detection(const TagDetectionArray& msg, const std::vector<int>& tag_ids,
+                                          std::optional<Refusal>& refusal);
+Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg);
+Detection detection_of(const geometry_msgs::PoseStamped& msg);
+Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern);
+
+/// Pairs the detection with T_base_effector looked up in `tf` AT THE DETECTION'S
+/// STAMP (the caller waits for TF first if it is filled live).
+struct ObservationResult {
+  std::optional<Observation> observation;
+  std::optional<Refusal> refusal;
+};
+ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfig& config, const Detection& detection);
+
+}  // namespace handeye

@@ -1,0 +1,95 @@
+#include "handeye_covariance/ros/observations.h"
+
+#include <tf2/exceptions.h>
+
+#include <set>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+
+namespace handeye {
+
+std::optional<Detection> select_detection(const TagDetectionArray& msg, const std::vector<int>& tag_ids,
+                                          std::optional<Refusal>& refusal) {
+  refusal.reset();
+  if (msg.detections.empty()) return std::nullopt;
+  const std::set<int> wanted(tag_ids.begin(), tag_ids.end());
+  for (const TagDetection& d : msg.detections) {
+    if (wanted.empty() ? msg.detections.size() == 1 : std::set<int>(d.id.begin(), d.id.end()) == wanted) {
+      Detection detection;
+      detection.stamp = d.pose.header.stamp.isZero() ? msg.header.stamp : d.pose.header.stamp;
+      detection.frame = d.pose.header.frame_id.empty() ? msg.header.frame_id : d.pose.header.frame_id;
+      detection.pose = d.pose.pose.pose;
+      detection.covariance = conversions::decoupled_if_nonzero(d.pose.pose.covariance);
+      return detection;
+    }
+  }
+  refusal = wanted.empty()
+                ? Refusal{"several_tags", "several detections in one message and tag_ids is empty; set tag_ids to the pattern's id(s)"}
+                : Refusal{"other_tags", "no detection with the configured tag_ids in this message (a different tag is in view)"};
+  return std::nullopt;
+}
+
+Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg) {
+  return {msg.header.stamp, msg.header.frame_id, msg.pose.pose, conversions::decoupled_if_nonzero(msg.pose.covariance)};
+}
+
+Detection detection_of(const geometry_msgs::PoseStamped& msg) {
+  return {msg.header.stamp, msg.header.frame_id, msg.pose, std::nullopt};
+}
+
+Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern) {
+  Detection d;
+  d.stamp = camera_to_pattern.header.stamp;
+  d.frame = camera_to_pattern.header.frame_id;
+  d.pose.position.x = camera_to_pattern.transform.translation.x;
+  d.pose.position.y = camera_to_pattern.transform.translation.y;
+  d.pose.position.z = camera_to_pattern.transform.translation.z;
+  d.pose.orientation = camera_to_pattern.transform.rotation;
+  return d;
+}
+
+ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfig& config, const Detection& detection) {
+  ObservationResult result;
+  if (detection.stamp.isZero()) {
+    result.refusal = Refusal{"zero_stamp", "a detection has a zero stamp; the detector must stamp with the image time"};
+    return result;
+  }
+  const double norm = conversions::quaternion_norm(detection.pose.orientation);
+  if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
+    result.refusal = Refusal{"bad_quaternion", "a detection's quaternion has norm " + number_text(norm) +
+                                                   "; expected a unit quaternion"};
+    return result;
+  }
+  Observation o;
+  o.stamp = detection.stamp.toSec();
+  o.T_camera_pattern = conversions::to_eigen(detection.pose);
+  o.pattern_noise = detection.covariance;
+  try {
+    // The robot pose at the detection's stamp; never the latest (Time(0)).
+    o.T_base_effector = conversions::to_eigen(
+        tf.lookupTransform(config.frames.base, config.frames.effector, detection.stamp).transform);
+  } catch (const tf2::TransformException& e) {
+    result.refusal = Refusal{"no_robot_tf", "no TF " + config.frames.base + " -> " + config.frames.effector +
+                                                " at the detection stamp " + std::to_string(detection.stamp.toSec()) +
+                                                ": " + e.what() +
+                                                ". Is the robot state publisher running, and are the clocks in sync?"};
+    return result;
+  }
+  if (!detection.frame.empty() && detection.frame != config.frames.camera) {
+    try {  // a detection in another optical frame of the same camera
+      o.T_camera_pattern = conversions::to_eigen(
+                               tf.lookupTransform(config.frames.camera, detection.frame, detection.stamp).transform) *
+                           o.T_camera_pattern;
+    } catch (const tf2::TransformException& e) {
+      result.refusal = Refusal{"detection_frame", "the detection is in frame `" + detection.frame + "`, not `" +
+                                                      config.frames.camera + "`, and TF cannot relate them: " +
+                                                      e.what() + ". Set tracking_base_frame to the detector's frame"};
+      return result;
+    }
+  }
+  result.observation = o;
+  return result;
+}
+
+}  // namespace handeye

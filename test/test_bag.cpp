@@ -1,0 +1,108 @@
+// Offline replay of simulated bags: the truth within the predicted uncertainty,
+// and a clear named error for each kind of bad bag.
+#include <gtest/gtest.h>
+#include <ros/time.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/ros/bag.h"
+
+namespace handeye {
+namespace {
+
+std::string temp(const std::string& name) { return ::testing::TempDir() + "/bag_" + name; }
+
+void expect_error(const std::string& bag, ErrorCode code, const std::string& mentions,
+                  const SessionConfig& config = {}) {
+  try {
+    replay_bag(bag, config, std::nullopt);
+    ADD_FAILURE() << "expected " << to_string(code);
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), code) << e.what();
+    EXPECT_NE(std::string(e.what()).find(mentions), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Fix:"), std::string::npos) << e.what();
+  }
+}
+
+void expect_recovers_truth(Setup setup, unsigned seed) {
+  BagSimulationOptions options;
+  options.setup = setup;
+  options.seed = seed;
+  const std::string path = temp(std::string(to_string(setup)) + ".bag");
+  const SimulatedBag bag = write_simulated_bag(path, options);
+  EXPECT_LT(std::filesystem::file_size(path), 2u * 1024 * 1024);
+  SessionConfig config;
+  config.eye_on_hand = setup == Setup::EyeInHand;
+  const BagReplay replay = replay_bag(path, config, std::nullopt);
+  EXPECT_EQ(replay.messages.at("/tf"), bag.tf_messages);
+  EXPECT_EQ(replay.detections, bag.detections);
+  EXPECT_GE(static_cast<int>(replay.samples.samples.size()), options.poses - 1);
+  EXPECT_LE(static_cast<int>(replay.samples.samples.size()), options.poses);
+  ASSERT_TRUE(replay.samples.noise.has_value()) << "the detections' covariance is the noise model";
+  const Calibration c = solve(replay.samples);
+  const Vector6d error = pose_error(c.T_parent_camera, bag.X);
+  // Within 3 sigma on every axis, and jointly below the chi2(6) 99.7% quantile.
+  for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(error(i)), 3.0 * std::sqrt(c.pose_covariance(i, i))) << i;
+  EXPECT_LT(error.dot(c.pose_covariance.ldlt().solve(error)), 20.06);
+}
+
+TEST(Bag, ReplayRecoversTheTruthEyeInHand) { expect_recovers_truth(Setup::EyeInHand, 3); }
+TEST(Bag, ReplayRecoversTheTruthEyeToHand) { expect_recovers_truth(Setup::EyeToHand, 4); }
+
+TEST(Bag, ReplayIsDeterministic) {
+  const std::string path = temp("twice.bag");
+  write_simulated_bag(path, {});
+  const BagReplay a = replay_bag(path, {}, std::nullopt), b = replay_bag(path, {}, std::nullopt);
+  ASSERT_EQ(a.samples.samples.size(), b.samples.samples.size());
+  for (std::size_t i = 0; i < a.samples.samples.size(); ++i) EXPECT_EQ(*a.samples.samples[i].stamp, *b.samples.samples[i].stamp);
+}
+
+TEST(Bag, NoDetections) {
+  BagSimulationOptions options;
+  options.detections = false;
+  write_simulated_bag(temp("nodet.bag"), options);
+  expect_error(temp("nodet.bag"), ErrorCode::NoData, "no topic `/tag_detections`");
+}
+
+TEST(Bag, MissingRobotTfLink) {
+  BagSimulationOptions options;
+  options.robot_tf = false;
+  write_simulated_bag(temp("notf.bag"), options);
+  expect_error(temp("notf.bag"), ErrorCode::NoData, "no TF base_link -> tool0");
+}
+
+TEST(Bag, WrongTopicName) {
+  write_simulated_bag(temp("topic.bag"), {});
+  SessionConfig config;
+  config.detections_topic = "/apriltag/detections";
+  expect_error(temp("topic.bag"), ErrorCode::NoData, "its topics are: /tag_detections, /tf, /tf_static", config);
+}
+
+TEST(Bag, TruncatedAndCorruptFiles) {
+  write_simulated_bag(temp("whole.bag"), {});
+  {  // a recording killed half way
+    std::ifstream in(temp("whole.bag"), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(temp("truncated.bag"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    std::string corrupt = bytes;
+    for (std::size_t i = 20; i < corrupt.size(); i += 97) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5a);
+    std::ofstream(temp("corrupt.bag"), std::ios::binary) << corrupt;
+  }
+  expect_error(temp("truncated.bag"), ErrorCode::IoError, "rosbag reindex");
+  expect_error(temp("corrupt.bag"), ErrorCode::IoError, "bag");
+  std::ofstream(temp("text.bag")) << "not a bag\n";
+  expect_error(temp("text.bag"), ErrorCode::IoError, "cannot read the bag");
+  expect_error(temp("absent.bag"), ErrorCode::IoError, "cannot read the bag");
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  ros::Time::init();
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
