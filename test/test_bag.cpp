@@ -52,6 +52,25 @@ void expect_recovers_truth(Setup setup, unsigned seed) {
 TEST(Bag, ReplayRecoversTheTruthEyeInHand) { expect_recovers_truth(Setup::EyeInHand, 3); }
 TEST(Bag, ReplayRecoversTheTruthEyeToHand) { expect_recovers_truth(Setup::EyeToHand, 4); }
 
+TEST(Bag, EveryDetectionInputOfTheNode) {
+  for (const std::string type : {"tags", "pose_with_covariance", "pose", "tf"}) {
+    BagSimulationOptions options;
+    options.detection_type = type;
+    options.poses = 8;
+    const std::string path = temp(type + ".bag");
+    const SimulatedBag bag = write_simulated_bag(path, options);
+    SessionConfig config;
+    config.detection_input = type;
+    const BagReplay replay = replay_bag(path, config, std::nullopt);
+    EXPECT_GE(replay.samples.samples.size(), 7u) << type;
+    // Only the covariance-carrying kinds give a noise model; the others estimate it.
+    EXPECT_EQ(replay.samples.noise.has_value(), type == "tags" || type == "pose_with_covariance") << type;
+    const Calibration c = solve(replay.samples);
+    const Vector6d error = pose_error(c.T_parent_camera, bag.X);
+    EXPECT_LT(error.dot(c.pose_covariance.ldlt().solve(error)), 20.06) << type;
+  }
+}
+
 TEST(Bag, ReplayIsDeterministic) {
   const std::string path = temp("twice.bag");
   write_simulated_bag(path, {});

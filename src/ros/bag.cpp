@@ -83,20 +83,36 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
       P = P * se3::make_pose(so3::exp(Eigen::Vector3d(0.35, 0, 0)), Eigen::Vector3d::Zero());  // a flipped pose
       ++result.wrong_detections;
     }
-    TagDetectionArray array;
-    array.header.stamp = capture;
-    array.header.frame_id = f.camera;
-    TagDetection detection;
-    detection.id = {0};
-    detection.size = {0.1};
-    detection.pose.header = array.header;
-    detection.pose.pose.pose = conversions::to_pose_msg(P);
+    geometry_msgs::PoseWithCovarianceStamped pose;
+    pose.header.stamp = capture;
+    pose.header.frame_id = f.camera;
+    pose.pose.pose = conversions::to_pose_msg(P);
     if (o.detection_covariance) {
-      detection.pose.pose.covariance = conversions::to_msg(PoseWithCovariance{P, noise.as_pose_covariance()}).covariance;
+      pose.pose.covariance = conversions::to_msg(PoseWithCovariance{P, noise.as_pose_covariance()}).covariance;
     }
-    array.detections.push_back(detection);
     const double delay = o.latency + o.latency_jitter * (2.0 * unit(rng) - 1.0);
-    bag.write(o.detections_topic, capture + ros::Duration(std::max(0.0, delay)), array);
+    const ros::Time received = capture + ros::Duration(std::max(0.0, delay));
+    if (o.detection_type == "tags") {
+      TagDetectionArray array;
+      array.header = pose.header;
+      TagDetection detection;
+      detection.id = {0};
+      detection.size = {0.1};
+      detection.pose = pose;
+      array.detections.push_back(detection);
+      bag.write(o.detections_topic, received, array);
+    } else if (o.detection_type == "pose_with_covariance") {
+      bag.write(o.detections_topic, received, pose);
+    } else if (o.detection_type == "pose") {
+      geometry_msgs::PoseStamped plain;
+      plain.header = pose.header;
+      plain.pose = pose.pose.pose;
+      bag.write(o.detections_topic, received, plain);
+    } else {  // tf: camera -> pattern on /tf, as a TF-publishing detector does
+      tf2_msgs::TFMessage msg;
+      msg.transforms.push_back(transform(capture, f.camera, f.pattern, P));
+      bag.write("/tf", received, msg);
+    }
     ++result.detections;
   }
   bag.close();

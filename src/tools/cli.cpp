@@ -77,7 +77,7 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
   po::options_description options("sim: a simulated calibration session with known truth (a samples file, or a rosbag when --output ends in .bag)");
   options.add_options()("help,h", "show this help")(
       "output,o", po::value(&output)->required(), "samples file to write (YAML)")(
-      "truth", po::value(&truth), "also write the true X as a result file")(
+      "truth", po::value(&truth), "also write the true X as a result file (bags: default <bag stem>_truth.yaml beside it)")(
       "setup", po::value(&setup_name), "eye_in_hand (default) or eye_to_hand")(
       "samples,n", po::value(&samples), "number of robot poses (default 20)")(
       "seed", po::value(&seed), "random seed (default 1)")(
@@ -92,7 +92,8 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
       "tilt-noise-deg", po::value(&bag_options.tilt_noise_deg), "bag: 1 sigma of the pattern's tilt (default 0.15)")(
       "dropout", po::value(&bag_options.dropout), "bag: share of frames without a detection (default 0.05)")(
       "wrong-detections", po::value(&bag_options.wrong_detections), "bag: share of flipped poses (default 0.005)")(
-      "latency", po::value(&bag_options.latency), "bag: s from capture to message (default 0.05)");
+      "latency", po::value(&bag_options.latency), "bag: s from capture to message (default 0.05)")(
+      "detection-type", po::value(&bag_options.detection_type), "bag: tags (default), pose_with_covariance, pose or tf");
   po::variables_map vm;
   if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
   if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
@@ -113,7 +114,8 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
     const SimulatedBag bag = write_simulated_bag(output, bag_options);
     out << "wrote a " << bag.duration << " s simulated " << setup_name << " bag to " << output << ": "
         << bag.tf_messages << " /tf, " << bag.detections << " detections (" << bag.wrong_detections << " wrong)\n";
-    if (!truth.empty()) {
+    if (truth.empty()) truth = (std::filesystem::path(output).parent_path() / std::filesystem::path(output).stem()).string() + "_truth.yaml";
+    {  // the truth always goes beside the bag
       io::ResultContext context;
       context.setup = setup;
       context.parent = setup == Setup::EyeInHand ? bag.frames.effector : bag.frames.base;

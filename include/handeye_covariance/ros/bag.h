@@ -30,6 +30,9 @@ struct BagSimulationOptions {
   bool robot_tf = true;             // false: a bag with a missing TF link (for tests)
   bool detections = true;           // false: a bag with no detections (for tests)
   std::string detections_topic = "/tag_detections";
+  /// How detections are recorded: tags (TagDetectionArray), pose_with_covariance,
+  /// pose, or tf (camera -> pattern transforms on /tf) - the node's inputs.
+  std::string detection_type = "tags";
   double start_time = 1700000000.0; // s, the first stamp
 };
 
