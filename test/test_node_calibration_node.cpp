@@ -4,6 +4,8 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <visualization_msgs/MarkerArray.h>
+
 #include <filesystem>
 
 #include "handeye_covariance/core/monte_carlo.h"
@@ -33,6 +35,12 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
         have_published = true;
       });
   test::StatusWatcher status(kNs + "handeye_calibration/status");
+  std::size_t markers = 0;
+  geometry_msgs::PoseWithCovarianceStamped running;
+  auto markers_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      kNs + "handeye_calibration/markers", 1, [&](const auto& msg) { markers = msg->markers.size(); });
+  auto estimate_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+      kNs + "handeye_calibration/estimate", 1, [&](const auto& msg) { running = *msg; });
   ASSERT_TRUE(test::wait_for([&] { return have_truth; }, 20.0)) << "no truth from the rig";
 
   // 12 poses, 1.7 s each: the node must take a sample at (nearly) every pause.
@@ -41,6 +49,9 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_TRUE(status.latest.has_estimate) << status.latest.last_event;
   EXPECT_GT(status.latest.object_error_mm, 0.0);
   EXPECT_EQ(status.latest.parent_frame, kParent);
+  // The running estimate and its markers (position ellipsoid, 3 discs, label) for RViz.
+  EXPECT_TRUE(test::wait_for([&] { return markers == 5 && running.header.frame_id == kParent; }, 5.0))
+      << markers << " markers, estimate in `" << running.header.frame_id << "`";
 
   Calibrate calibrate;
   ASSERT_TRUE(test::call(kNs + "calibrate", calibrate));

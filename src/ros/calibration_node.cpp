@@ -7,6 +7,7 @@
 #include <set>
 
 #include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/ros/params.h"
@@ -43,6 +44,8 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
 
   calibration_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("calibration", 1, true);
   status_pub_ = private_node_.advertise<CalibrationStatus>("status", 10, true);
+  markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
+  estimate_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("estimate", 1, true);
   services_ = {
       node_.advertiseService("calibrate", &CalibrationNode::calibrate, this),
       node_.advertiseService("take_sample", &CalibrationNode::take_sample, this),
@@ -158,6 +161,7 @@ void CalibrationNode::samples_changed(const std::string& event) {
   if (sampler_.samples().size() >= 3) {
     try {
       estimate_ = solve(sample_set());
+      publish_estimate(*estimate_);
     } catch (const HandEyeError& e) {
       last_event_ = event + "; no estimate yet: " + e.what();
     }
@@ -190,6 +194,19 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
     status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
   }
   status_pub_.publish(status);
+}
+
+void CalibrationNode::publish_estimate(const Calibration& c) {
+  geometry_msgs::PoseWithCovarianceStamped estimate;
+  estimate.header.stamp = ros::Time::now();
+  estimate.header.frame_id = config_.parent_frame();
+  estimate.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
+  estimate_pub_.publish(estimate);
+  try {
+    markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.parent_frame(), ros::Time::now()));
+  } catch (const HandEyeError& e) {
+    ROS_WARN("cannot draw the covariance: %s", e.what());
+  }
 }
 
 // ------------------------------------------------------------------ services
@@ -227,6 +244,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
 
   calibration_pub_.publish(res.calibration);
+  publish_estimate(c);
   if (config_.publish_tf) {
     geometry_msgs::TransformStamped tf;
     tf.header = res.calibration.header;

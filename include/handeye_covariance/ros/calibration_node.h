@@ -49,6 +49,8 @@ class CalibrationNode {
   void samples_changed(const std::string& event);
   void refuse(const std::string& reason);
   void publish_status();
+  /// The running estimate (~estimate) and its markers (~markers).
+  void publish_estimate(const Calibration& c);
   SampleSet sample_set() const;
 
   SessionConfig config_;
@@ -61,7 +63,7 @@ class CalibrationNode {
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::Subscriber detections_;
   ros::Timer tf_poll_, status_timer_;
-  ros::Publisher calibration_pub_, status_pub_;
+  ros::Publisher calibration_pub_, estimate_pub_, status_pub_, markers_pub_;
   std::vector<ros::ServiceServer> services_;
 
   mutable std::mutex mutex_;  // guards everything below

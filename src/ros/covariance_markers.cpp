@@ -1,0 +1,64 @@
+#include "handeye_covariance/ros/covariance_markers.h"
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+
+namespace handeye {
+
+namespace {
+
+visualization_msgs::Marker ellipsoid_marker(const Ellipsoid& e, const Eigen::Vector3d& center, int id,
+                                            std::array<float, 4> rgba) {
+  visualization_msgs::Marker m;
+  m.id = id;
+  m.type = visualization_msgs::Marker::SPHERE;
+  m.action = visualization_msgs::Marker::ADD;
+  m.pose = conversions::to_pose_msg(se3::make_pose(e.axes, center));
+  m.scale.x = std::max(2.0 * e.radii(0), 1e-4);  // a rank-deficient axis still shows as a thin disc
+  m.scale.y = std::max(2.0 * e.radii(1), 1e-4);
+  m.scale.z = std::max(2.0 * e.radii(2), 1e-4);
+  m.color.r = rgba[0], m.color.g = rgba[1], m.color.b = rgba[2], m.color.a = rgba[3];
+  return m;
+}
+
+}  // namespace
+
+std::string sigma_label(const PoseWithCovariance& X) {
+  return "1\u03c3 " + number_text(max_sigma(X.covariance.topLeftCorner<3, 3>()) * 1e3, 3) + " mm, " +
+         number_text(max_sigma(X.covariance.bottomRightCorner<3, 3>()) * 180.0 / M_PI, 3) + "\u00b0";
+}
+
+visualization_msgs::MarkerArray covariance_markers(const PoseWithCovariance& X, const std::string& frame,
+                                                   const ros::Time& stamp, const CovarianceMarkerOptions& o) {
+  visualization_msgs::MarkerArray array;
+  const Eigen::Vector3d origin = X.pose.translation();
+  array.markers.push_back(ellipsoid_marker(
+      ellipsoid_from_covariance(X.covariance.topLeftCorner<3, 3>(), o.sigmas), origin, 0, {1.0f, 0.0f, 1.0f, 0.6f}));
+  const std::array<std::array<float, 4>, 3> colours = {{{1, 0, 0, 0.6f}, {0, 1, 0, 0.6f}, {0, 0, 1, 0.6f}}};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d axis = X.pose.linear().col(k);
+    const Ellipsoid disc = ellipsoid_from_covariance(
+        axis_tip_covariance(X.covariance.bottomRightCorner<3, 3>(), axis, o.axis_length), o.sigmas);
+    array.markers.push_back(ellipsoid_marker(disc, origin + o.axis_length * axis, 1 + k, colours[k]));
+  }
+  visualization_msgs::Marker text;
+  text.id = 4;
+  text.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+  text.action = visualization_msgs::Marker::ADD;
+  text.pose.position.x = origin.x();
+  text.pose.position.y = origin.y();
+  text.pose.position.z = origin.z() + 1.5 * o.axis_length;
+  text.pose.orientation.w = 1.0;
+  text.scale.z = 0.02;
+  text.color.r = text.color.g = text.color.b = text.color.a = 1.0f;
+  text.text = sigma_label(X);
+  array.markers.push_back(text);
+  for (visualization_msgs::Marker& m : array.markers) {
+    m.header.frame_id = frame;
+    m.header.stamp = stamp;
+    m.ns = o.ns;
+  }
+  return array;
+}
+
+}  // namespace handeye
