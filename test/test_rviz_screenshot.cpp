@@ -98,6 +98,23 @@ TEST(RvizDisplay, DrawsTheAnisotropicPositionEllipsoid) {
   EXPECT_LT(blob.area, 0.25 * image.rows * image.cols) << "the ellipsoid fills the view";
   ASSERT_GT(blob.minor, 0.0);
   EXPECT_NEAR(blob.major / blob.minor, 4.0, 1.0) << "long/short axis ratio should follow the sigma ratio";
+
+  // A covariance that is not positive semi-definite: nothing drawn (a status
+  // error in the display), and rviz survives to draw the next valid one.
+  geometry_msgs::PoseWithCovarianceStamped invalid = msg;
+  invalid.pose.covariance[7] = -1e-6;  // (y, y) < 0
+  const auto shows = [&](const geometry_msgs::PoseWithCovarianceStamped& m, bool expect_drawn) {
+    return test::wait_for(
+        [&] {
+          pub.publish(m);
+          ros::WallDuration(1.0).sleep();
+          if (std::system(capture.c_str()) != 0) return false;
+          return (magenta_blob(png).area > 2000) == expect_drawn;
+        },
+        20.0);
+  };
+  EXPECT_TRUE(shows(invalid, false)) << "an invalid covariance was drawn";
+  EXPECT_TRUE(shows(msg, true)) << "rviz did not draw again after an invalid covariance (crashed?)";
 }
 
 }  // namespace
