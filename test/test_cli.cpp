@@ -3,7 +3,9 @@
 
 #include <array>
 #include <cstdio>
+#include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <sys/wait.h>
 
 #include "handeye_covariance/io/yaml_io.h"
@@ -124,6 +126,31 @@ TEST(Cli, BadBagsExit2WithTheReasonAndWriteNothing) {
   EXPECT_EQ(corrupt.exit_code, 2);
   EXPECT_NE(corrupt.err.find("IoError"), std::string::npos) << corrupt.err;
   EXPECT_FALSE(std::filesystem::exists(result));
+}
+
+TEST(Cli, ValidateSmokeTestWritesFiniteFiguresAndPlots) {
+  const std::string dir = ::testing::TempDir() + "/validate";
+  std::filesystem::remove_all(dir);
+  const CliRun r = run("validate --protocol paper,pose-stream --lambda 1e-5,1e-4 --M 40 --k 10 --seed 3 --out " + dir);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  std::istringstream csv(handeye::io::read_file(dir + "/validation.csv"));
+  std::string line;
+  std::getline(csv, line);  // header
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::istringstream fields(line);
+    std::string field;
+    std::getline(fields, field, ',');  // protocol
+    for (int column = 1; std::getline(fields, field, ','); ++column) {
+      EXPECT_TRUE(std::isfinite(std::stod(field))) << "row " << rows << " column " << column << ": " << line;
+    }
+  }
+  EXPECT_EQ(rows, 4);
+  for (const char* png : {"fig3_epsilon.png", "fig2_paper.png", "fig2_pose-stream.png"}) {
+    EXPECT_GT(std::filesystem::file_size(dir + "/" + png), 10000u) << png;
+  }
+  EXPECT_EQ(run("validate --protocol nonsense --M 20").exit_code, 2);
 }
 
 TEST(Cli, ShippedExampleSolves) {
