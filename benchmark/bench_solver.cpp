@@ -13,6 +13,7 @@ using namespace handeye;
 void BM_SolveMotions(benchmark::State& state) {
   Rng rng(1);
   const MotionSet set = simulate_motions(rng, random_pose(rng, 0.5), static_cast<int>(state.range(0)), paper_noise(1e-4));
+  benchmark::DoNotOptimize(solve(set).pose_covariance);  // warm-up: first-touch page faults are not the solver
   for (auto _ : state) {
     Calibration c = solve(set);
     benchmark::DoNotOptimize(c.pose_covariance);
@@ -26,6 +27,7 @@ void BM_SolveSamples(benchmark::State& state) {
   Rng rng(2);
   const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                               static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
+  benchmark::DoNotOptimize(solve(s.samples).pose_covariance);  // warm-up, as above
   for (auto _ : state) {
     Calibration c = solve(s.samples);
     benchmark::DoNotOptimize(c.pose_covariance);
@@ -40,6 +42,7 @@ void BM_SolveSamplesEstimatedNoise(benchmark::State& state) {
   SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                         static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
   s.samples.noise.reset();
+  benchmark::DoNotOptimize(solve(s.samples).pose_covariance);  // warm-up, as above
   for (auto _ : state) {
     Calibration c = solve(s.samples);
     benchmark::DoNotOptimize(c.pose_covariance);
