@@ -51,7 +51,15 @@ TEST(Estimator, NoiseFreeSamplesRecoverXTo1e9InBothSetups) {
     const Calibration c = solve(session.samples);
     expect_recovers(c.T_parent_camera, session.X, 1e-9);
     EXPECT_EQ(c.samples_used, 20);
-    EXPECT_EQ(c.motions_used, 19);
+    EXPECT_EQ(c.motions_used, 190);  // all pairs: 20 samples are within the default window
+    SolverOptions consecutive;
+    consecutive.pair_window = 1;
+    const Calibration c1 = solve(session.samples, consecutive);
+    EXPECT_EQ(c1.motions_used, 19);
+    expect_recovers(c1.T_parent_camera, session.X, 1e-9);
+    SolverOptions windowed;
+    windowed.pair_window = 3;
+    EXPECT_EQ(solve(session.samples, windowed).motions_used, 17 * 3 + 2 + 1);
   }
 }
 

@@ -40,13 +40,17 @@ struct Influence {
 };
 
 /// An independent noise input: a motion's own A or B noise (motion input), or
-/// one sample's effector or pattern pose noise (pose input, touches 2 motions).
+/// one sample's effector or pattern pose noise (pose input: it touches every
+/// motion that uses the sample, up to 2 x pair_window of them).
 struct NoiseInput {
   DecoupledCovariance covariance;
   bool robot = true;  // robot/effector noise or camera/pattern noise
-  std::array<Influence, 2> influences;
+  std::vector<Influence> influences;
   int count = 0;
-  void add(const Influence& influence) { influences[count++] = influence; }
+  void add(const Influence& influence) {
+    influences.push_back(influence);
+    ++count;
+  }
 };
 
 struct Problem {
@@ -54,7 +58,8 @@ struct Problem {
   std::vector<NoiseInput> inputs;
   std::vector<Matrix6d> jacobians;  // kept apart so motion input stays small in memory
   bool noise_given = true;
-  int samples = 0;  // > 0: motions are consecutive samples
+  int samples = 0;  // > 0: pose input; motion m runs from sample pairs[m].first to .second
+  std::vector<std::pair<int, int>> pairs;
   std::size_t size() const { return A.size(); }
   int add_jacobian(const Matrix6d& J) {
     jacobians.push_back(J);
@@ -62,7 +67,7 @@ struct Problem {
   }
   /// Where motion i came from, for messages (built only when needed).
   std::string label(std::size_t i) const {
-    return samples > 0 ? "samples[" + std::to_string(i) + "] -> samples[" + std::to_string(i + 1) + "]"
+    return samples > 0 ? "samples[" + std::to_string(pairs[i].first) + "] -> samples[" + std::to_string(pairs[i].second) + "]"
                        : "motions[" + std::to_string(i) + "]";
   }
 };
@@ -656,60 +661,58 @@ Problem build(const MotionSet& set) {
   return p;
 }
 
-Problem build(const SampleSet& set) {
+Problem build(const SampleSet& set, int pair_window) {
   Problem p;
-  p.A.reserve(set.samples.size());
-  p.B.reserve(set.samples.size());
-  p.inputs.reserve(2 * set.samples.size());
-  p.jacobians.reserve(4 * set.samples.size());
   p.noise_given = set.noise.has_value();
   p.samples = static_cast<int>(set.samples.size());
   if (set.noise) check_noise_block(*set.noise, "noise");
-  const std::size_t n = set.samples.size();
-  for (std::size_t s = 0; s < n; ++s) {
+  const int n = static_cast<int>(set.samples.size());
+  for (int s = 0; s < n; ++s) {
     const std::string where = "samples[" + std::to_string(s) + "]";
     check_pose(set.samples[s].T_base_effector, where + ".effector");
     check_pose(set.samples[s].T_camera_pattern, where + ".pattern");
   }
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    const MotionPair motion = motion_between(set.setup, set.samples[i], set.samples[i + 1]);
-    p.A.push_back(motion.A);
-    p.B.push_back(motion.B);
+  // Each sample pairs with the next pair_window samples: all pairs for short
+  // sessions (more, and more varied, motions), O(n w) for long streams.
+  const int window = std::max(1, pair_window);
+  for (int i = 0; i + 1 < n; ++i) {
+    for (int j = i + 1; j < n && j - i <= window; ++j) p.pairs.push_back({i, j});
+  }
+  p.A.reserve(p.pairs.size());
+  p.B.reserve(p.pairs.size());
+  p.jacobians.reserve(4 * p.pairs.size());
+  std::vector<NoiseInput> effector(n), pattern(n);
+  for (int s = 0; s < n; ++s) {
+    const MeasurementNoise noise = noise_for(set.samples[s].noise, set.noise, "samples[" + std::to_string(s) + "]");
+    effector[s].covariance = noise.robot;
+    effector[s].robot = true;
+    pattern[s].covariance = noise.camera;
+    pattern[s].robot = false;
   }
   const bool in_hand = set.setup == Setup::EyeInHand;
-  for (std::size_t s = 0; s < n; ++s) {
-    const PoseSample& sample = set.samples[s];
-    const MeasurementNoise noise =
-        noise_for(sample.noise, set.noise, "samples[" + std::to_string(s) + "]");
-    const Isometry3d& E = sample.T_base_effector;
-    const Isometry3d& P = sample.T_camera_pattern;
-    NoiseInput effector, pattern;
-    effector.covariance = noise.robot;
-    effector.robot = true;
-    pattern.covariance = noise.camera;
-    pattern.robot = false;
-    // Motion s-1 ends at this sample; motion s starts at it.
-    if (s >= 1) {
-      const int m = static_cast<int>(s) - 1;
-      const Isometry3d& E_prev = set.samples[s - 1].T_base_effector;
-      const Isometry3d& P_prev = set.samples[s - 1].T_camera_pattern;
-      // eye_in_hand A = E^-1 E_prev; eye_to_hand A = E E_prev^-1; B = P P_prev^-1.
-      const Matrix6d dA = in_hand ? compose_jacobian_left(E.inverse(), E_prev) * inverse_jacobian(E)
-                                  : compose_jacobian_left(E, E_prev.inverse());
-      effector.add({m, true, p.add_jacobian(dA)});
-      pattern.add({m, false, p.add_jacobian(compose_jacobian_left(P, P_prev.inverse()))});
-    }
-    if (s + 1 < n) {
-      const int m = static_cast<int>(s);
-      const Isometry3d& E_next = set.samples[s + 1].T_base_effector;
-      const Isometry3d& P_next = set.samples[s + 1].T_camera_pattern;
-      const Matrix6d dA = in_hand ? compose_jacobian_right(E_next.inverse())
-                                  : compose_jacobian_right(E_next) * inverse_jacobian(E);
-      effector.add({m, true, p.add_jacobian(dA)});
-      pattern.add({m, false, p.add_jacobian(compose_jacobian_right(P_next) * inverse_jacobian(P))});
-    }
-    p.inputs.push_back(effector);
-    p.inputs.push_back(pattern);
+  for (std::size_t m = 0; m < p.pairs.size(); ++m) {
+    const auto [i, j] = p.pairs[m];
+    const MotionPair motion = motion_between(set.setup, set.samples[i], set.samples[j]);
+    p.A.push_back(motion.A);
+    p.B.push_back(motion.B);
+    const Isometry3d& Ei = set.samples[i].T_base_effector;
+    const Isometry3d& Ej = set.samples[j].T_base_effector;
+    const Isometry3d& Pi = set.samples[i].T_camera_pattern;
+    const Isometry3d& Pj = set.samples[j].T_camera_pattern;
+    // eye_in_hand A = Ej^-1 Ei; eye_to_hand A = Ej Ei^-1; B = Pj Pi^-1 (motion_between).
+    const Matrix6d dA_dEj = in_hand ? compose_jacobian_left(Ej.inverse(), Ei) * inverse_jacobian(Ej)
+                                    : compose_jacobian_left(Ej, Ei.inverse());
+    const Matrix6d dA_dEi = in_hand ? compose_jacobian_right(Ej.inverse())
+                                    : compose_jacobian_right(Ej) * inverse_jacobian(Ei);
+    const int motion_index = static_cast<int>(m);
+    effector[j].add({motion_index, true, p.add_jacobian(dA_dEj)});
+    effector[i].add({motion_index, true, p.add_jacobian(dA_dEi)});
+    pattern[j].add({motion_index, false, p.add_jacobian(compose_jacobian_left(Pj, Pi.inverse()))});
+    pattern[i].add({motion_index, false, p.add_jacobian(compose_jacobian_right(Pj) * inverse_jacobian(Pi))});
+  }
+  for (int s = 0; s < n; ++s) {
+    p.inputs.push_back(std::move(effector[s]));
+    p.inputs.push_back(std::move(pattern[s]));
   }
   return p;
 }
@@ -779,12 +782,25 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   result.motions_used = static_cast<int>(problem.size());
   result.samples_used = problem.samples;
 
+  // The expected chi^2 of each stage at its minimum: 3k minus what the fit
+  // absorbs, tr(S Sigma) with S the stage's information and Sigma the sandwich
+  // covariance. For independent motions that is 3k - 3; correlated motions
+  // (pose streams, above all with many pairs) absorb much more, and dividing
+  // by 3k - 3 would underestimate the noise.
+  const auto expected_chi2 = [&](const StageSolution& st, const Matrix6d& covariance) {
+    const double all = 3.0 * static_cast<double>(problem.size());
+    const Matrix3d S = st.per_pair_rotation_covariance.inverse();
+    return std::pair<double, double>{
+        std::max(1.0, all - (S * covariance.bottomRightCorner<3, 3>()).trace()),
+        std::max(1.0, all - (st.translation.linearization.information * covariance.topLeftCorner<3, 3>()).trace())};
+  };
+
   StageSolution s;
   if (problem.noise_given) {
     s = solve_stages(problem, d, R0, scale, options);
   } else {
     // Variance-component estimation: scale the rotation noise until the
-    // rotation chi^2 equals its dof, then the translation noise likewise.
+    // rotation chi^2 equals its expectation, then the translation noise likewise.
     const int dof = 3 * static_cast<int>(problem.size()) - 3;
     if (dof < 6) {
       throw HandEyeError(ErrorCode::NoiseUnidentifiable,
@@ -795,10 +811,13 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
     constexpr double kFloor = 1e-24;  // (1e-12 rad or m)^2: noise-free input
     scale.translation = 1e-6;
     s = solve_stages(problem, d, R0, scale, options);
-    scale.rotation = std::max(kFloor, s.rotation_stage.chi2 / dof);
+    scale.rotation = std::max(
+        kFloor, s.rotation_stage.chi2 /
+                    expected_chi2(s, pose_covariance(problem, scale, s.R, s.translation, s.gains)).first);
     for (int round = 0; round < 30; ++round) {
       s = solve_stages(problem, d, s.R, scale, options);
-      const double ratio = s.translation.diagnostics.chi2 / dof;
+      const double ratio = s.translation.diagnostics.chi2 /
+                           expected_chi2(s, pose_covariance(problem, scale, s.R, s.translation, s.gains)).second;
       scale.translation = std::max(kFloor, scale.translation * ratio);
       if (std::abs(ratio - 1.0) < 1e-3 || scale.translation == kFloor) break;
     }
@@ -824,6 +843,9 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   result.per_pair_covariance.rotation = s.per_pair_rotation_covariance;
   result.per_pair_covariance.translation = s.translation.linearization.information.inverse();
   result.rotation_covariance = result.pose_covariance.bottomRightCorner<3, 3>();
+  const auto [expected_rotation, expected_translation] = expected_chi2(s, result.pose_covariance);
+  result.rotation_stage.dof = static_cast<int>(std::lround(expected_rotation));
+  result.translation_stage.dof = static_cast<int>(std::lround(expected_translation));
 
   const double rotation_sigma = max_sigma(result.rotation_covariance);
   if (!(rotation_sigma <= options.max_rotation_sigma)) {
@@ -874,7 +896,7 @@ Calibration solve(const SampleSet& samples, const SolverOptions& options) {
                            " sample(s); at least 3 are needed (2 motions)",
                        "samples", "record more samples (10-30 poses rotating about different axes is typical)");
   }
-  return solve_problem(build(samples), options);
+  return solve_problem(build(samples, options.pair_window), options);
 }
 
 }  // namespace handeye

@@ -46,6 +46,11 @@ struct SolverOptions {
   /// Refuse a result whose rotation 1-sigma exceeds this (rad): the first-order
   /// covariance is meaningless there.
   double max_rotation_sigma = 0.1;
+  /// Pose input: each sample forms a motion with each of the next pair_window
+  /// samples (all pairs for sessions up to pair_window + 1 samples; O(n w)
+  /// beyond). 1 uses consecutive motions only. Every pair's correlation through
+  /// the shared poses is in the covariance, whatever the window.
+  int pair_window = 30;
 };
 
 enum class StopReason {
@@ -59,7 +64,7 @@ struct StageDiagnostics {
   int iterations = 0;
   StopReason stop_reason = StopReason::MaxIterations;
   double chi2 = 0.0;  // weighted residual sum of squares at the solution
-  int dof = 0;        // 3k - 3
+  int dof = 0;        // expected chi2: 3k minus what the fit absorbs (3k - 3 for independent motions)
   bool converged() const { return stop_reason != StopReason::MaxIterations; }
 };
 
@@ -98,9 +103,10 @@ Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions);
 /// Solve from independent motion pairs.
 Calibration solve(const MotionSet& motions, const SolverOptions& options = {});
 
-/// Solve from absolute pose samples. Consecutive samples form the motions
-/// (n samples -> n-1 motions), and each sample's noise is propagated into both
-/// motions that use it, so their correlation is in the covariance.
+/// Solve from absolute pose samples. Each sample forms motions with the next
+/// pair_window samples (all pairs for short sessions), and each sample's noise
+/// is propagated into every motion that uses it, so their correlation is in the
+/// covariance.
 Calibration solve(const SampleSet& samples, const SolverOptions& options = {});
 
 }  // namespace handeye
