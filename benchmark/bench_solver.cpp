@@ -22,7 +22,8 @@ void BM_SolveMotions(benchmark::State& state) {
 }
 BENCHMARK(BM_SolveMotions)->Arg(30)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
 
-// A pose stream of k+1 samples (k motions), with the correlated covariance.
+// A pose stream of k+1 samples (each paired with the next 30: about 30 k motions),
+// with the correlated covariance.
 void BM_SolveSamples(benchmark::State& state) {
   Rng rng(2);
   const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
