@@ -22,6 +22,7 @@ const char* to_string(ErrorCode code) {
     case ErrorCode::PoorlyConstrained: return "PoorlyConstrained";
     case ErrorCode::NoData: return "NoData";
     case ErrorCode::IoError: return "IoError";
+    case ErrorCode::InvalidLayout: return "InvalidLayout";
   }
   return "Unknown";
 }

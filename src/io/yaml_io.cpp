@@ -432,6 +432,47 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
 
+// ---------------------------------------------------------------- tag layouts
+
+TagLayout parse_tag_layout(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  TagLayout layout;
+  if (const YAML::Node family = root["family"]) {
+    if (!family.IsScalar()) {
+      throw HandEyeError(ErrorCode::MalformedFile, "`family` must be a name", (top / "family").str(),
+                         "write e.g. `family: tag36h11`");
+    }
+    layout.family = family.Scalar();
+  }
+  const YAML::Node tags = require_list(root, "tags", top);
+  const std::string hint = "a tag is {id: 0, size: 0.06, x: 0, y: 0, z: 0, qw: 1, qx: 0, qy: 0, qz: 0}";
+  for (std::size_t i = 0; i < tags.size(); ++i) {
+    const Location at = (top / "tags")[i];
+    const YAML::Node entry = tags[i];
+    TagPlacement tag;
+    const double id = as_double(require(entry, "id", at, hint), at / "id");
+    if (id != std::floor(id) || id < 0) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the tag id must be a non-negative integer", (at / "id").str(), hint);
+    }
+    tag.id = static_cast<int>(id);
+    tag.size = as_double(require(entry, "size", at, hint), at / "size");
+    const auto optional_number = [&](const char* key, double fallback) {
+      const YAML::Node node = entry[key];
+      return node ? as_double(node, at / key) : fallback;
+    };
+    const Vector3d t(optional_number("x", 0.0), optional_number("y", 0.0), optional_number("z", 0.0));
+    const Eigen::Quaterniond q(optional_number("qw", 1.0), optional_number("qx", 0.0), optional_number("qy", 0.0),
+                               optional_number("qz", 0.0));
+    tag.T_pattern_tag = se3::make_pose(checked_unit_quaternion(q, at.str()).toRotationMatrix(), t);
+    layout.tags.push_back(tag);
+  }
+  check_layout(layout, source);
+  return layout;
+}
+
+TagLayout read_tag_layout(const std::string& path) { return parse_tag_layout(read_file(path), path); }
+
 // ---------------------------------------------------------------- session config
 
 void read_session_config(const std::string& path, SessionConfig& config) {

@@ -24,6 +24,7 @@ enum class ErrorCode {
   PoorlyConstrained,         // solved, but the rotation sigma is too large for a first-order covariance
   NoData,                    // a bag or stream without usable detections or samples
   IoError,                   // file cannot be read or written
+  InvalidLayout,             // a tag pattern layout without tags, with a bad size or a duplicate id
 };
 
 /// A number for a message, with `significant_digits` digits ("0.0484", "1.2e-05").

@@ -16,6 +16,7 @@
 
 #include "handeye_covariance/core/estimator.h"
 #include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/core/tag_layout.h"
 
 namespace handeye {
 namespace io {
@@ -30,6 +31,14 @@ SampleSet read_samples(const std::string& path);
 /// as the node's ~noise_config. Throws MissingKey when there is no such block.
 MeasurementNoise read_noise_file(const std::string& path);
 MotionSet read_motions(const std::string& path);
+
+/// A tag pattern layout (config/tag_board_2x2.yaml shows the format):
+///   family: tag36h11
+///   tags:   # each tag's centre pose in the pattern frame; x/y/z and q default to the identity
+///     - {id: 0, size: 0.06, x: -0.04, y: 0.04, z: 0.0, qw: 1, qx: 0, qy: 0, qz: 0}
+/// Throws HandEyeError naming the file and the entry.
+TagLayout parse_tag_layout(const std::string& text, const std::string& source);
+TagLayout read_tag_layout(const std::string& path);
 
 /// A file holding either samples or motions (told apart by its top-level key).
 using Input = std::variant<SampleSet, MotionSet>;

@@ -1,0 +1,133 @@
+// The pattern pose from detected tag corners, with its covariance (no ROS).
+//
+// PnP on every corner of every detected tag of the layout (OpenCV: IPPE for a
+// planar pattern, then Levenberg-Marquardt), distortion included. The
+// covariance is first-order: Sigma = sigma_px^2 (J^T J)^-1, with J the
+// reprojection Jacobian d(pixels)/d(pose perturbation) in the package's
+// convention (ROS order, translation t = t_hat + dt, rotation R = exp([xi]) R_hat,
+// both in the camera frame). J comes from cv::projectPoints's own derivatives,
+// so the distortion model is differentiated by the library that applies it.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/core/tag_layout.h"
+#include "handeye_covariance/vision/tag_detector.h"
+
+namespace handeye {
+
+/// A pinhole camera with OpenCV's distortion model (sensor_msgs/CameraInfo's
+/// plumb_bob / rational_polynomial: D = k1, k2, p1, p2[, k3[, k4, k5, k6]]).
+struct CameraModel {
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  std::vector<double> distortion;
+  int width = 0, height = 0;
+
+  /// The pixel of a point in the camera frame (z > 0).
+  Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const;
+};
+
+/// Removes the lens distortion from images. libapriltag fits straight lines to
+/// the tag edges, so on a distorted image its corners are biased (about 0.02 px
+/// outwards here, i.e. 0.2-0.4 mm of depth at 0.6 m; test_vision measures it).
+/// The detector therefore runs on the rectified image, whose camera is
+/// rectified(): the same K and no distortion.
+class ImageRectifier {
+ public:
+  explicit ImageRectifier(const CameraModel& camera);
+  /// The image itself when the camera has no distortion.
+  cv::Mat rectify(const cv::Mat& image) const;
+  const CameraModel& rectified() const { return rectified_; }
+
+ private:
+  CameraModel rectified_;
+  cv::Mat map_x_, map_y_;  // empty: nothing to undo
+};
+
+/// Throws HandEyeError when K is not a usable pinhole matrix (fx, fy <= 0, NaN)
+/// or the distortion has a length OpenCV does not know.
+void check_camera_model(const CameraModel& camera, const std::string& where);
+
+/// Pooled pixel noise: the residual variance over the recent frames. One frame
+/// of one tag leaves 8 - 6 = 2 degrees of freedom, far too few for an honest
+/// sigma (the mean of 1/chi2_2 is infinite); pooling over a window of frames
+/// gives hundreds. The camera's pixel noise is a property of the camera and the
+/// scene, so it changes slowly.
+class PixelNoise {
+ public:
+  explicit PixelNoise(double floor_px = 0.05, std::size_t window_frames = 200)
+      : floor_(floor_px), window_(window_frames) {}
+
+  void add(double residual_sum_of_squares, int degrees_of_freedom);
+  /// sqrt(pooled RSS / pooled dof), at least the floor; the floor alone
+  /// until some frame had residual degrees of freedom.
+  double sigma() const;
+  int degrees_of_freedom() const { return dof_; }
+  double floor() const { return floor_; }
+
+ private:
+  double floor_;
+  std::size_t window_;
+  std::deque<std::pair<double, int>> frames_;
+  double rss_ = 0.0;
+  int dof_ = 0;
+};
+
+/// How the corner errors of one tag are modelled.
+///   EdgeFit: libapriltag fits a line to each edge, and a corner is where two
+///     lines meet. A line fitted to l edge points with independent noise sigma
+///     moves its two ends (perpendicular to it) with variance 4 sigma^2 / l
+///     each and correlation -1/2 (offset plus tilt about the middle). The 8 x 8
+///     corner covariance of a tag follows from its four lines; sigma is the
+///     noise of one edge point, in px.
+///   Independent: every corner coordinate independent with variance sigma^2.
+///     Simpler, but on rendered images its pose covariance is 2-3x too large
+///     (NEES about 1.3 instead of 3, test_vision).
+enum class CornerNoiseModel { EdgeFit, Independent };
+
+struct PatternPoseOptions {
+  int min_tags = 1;                  // tags of the layout that must be seen
+  double max_rms_px = 2.0;           // refuse a fit worse than this (a wrong tag, a bad corner)
+  CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
+};
+
+/// The 8 x 8 covariance, per unit sigma^2, of a tag's corners (x0, y0, ..., x3, y3)
+/// under the EdgeFit model, at the detected corners (in order around the tag).
+Eigen::Matrix<double, 8, 8> edge_fit_corner_covariance(const std::array<Eigen::Vector2d, 4>& corners);
+
+struct PatternPose {
+  Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
+  Matrix6d covariance = Matrix6d::Zero();  // ROS order, m^2 and rad^2
+  std::vector<int> ids;                    // the layout's tags used
+  int points = 0;                          // corners used
+  double rms_px = 0.0;                     // this frame's reprojection RMS
+  double residual_sum_of_squares = 0.0;    // weighted by the corner noise model (r^T C^-1 r)
+  int degrees_of_freedom = 0;              // 2 * points - 6
+  double pixel_sigma = 0.0;                // px, the sigma the covariance uses (pooled, floored)
+};
+
+struct PatternPoseResult {
+  std::optional<PatternPose> pose;
+  std::string refusal;  // why there is no pose (empty when there is one)
+};
+
+/// The pattern pose from the detected tags that belong to `layout` (others are
+/// ignored). The covariance uses `noise.sigma()` after adding this frame's
+/// residuals to it (the caller keeps one PixelNoise per camera).
+PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
+                                        const std::vector<TagCorners>& detections, PixelNoise& noise,
+                                        const PatternPoseOptions& options = {});
+
+/// d(pixels)/d(pose perturbation) (2n x 6, ROS order) of the pattern points
+/// at T_camera_pattern; exposed for the numerical check in test_vision.
+Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel& camera,
+                                                               const Eigen::Isometry3d& T_camera_pattern,
+                                                               const std::vector<Eigen::Vector3d>& points);
+
+}  // namespace handeye

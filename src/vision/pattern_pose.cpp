@@ -1,0 +1,291 @@
+#include "handeye_covariance/vision/pattern_pose.h"
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+cv::Mat camera_matrix(const CameraModel& camera) {
+  cv::Mat K;
+  cv::eigen2cv(camera.K, K);
+  return K;
+}
+
+cv::Mat distortion(const CameraModel& camera) {
+  return camera.distortion.empty() ? cv::Mat::zeros(1, 4, CV_64F) : cv::Mat(camera.distortion, true).reshape(1, 1);
+}
+
+std::vector<cv::Point3d> cv_points(const std::vector<Vector3d>& points) {
+  std::vector<cv::Point3d> out;
+  out.reserve(points.size());
+  for (const Vector3d& p : points) out.emplace_back(p.x(), p.y(), p.z());
+  return out;
+}
+
+/// True when every point lies within 1e-9 of the best-fit plane (relative to the pattern's extent).
+bool coplanar(const std::vector<Vector3d>& points) {
+  Vector3d centre = Vector3d::Zero();
+  for (const Vector3d& p : points) centre += p;
+  centre /= static_cast<double>(points.size());
+  Matrix3d scatter = Matrix3d::Zero();
+  for (const Vector3d& p : points) scatter += (p - centre) * (p - centre).transpose();
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(scatter);
+  return eig.eigenvalues()(0) <= 1e-18 * eig.eigenvalues()(2);
+}
+
+Isometry3d pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Matrix3d R_eigen;
+  Vector3d t;
+  cv::cv2eigen(R, R_eigen);
+  cv::cv2eigen(tvec.reshape(1, 3), t);
+  return se3::make_pose(R_eigen, t);
+}
+
+}  // namespace
+
+Eigen::Vector2d CameraModel::project(const Vector3d& p_camera) const {
+  std::vector<cv::Point2d> pixels;
+  cv::projectPoints(cv_points({p_camera}), cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(*this),
+                    handeye::distortion(*this), pixels);
+  return {pixels[0].x, pixels[0].y};
+}
+
+ImageRectifier::ImageRectifier(const CameraModel& camera) : rectified_(camera) {
+  check_camera_model(camera, "camera");
+  rectified_.distortion.clear();
+  bool distorted = false;
+  for (double d : camera.distortion) distorted = distorted || d != 0.0;
+  if (!distorted) return;
+  if (camera.width <= 0 || camera.height <= 0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the camera has distortion but no image size", "camera",
+                       "set width and height in the CameraInfo");
+  }
+  const cv::Mat K = camera_matrix(camera);
+  cv::initUndistortRectifyMap(K, distortion(camera), cv::noArray(), K, cv::Size(camera.width, camera.height), CV_32FC1,
+                              map_x_, map_y_);
+}
+
+cv::Mat ImageRectifier::rectify(const cv::Mat& image) const {
+  if (map_x_.empty()) return image;
+  cv::Mat out;
+  cv::remap(image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  return out;
+}
+
+void check_camera_model(const CameraModel& camera, const std::string& where) {
+  if (!camera.K.allFinite() || !(camera.K(0, 0) > 0.0) || !(camera.K(1, 1) > 0.0) || camera.K(2, 2) != 1.0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the camera matrix K is not a pinhole matrix (fx, fy > 0, K[2][2] = 1)",
+                       where, "calibrate the camera's intrinsics first (camera_calibration) and publish them in CameraInfo");
+  }
+  const std::size_t n = camera.distortion.size();
+  if (!(n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14)) {
+    throw HandEyeError(ErrorCode::WrongLength, "distortion has " + std::to_string(n) + " coefficients", where,
+                       "give plumb_bob (5) or rational_polynomial (8) coefficients, or none");
+  }
+  for (double d : camera.distortion) {
+    if (!std::isfinite(d)) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in the distortion coefficients", where, "fix the camera info");
+    }
+  }
+}
+
+void PixelNoise::add(double residual_sum_of_squares, int degrees_of_freedom) {
+  if (degrees_of_freedom <= 0 || !std::isfinite(residual_sum_of_squares)) return;
+  frames_.emplace_back(residual_sum_of_squares, degrees_of_freedom);
+  rss_ += residual_sum_of_squares;
+  dof_ += degrees_of_freedom;
+  while (frames_.size() > window_) {
+    rss_ -= frames_.front().first;
+    dof_ -= frames_.front().second;
+    frames_.pop_front();
+  }
+}
+
+double PixelNoise::sigma() const {
+  if (dof_ <= 0) return floor_;
+  return std::max(floor_, std::sqrt(std::max(0.0, rss_) / dof_));
+}
+
+Eigen::Matrix<double, 8, 8> edge_fit_corner_covariance(const std::array<Eigen::Vector2d, 4>& corners) {
+  // d: the perpendicular displacement of each edge line at its two ends;
+  // edge e runs from corner e to corner e + 1, so d(2e) is at corner e and
+  // d(2e + 1) at corner e + 1.
+  Eigen::Matrix<double, 8, 8> D = Eigen::Matrix<double, 8, 8>::Zero();
+  std::array<Eigen::Vector2d, 4> normal;
+  for (int e = 0; e < 4; ++e) {
+    const Eigen::Vector2d along = corners[(e + 1) % 4] - corners[e];
+    const double length = std::max(along.norm(), 1e-9);
+    normal[e] = Eigen::Vector2d(-along.y(), along.x()) / length;
+    // A line fitted to `length` unit-spaced points of noise 1: offset variance
+    // 1/l, tilt variance 12/l^3; at the ends +-l/2 that is 4/l each, covariance -2/l.
+    D.block<2, 2>(2 * e, 2 * e) << 4.0 / length, -2.0 / length, -2.0 / length, 4.0 / length;
+  }
+  // Corner c is on edges c - 1 (its end) and c (its start): n_{c-1} . dc = d, n_c . dc = d'.
+  Eigen::Matrix<double, 8, 8> G = Eigen::Matrix<double, 8, 8>::Zero();
+  for (int c = 0; c < 4; ++c) {
+    const int previous = (c + 3) % 4;
+    Eigen::Matrix2d N;
+    N.row(0) = normal[previous].transpose();
+    N.row(1) = normal[c].transpose();
+    const Eigen::Matrix2d N_inverse = N.inverse();
+    G.block<2, 1>(2 * c, 2 * previous + 1) = N_inverse.col(0);
+    G.block<2, 1>(2 * c, 2 * c) = N_inverse.col(1);
+  }
+  return G * D * G.transpose();
+}
+
+Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel& camera, const Isometry3d& T_camera_pattern,
+                                                               const std::vector<Vector3d>& points) {
+  std::vector<Vector3d> in_camera;
+  in_camera.reserve(points.size());
+  for (const Vector3d& p : points) in_camera.push_back(T_camera_pattern * p);
+  // With rvec = tvec = 0, d(pixel)/d(tvec) is d(pixel)/d(point in the camera frame).
+  std::vector<cv::Point2d> pixels;
+  cv::Mat jacobian;
+  cv::projectPoints(cv_points(in_camera), cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(camera),
+                    distortion(camera), pixels, jacobian);
+  Eigen::Matrix<double, Eigen::Dynamic, 6> J(2 * points.size(), 6);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Eigen::Matrix<double, 2, 3> d_pixel_d_point;
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 3; ++c) d_pixel_d_point(r, c) = jacobian.at<double>(static_cast<int>(2 * i) + r, 3 + c);
+    }
+    // p_c = R p + t: d p_c = dt - [R p] xi for R = exp([xi]) R_hat.
+    const Vector3d rotated = in_camera[i] - T_camera_pattern.translation();
+    J.block<2, 3>(2 * i, 0) = d_pixel_d_point;
+    J.block<2, 3>(2 * i, 3) = -d_pixel_d_point * so3::hat(rotated);
+  }
+  return J;
+}
+
+PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
+                                        const std::vector<TagCorners>& detections, PixelNoise& noise,
+                                        const PatternPoseOptions& options) {
+  PatternPoseResult result;
+  std::vector<Vector3d> object;
+  std::vector<cv::Point2d> image;
+  std::vector<int> ids;
+  for (const TagCorners& detection : detections) {
+    const TagPlacement* tag = layout.find(detection.id);
+    if (!tag) continue;
+    if (std::find(ids.begin(), ids.end(), detection.id) != ids.end()) {
+      result.refusal = "tag " + std::to_string(detection.id) +
+                       " is seen twice; two printed copies of one id make the pose ambiguous, remove one";
+      return result;
+    }
+    ids.push_back(detection.id);
+    const auto corners = tag->corners();
+    for (int c = 0; c < 4; ++c) {
+      object.push_back(corners[c]);
+      image.emplace_back(detection.corners[c].x(), detection.corners[c].y());
+    }
+  }
+  if (static_cast<int>(ids.size()) < std::max(1, options.min_tags)) {
+    result.refusal = "saw " + std::to_string(ids.size()) + " of the pattern's tags, need " +
+                     std::to_string(std::max(1, options.min_tags)) + "; bring the pattern fully into view";
+    return result;
+  }
+
+  const cv::Mat K = camera_matrix(camera);
+  const cv::Mat D = distortion(camera);
+  const std::vector<cv::Point3d> object_cv = cv_points(object);
+  cv::Mat rvec, tvec;
+  const int method = coplanar(object) ? cv::SOLVEPNP_IPPE : (object.size() >= 6 ? cv::SOLVEPNP_SQPNP : -1);
+  if (method < 0 || !cv::solvePnP(object_cv, image, K, D, rvec, tvec, false, method)) {
+    result.refusal = "PnP found no pose for tags " + std::to_string(ids.size()) +
+                     " (a non-planar layout needs at least 2 tags in view)";
+    return result;
+  }
+  cv::solvePnPRefineLM(object_cv, image, K, D, rvec, tvec);
+
+  PatternPose pose;
+  pose.T_camera_pattern = pose_of(rvec, tvec);
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(object_cv, rvec, tvec, K, D, projected);
+  double unweighted = 0.0;
+  for (std::size_t i = 0; i < image.size(); ++i) {
+    const cv::Point2d r = projected[i] - image[i];
+    unweighted += r.dot(r);
+  }
+  pose.points = static_cast<int>(object.size());
+  pose.degrees_of_freedom = 2 * pose.points - 6;
+  pose.rms_px = std::sqrt(unweighted / (2.0 * pose.points));
+  pose.ids = ids;
+  for (const Vector3d& p : object) {
+    if ((pose.T_camera_pattern * p).z() <= 0.0) {
+      result.refusal = "the PnP solution puts the pattern behind the camera; check the tag layout's sizes and ids";
+      return result;
+    }
+  }
+  if (!(pose.rms_px <= options.max_rms_px)) {
+    result.refusal = "reprojection RMS " + number_text(pose.rms_px) + " px exceeds " + number_text(options.max_rms_px) +
+                     " px; a tag is misdetected or the layout (sizes, positions) does not match the printed pattern";
+    return result;
+  }
+
+  // The corner noise model's weights, one 8 x 8 block per tag.
+  const int n = pose.points;
+  Eigen::MatrixXd weight = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  if (options.corner_noise == CornerNoiseModel::EdgeFit) {
+    for (int t = 0; t < n / 4; ++t) {
+      std::array<Eigen::Vector2d, 4> corners;
+      for (int c = 0; c < 4; ++c) corners[c] = Eigen::Vector2d(image[4 * t + c].x, image[4 * t + c].y);
+      const Eigen::Matrix<double, 8, 8> C = edge_fit_corner_covariance(corners);
+      const Eigen::LLT<Eigen::Matrix<double, 8, 8>> llt(C);
+      if (llt.info() != Eigen::Success) {
+        result.refusal = "tag " + std::to_string(ids[t]) + " is seen edge-on (its corners are nearly collinear)";
+        return result;
+      }
+      weight.block<8, 8>(8 * t, 8 * t) = llt.solve(Eigen::Matrix<double, 8, 8>::Identity());
+    }
+  }
+  const auto residuals = [&](const Isometry3d& T) {
+    Eigen::VectorXd r(2 * n);
+    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = Eigen::Vector2d(image[i].x, image[i].y) - camera.project(T * object[i]);
+    return r;
+  };
+  // Gauss-Newton on the weighted residuals, from the unweighted PnP solution
+  // (R = exp([xi]) R, t = t + dt, as the covariance).
+  Eigen::Matrix<double, Eigen::Dynamic, 6> J;
+  Matrix6d information;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    J = reprojection_jacobian(camera, pose.T_camera_pattern, object);
+    information = J.transpose() * weight * J;
+    const Vector6d step = information.ldlt().solve(J.transpose() * weight * residuals(pose.T_camera_pattern));
+    if (!step.allFinite()) break;
+    pose.T_camera_pattern = se3::make_pose(so3::exp(step.tail<3>()) * pose.T_camera_pattern.linear(),
+                                           pose.T_camera_pattern.translation() + step.head<3>());
+    if (step.norm() < 1e-12) break;
+  }
+  J = reprojection_jacobian(camera, pose.T_camera_pattern, object);
+  information = J.transpose() * weight * J;
+  const Eigen::VectorXd r = residuals(pose.T_camera_pattern);
+  pose.residual_sum_of_squares = r.dot(weight * r);
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(information);
+  if (!(eig.eigenvalues()(0) > 1e-12 * eig.eigenvalues()(5)) || !pose.T_camera_pattern.matrix().allFinite()) {
+    result.refusal = "the corners do not constrain all six pose parameters (degenerate view)";
+    return result;
+  }
+  noise.add(pose.residual_sum_of_squares, pose.degrees_of_freedom);
+  pose.pixel_sigma = noise.sigma();
+  pose.covariance = pose.pixel_sigma * pose.pixel_sigma * information.inverse();
+  pose.covariance = 0.5 * (pose.covariance + pose.covariance.transpose());
+  result.pose = pose;
+  return result;
+}
+
+}  // namespace handeye
