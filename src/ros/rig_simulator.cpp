@@ -2,7 +2,10 @@
 // and for the rostests. The robot holds a pose for ~pause_time, then moves to the
 // next in ~move_time. The base -> flange TF is published at ~tf_rate, with a static
 // flange -> tool0 offset. Pattern detections come at ~detection_rate, stamped with
-// the capture time and published ~latency later, with per-frame noise.
+// the capture time and published ~latency later, with per-frame noise. With
+// ~output:=images the rig instead renders what its camera sees (the tag layout
+// ~layout_file, or one tag ~tag_size of id 0) and publishes the image and its
+// CameraInfo, stamped with the capture time, for the apriltag_detector node.
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <ros/ros.h>
@@ -13,6 +16,11 @@
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/vision/tag_renderer.h"
+
+#include <image_transport/image_transport.h>
+#include <sensor_msgs/image_encodings.h>
 
 namespace handeye {
 namespace {
@@ -54,6 +62,17 @@ class RigSimulator {
     if (output_ == "tags") detections_ = node.advertise<TagDetectionArray>(topic, 10);
     if (output_ == "pose_with_covariance") detections_ = node.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 10);
     if (output_ == "pose") detections_ = node.advertise<geometry_msgs::PoseStamped>(topic, 10);
+    if (output_ == "images") {
+      const std::string layout_file = param<std::string>(pn, "layout_file", "");
+      const TagLayout layout = layout_file.empty() ? single_tag_layout(0, param(pn, "tag_size", 0.1)) : io::read_tag_layout(layout_file);
+      RenderOptions render;
+      render.noise_sigma = param(pn, "image_noise", render.noise_sigma);
+      render.blur_sigma_px = param(pn, "image_blur", render.blur_sigma_px);
+      renderer_ = std::make_unique<TagRenderer>(layout, simulated_camera(), render);
+      transport_ = std::make_unique<image_transport::ImageTransport>(node);
+      image_pub_ = transport_->advertise(param<std::string>(pn, "image_topic", "camera/image_raw"), 2);
+      info_pub_ = node.advertise<sensor_msgs::CameraInfo>(param<std::string>(pn, "camera_info_topic", "camera/camera_info"), 2);
+    }
 
     geometry_msgs::TransformStamped offset;
     offset.header.stamp = ros::Time::now();
@@ -84,8 +103,31 @@ class RigSimulator {
     broadcaster_.sendTransform(tf);
   }
 
+  /// The camera's view at the capture time, rendered, with its CameraInfo.
+  void publish_image(const ros::Time& capture) {
+    std_msgs::Header header;
+    header.stamp = capture;
+    header.frame_id = camera_;
+    const cv::Mat image = renderer_->render(trajectory_.pattern_at(elapsed(capture)), rng_);
+    sensor_msgs::ImagePtr msg(new sensor_msgs::Image);
+    msg->header = header;
+    msg->height = static_cast<uint32_t>(image.rows);
+    msg->width = static_cast<uint32_t>(image.cols);
+    msg->encoding = sensor_msgs::image_encodings::MONO8;
+    msg->step = static_cast<uint32_t>(image.cols);
+    msg->data.assign(image.data, image.data + image.total());
+    sensor_msgs::CameraInfo info = conversions::to_camera_info(renderer_->camera());
+    info.header = header;
+    image_pub_.publish(msg);
+    info_pub_.publish(info);
+  }
+
   void publish_detection(const ros::TimerEvent&) {
     const ros::Time capture = ros::Time::now() - ros::Duration(latency_);
+    if (output_ == "images") {
+      publish_image(capture);
+      return;
+    }
     const Eigen::Isometry3d P = perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_);
     geometry_msgs::PoseWithCovarianceStamped pose;
     pose.header.stamp = capture;
@@ -127,7 +169,10 @@ class RigSimulator {
   RigTrajectory trajectory_;
   Eigen::Isometry3d flange_T_tool_;
   ros::Time start_;
-  ros::Publisher truth_pub_, detections_;
+  ros::Publisher truth_pub_, detections_, info_pub_;
+  std::unique_ptr<TagRenderer> renderer_;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
+  image_transport::Publisher image_pub_;
   ros::Timer tf_timer_, detection_timer_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;

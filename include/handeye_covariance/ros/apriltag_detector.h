@@ -1,0 +1,50 @@
+// The AprilTag detector node: image + CameraInfo in, the pattern's pose with its
+// covariance out as TagDetectionArray (and optionally TF camera -> pattern at
+// the image stamp). The work is done by the ROS-free vision layer
+// (tag_detector.h, pattern_pose.h); this class is glue.
+#pragma once
+
+#include <image_transport/image_transport.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "handeye_covariance/core/tag_layout.h"
+#include "handeye_covariance/vision/pattern_pose.h"
+#include "handeye_covariance/vision/tag_detector.h"
+
+namespace handeye {
+
+class ApriltagDetectorNode {
+ public:
+  /// Reads ~parameters (see launch/apriltag_detector.launch); throws
+  /// HandEyeError for an unreadable layout or an unknown family.
+  ApriltagDetectorNode(ros::NodeHandle node, ros::NodeHandle private_node);
+
+ private:
+  void on_camera_info(const sensor_msgs::CameraInfo::ConstPtr& info);
+  void on_image(const sensor_msgs::Image::ConstPtr& image);
+
+  TagLayout layout_;
+  std::string pattern_frame_;
+  bool publish_tf_ = false, image_is_rectified_ = false;
+  PatternPoseOptions pose_options_;
+  std::unique_ptr<TagDetector> detector_;
+  image_transport::ImageTransport transport_;
+  image_transport::Subscriber image_sub_;
+  ros::Subscriber info_sub_;
+  ros::Publisher detections_pub_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+
+  std::mutex mutex_;  // camera_ and rectifier_ come from the info callback
+  std::optional<sensor_msgs::CameraInfo> info_;
+  std::unique_ptr<ImageRectifier> rectifier_;
+  PixelNoise pixel_noise_;
+  std::string camera_error_;  // why the last CameraInfo was refused
+};
+
+}  // namespace handeye
