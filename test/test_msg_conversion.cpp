@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/vision/tag_renderer.h"
 #include "test_helpers.h"
 
 namespace handeye {
@@ -45,6 +47,38 @@ TEST(MsgConversion, QuaternionNorm) {
   geometry_msgs::Quaternion q;
   q.w = 2.0;
   EXPECT_DOUBLE_EQ(conversions::quaternion_norm(q), 2.0);
+}
+
+}  // namespace
+}  // namespace handeye
+
+namespace handeye {
+namespace {
+
+TEST(CameraInfoConversion, RoundTripsAndRefusesUncalibratedCameras) {
+  const CameraModel camera = simulated_camera();
+  sensor_msgs::CameraInfo info = conversions::to_camera_info(camera);
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+  const CameraModel back = conversions::to_camera_model(info);
+  EXPECT_EQ(back.K, camera.K);
+  EXPECT_EQ(back.distortion, camera.distortion);
+  EXPECT_EQ(back.width, 640);
+  EXPECT_EQ(info.K[2], camera.K(0, 2));  // row-major: K[2] is cx
+
+  sensor_msgs::CameraInfo uncalibrated = info;
+  uncalibrated.K.fill(0.0);
+  try {
+    conversions::to_camera_model(uncalibrated);
+    FAIL() << "accepted K = 0";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("not calibrated"), std::string::npos) << e.what();
+  }
+  sensor_msgs::CameraInfo fisheye = info;
+  fisheye.distortion_model = "equidistant";
+  EXPECT_THROW(conversions::to_camera_model(fisheye), HandEyeError);
+  sensor_msgs::CameraInfo odd = info;
+  odd.D.resize(3);
+  EXPECT_THROW(conversions::to_camera_model(odd), HandEyeError);
 }
 
 }  // namespace

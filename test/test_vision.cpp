@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
@@ -231,6 +232,49 @@ TEST(PatternPose, CovarianceIsHonestOnASingleTag) {
   EXPECT_LE(c.nees_rotation, 3.5);
   EXPECT_GE(c.nees_translation, 2.5);
   EXPECT_LE(c.nees_translation, 3.5);
+}
+
+// The whole chain without ROS: sessions of 12 rendered views, the detector's
+// covariances as the pattern noise of each sample, then the estimator. The X
+// covariance must match X's error over the sessions (6-dof NEES mean near 6),
+// although the estimator keeps only the rotation and translation blocks of
+// each detection covariance (its R-t correlation is dropped, see README).
+TEST(PatternPose, CalibrationFromRenderedImagesIsConsistent) {
+  const TagLayout layout = io::read_tag_layout(board_file());
+  const CameraModel camera = simulated_camera();
+  const TagRenderer renderer(layout, camera);
+  const ImageRectifier rectifier(camera);
+  const TagDetector detector;
+  PixelNoise noise;
+  const int sessions = 30;
+  double nees = 0.0;
+  for (int session = 0; session < sessions; ++session) {
+    Rng rng(100 + session);
+    SimulatedSession truth = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, MeasurementNoise{});
+    SampleSet set = truth.samples;
+    MeasurementNoise mean;
+    for (PoseSample& sample : set.samples) {
+      const PatternPoseResult r = estimate_pattern_pose(
+          layout, rectifier.rectified(), detector.detect(rectifier.rectify(renderer.render(sample.T_camera_pattern, rng))),
+          noise);
+      ASSERT_TRUE(r.pose) << r.refusal;
+      sample.T_camera_pattern = r.pose->T_camera_pattern;
+      MeasurementNoise n;
+      n.camera.translation = r.pose->covariance.topLeftCorner<3, 3>();
+      n.camera.rotation = r.pose->covariance.bottomRightCorner<3, 3>();
+      mean.camera.translation += n.camera.translation / 12.0;
+      mean.camera.rotation += n.camera.rotation / 12.0;
+      sample.noise = n;
+    }
+    set.noise = mean;  // the robot is exact here
+    const Calibration c = solve(set);
+    const Vector6d e = test::pose_perturbation(c.T_parent_camera, truth.X);
+    nees += e.dot(c.pose_covariance.ldlt().solve(e)) / sessions;
+  }
+  std::printf("calibration from rendered images: %d sessions of 12 views, 6-dof NEES mean %.2f\n", sessions, nees);
+  // 30 x chi2(6) = chi2(180): its 0.1% and 99.9% quantiles are 125 and 246.
+  EXPECT_GT(nees, 125.0 / sessions);
+  EXPECT_LT(nees, 246.0 / sessions);
 }
 
 // Why the detector rectifies first and models edge fits: without either, the
