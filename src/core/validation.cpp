@@ -21,23 +21,34 @@ void check_pose(const Eigen::Isometry3d& pose, const std::string& where) {
   }
 }
 
-void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where) {
+namespace {
+template <int N>
+void check_square_covariance(const Eigen::Matrix<double, N, N>& covariance, const std::string& where) {
   if (!covariance.allFinite()) {
     throw HandEyeError(ErrorCode::NonFinite, "covariance contains NaN or Inf", where,
-                       "give 9 finite numbers, row-major, in rad^2 or m^2");
+                       "give " + std::to_string(N * N) + " finite numbers, row-major, in rad^2 or m^2");
   }
   const double scale = covariance.cwiseAbs().maxCoeff();
   if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
     throw HandEyeError(ErrorCode::InvalidNoise, "covariance is not symmetric", where,
-                       "give a symmetric 3x3 matrix, row-major");
+                       "give a symmetric " + std::to_string(N) + "x" + std::to_string(N) + " matrix, row-major");
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(covariance, Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(covariance, Eigen::EigenvaluesOnly);
   if (eig.eigenvalues().minCoeff() < -1e-12 * std::max(scale, 1e-300)) {
     throw HandEyeError(ErrorCode::InvalidNoise,
                        "covariance is not positive semi-definite (smallest eigenvalue " +
                            number_text(eig.eigenvalues().minCoeff(), 6) + ")",
                        where, "variances go on the diagonal and must be >= 0 (they are sigma^2, not sigma)");
   }
+}
+}  // namespace
+
+void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where) {
+  check_square_covariance<3>(covariance, where);
+}
+
+void check_covariance(const Matrix6d& covariance, const std::string& where) {
+  check_square_covariance<6>(covariance, where);
 }
 
 void check_covariance(const DecoupledCovariance& covariance, const std::string& where) {

@@ -1,0 +1,48 @@
+#include "handeye_covariance/core/object_pose.h"
+
+#include "handeye_covariance/core/validation.h"
+
+namespace handeye {
+
+namespace {
+
+void check(const PoseWithCovariance& T, const std::string& where) {
+  check_pose(T.pose, where);
+  check_covariance(T.covariance, where + ".covariance");
+}
+
+Matrix6d sandwich(const Matrix6d& J, const Matrix6d& covariance) { return J * covariance * J.transpose(); }
+
+}  // namespace
+
+ObjectPose object_in_base(const ObjectPoseInput& input) {
+  const bool in_hand = input.setup == Setup::EyeInHand;
+  if (in_hand) check(input.T_base_effector, "effector");
+  check(input.X, "calibration");
+  check(input.T_camera_object, "object");
+  // Eq. (68): T = E X P (eye_in_hand) or X P (eye_to_hand); E = identity drops out.
+  const Eigen::Isometry3d E = in_hand ? input.T_base_effector.pose : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d& X = input.X.pose;
+  const Eigen::Isometry3d& P = input.T_camera_object.pose;
+  ObjectPose out;
+  out.T_base_object.pose = E * X * P;
+  if (in_hand) out.from_robot = sandwich(compose_jacobian_left(E, X * P), input.T_base_effector.covariance);
+  out.from_calibration =
+      sandwich(compose_jacobian_right(E) * compose_jacobian_left(X, P), input.X.covariance);
+  out.from_detection = sandwich(compose_jacobian_right(E * X), input.T_camera_object.covariance);
+  out.T_base_object.covariance = out.from_robot + out.from_calibration + out.from_detection;
+  return out;
+}
+
+PointInBase point_in_base(const ObjectPose& object, const Eigen::Vector3d& p_object) {
+  const Eigen::Isometry3d& T = object.T_base_object.pose;
+  PointInBase point;
+  point.position = T * p_object;
+  point.covariance = point_covariance(object.T_base_object, p_object);
+  point.from_robot = point_covariance({T, object.from_robot}, p_object);
+  point.from_calibration = point_covariance({T, object.from_calibration}, p_object);
+  point.from_detection = point_covariance({T, object.from_detection}, p_object);
+  return point;
+}
+
+}  // namespace handeye
