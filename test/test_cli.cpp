@@ -8,6 +8,7 @@
 #include <sstream>
 #include <sys/wait.h>
 
+#include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace {
@@ -163,3 +164,76 @@ TEST(Cli, ShippedExampleSolves) {
 }
 
 }  // namespace
+
+namespace compose_test {
+
+std::string write(const std::string& name, const std::string& text) {
+  const std::string path = temp(name);
+  handeye::io::write_file_atomically(path, text);
+  return path;
+}
+
+TEST(Cli, ComposeGivesTheObjectInTheBaseWithEq68sCovariance) {
+  const std::string samples = temp("c_samples.yaml"), result = temp("c_result.yaml"), object = temp("c_object.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 15 --seed 5").exit_code, 0);
+  ASSERT_EQ(run("solve --input " + samples + " --output " + result).exit_code, 0);
+  // The detection as a pose file with its own covariance; the robot inline with isotropic sigmas.
+  const std::string detection = write("c_detection.yaml",
+                                      "translation: [0.05, 0.02, 0.7]\nrotation: [0, 0, 0.1, 0.99498743710662]\n"
+                                      "covariance: {rotation: [4e-7, 0, 0, 0, 4e-7, 0, 0, 0, 9e-7],"
+                                      " translation: [1e-8, 0, 0, 0, 1e-8, 0, 0, 0, 4e-7]}\n");
+  const CliRun r = run("compose --calibration " + result + " --object " + detection +
+                       " --effector 0.5,0.1,0.6,1,0,0,0 --robot-sigma-mm 0.05 --robot-sigma-deg 0.01"
+                       " --point 0.02,0,0 --output " + object);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("T_base_link_object"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("calibration (X)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("point [0.02 0 0]"), std::string::npos) << r.out;
+
+  // The file holds eq. (68) with the three covariances compounded.
+  const auto calibration = handeye::io::read_result(result);
+  handeye::ObjectPoseInput in;
+  in.X = calibration.T_parent_camera;
+  in.T_camera_object = handeye::io::read_pose_file(detection).value;
+  const double mm = 0.05e-3, rad = 0.01 * M_PI / 180.0;
+  in.T_base_effector.pose = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  in.T_base_effector.pose.translation() = Eigen::Vector3d(0.5, 0.1, 0.6);
+  in.T_base_effector.covariance.diagonal() << mm * mm, mm * mm, mm * mm, rad * rad, rad * rad, rad * rad;
+  const handeye::ObjectPose expected = handeye::object_in_base(in);
+  const handeye::io::PoseFile written = handeye::io::read_pose_file(object);
+  EXPECT_EQ(written.parent, "base_link");
+  EXPECT_EQ(written.child, "object");
+  EXPECT_TRUE(written.value.pose.isApprox(expected.T_base_object.pose, 1e-9));
+  EXPECT_TRUE(written.value.covariance.isApprox(expected.T_base_object.covariance, 1e-9));
+  // X's part is there: the compounded position variance exceeds robot + detection alone.
+  EXPECT_GT((expected.from_calibration.topLeftCorner<3, 3>().trace()), 0.0);
+}
+
+TEST(Cli, ComposeRefusesMissingOrBadPosesAndWritesNothing) {
+  const std::string samples = temp("c2_samples.yaml"), result = temp("c2_result.yaml"), object = temp("c2_object.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 12 --seed 6").exit_code, 0);
+  ASSERT_EQ(run("solve --input " + samples + " --output " + result).exit_code, 0);
+  const std::string base = "compose --calibration " + result + " --output " + object + " ";
+  struct Case {
+    std::string args, expected;
+  };
+  for (const Case& c : {Case{"--object 0,0,0.7,0,0,0,1", "needs the robot pose"},
+                        Case{"--object 0,0,0.7,0,0,0,2 --effector 0,0,0,0,0,0,1", "QuaternionNotUnit"},
+                        Case{"--object 0,0,0.7,0,0,1 --effector 0,0,0,0,0,0,1", "expected 7 numbers"},
+                        Case{"--object 0,0,0.7,0,0,0,1 --effector 0,0,0,0,0,0,1 --object-sigma-mm 1", "give both"},
+                        Case{"--object 0,0,0.7,0,0,0,1 --effector 0,0,0,0,0,0,1 --point 1,2", "a point is x,y,z"},
+                        Case{"--object /nonexistent/detection.yaml --effector 0,0,0,0,0,0,1", "IoError"}}) {
+    const CliRun r = run(base + c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(object)) << c.args;
+  }
+  // Without any covariance for the detection and no noise model to fall back on: refused.
+  const std::string truth = temp("c2_truth.yaml");
+  ASSERT_EQ(run("sim --output " + temp("c2_s2.yaml") + " --truth " + truth + " --samples 5").exit_code, 0);
+  const CliRun r = run("compose --calibration " + truth + " --object 0,0,0.7,0,0,0,1 --effector 0,0,0,0,0,0,1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no covariance for the object pose"), std::string::npos) << r.err;
+}
+
+}  // namespace compose_test

@@ -25,32 +25,63 @@ std::string name_or(const std::string& name, const char* fallback) {
   return name.empty() ? fallback : name;
 }
 
+/// Translation and rotation with 1 sigma per axis (parent frame), as both summaries print them.
+std::string pose_lines(const Eigen::Isometry3d& T, const Matrix6d& covariance, const std::string& parent) {
+  const Eigen::Vector3d t = T.translation();
+  // Fixed-axis roll, pitch, yaw (about parent x, then y, then z), as ROS uses.
+  const Eigen::Vector3d ypr = T.linear().eulerAngles(2, 1, 0);
+  const Eigen::Vector3d sigma_t = covariance.topLeftCorner<3, 3>().diagonal().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::Vector3d sigma_R = covariance.bottomRightCorner<3, 3>().diagonal().cwiseMax(0.0).cwiseSqrt();
+  std::string out;
+  out += line("  translation [m]       %+10.6f %+10.6f %+10.6f", t.x(), t.y(), t.z());
+  out += line("    1 sigma [mm]        %10.3f %10.3f %10.3f", sigma_t.x() * 1e3, sigma_t.y() * 1e3, sigma_t.z() * 1e3);
+  out += line("  rotation rpy [deg]    %+10.4f %+10.4f %+10.4f", ypr.z() * kDeg, ypr.y() * kDeg, ypr.x() * kDeg);
+  out += line("    1 sigma [deg]       %10.4f %10.4f %10.4f   (about %s x, y, z)", sigma_R.x() * kDeg,
+              sigma_R.y() * kDeg, sigma_R.z() * kDeg, parent.c_str());
+  Eigen::Quaterniond q(T.linear());
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  out += line("  quaternion [x y z w]  %+.8f %+.8f %+.8f %+.8f", q.x(), q.y(), q.z(), q.w());
+  out += line("  worst axis 1 sigma    %.3f mm, %.4f deg", max_sigma(covariance.topLeftCorner<3, 3>()) * 1e3,
+              max_sigma(covariance.bottomRightCorner<3, 3>()) * kDeg);
+  return out;
+}
+
+/// "robot 3%, calibration 45%, detection 52%" of a total variance.
+std::string shares(double robot, double calibration, double detection) {
+  const double total = std::max(1e-300, robot + calibration + detection);
+  return line("robot %.0f%%, calibration (X) %.0f%%, detection %.0f%%", 100.0 * robot / total,
+              100.0 * calibration / total, 100.0 * detection / total);
+}
+
 }  // namespace
 
-std::string human_summary(const Calibration& c, const ResultContext& context) {
-  const Eigen::Isometry3d& X = c.T_parent_camera;
-  const Eigen::Vector3d t = X.translation();
-  Eigen::Quaterniond q(X.linear());
-  if (q.w() < 0) q.coeffs() *= -1.0;
-  // Fixed-axis roll, pitch, yaw (about parent x, then y, then z), as ROS uses.
-  const Eigen::Vector3d ypr = X.linear().eulerAngles(2, 1, 0);
-  const Eigen::Vector3d sigma_t = c.translation_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  const Eigen::Vector3d sigma_R = c.rotation_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+std::string object_summary(const ObjectPose& object, const std::string& base, const std::string& object_frame,
+                           const std::vector<Eigen::Vector3d>& points) {
+  std::string out = line("Object pose T_%s_%s (maps %s points into %s):", base.c_str(), object_frame.c_str(),
+                         object_frame.c_str(), base.c_str());
+  out += pose_lines(object.T_base_object.pose, object.T_base_object.covariance, base);
+  const auto position_variance = [](const Matrix6d& c) { return c.topLeftCorner<3, 3>().trace(); };
+  out += "  position variance     " + shares(position_variance(object.from_robot), position_variance(object.from_calibration),
+                                           position_variance(object.from_detection));
+  for (const Eigen::Vector3d& p : points) {
+    const PointInBase point = point_in_base(object, p);
+    out += line("  point [%g %g %g] m on the object: at [%+.6f %+.6f %+.6f] m in %s, worst axis 1 sigma %.3f mm",
+                p.x(), p.y(), p.z(), point.position.x(), point.position.y(), point.position.z(), base.c_str(),
+                max_sigma(point.covariance) * 1e3);
+    out += "    its variance        " + shares(point.from_robot.trace(), point.from_calibration.trace(),
+                                               point.from_detection.trace());
+  }
+  return out;
+}
 
+std::string human_summary(const Calibration& c, const ResultContext& context) {
   const std::string parent = name_or(context.parent, context.setup == Setup::EyeToHand ? "base" : "parent");
   const std::string child = name_or(context.child, "camera");
   std::string out;
   out += line("Hand-eye calibration%s: X = T_%s_%s (maps %s points into %s)",
               context.setup ? (std::string(" (") + to_string(*context.setup) + ")").c_str() : "",
               parent.c_str(), child.c_str(), child.c_str(), parent.c_str());
-  out += line("  translation [m]       %+10.6f %+10.6f %+10.6f", t.x(), t.y(), t.z());
-  out += line("    1 sigma [mm]        %10.3f %10.3f %10.3f", sigma_t.x() * 1e3, sigma_t.y() * 1e3, sigma_t.z() * 1e3);
-  out += line("  rotation rpy [deg]    %+10.4f %+10.4f %+10.4f", ypr.z() * kDeg, ypr.y() * kDeg, ypr.x() * kDeg);
-  out += line("    1 sigma [deg]       %10.4f %10.4f %10.4f   (about %s x, y, z)", sigma_R.x() * kDeg,
-              sigma_R.y() * kDeg, sigma_R.z() * kDeg, parent.c_str());
-  out += line("  quaternion [x y z w]  %+.8f %+.8f %+.8f %+.8f", q.x(), q.y(), q.z(), q.w());
-  out += line("  worst axis 1 sigma    %.3f mm, %.4f deg", max_sigma(c.translation_covariance) * 1e3,
-              max_sigma(c.rotation_covariance) * kDeg);
+  out += pose_lines(c.T_parent_camera, c.pose_covariance, parent);
   if (c.samples_used > 0) {
     out += line("  data                  %d samples -> %d motions", c.samples_used, c.motions_used);
   } else {

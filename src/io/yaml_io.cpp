@@ -413,6 +413,41 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   return std::string(out.c_str()) + "\n";
 }
 
+namespace {
+/// `covariance: {pose: [36]}` (ROS order, wins when present) or
+/// `{rotation: [9], translation: [9]}` (no cross block).
+Matrix6d read_pose_covariance(const YAML::Node& covariance, const Location& at) {
+  if (!covariance.IsMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`covariance` must be a map", at.str(),
+                       "write covariance: {pose: [36 numbers]} or {rotation: [9], translation: [9]}");
+  }
+  Matrix6d c;
+  if (covariance["pose"]) {
+    c = from_row_major_6x6(as_numbers<36>(covariance["pose"], at / "pose", "6x6 covariance, ROS order"));
+  } else {
+    c = read_covariance(covariance, at).as_pose_covariance();
+  }
+  check_covariance(c, at.str());
+  return c;
+}
+}  // namespace
+
+PoseFile parse_pose_file(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  PoseFile file;
+  if (root["parent"] && root["parent"].IsScalar()) file.parent = root["parent"].Scalar();
+  if (root["child"] && root["child"].IsScalar()) file.child = root["child"].Scalar();
+  file.value.pose = read_pose(root, top);
+  if (const YAML::Node covariance = root["covariance"]) {
+    file.value.covariance = read_pose_covariance(covariance, top / "covariance");
+    file.has_covariance = true;
+  }
+  return file;
+}
+
+PoseFile read_pose_file(const std::string& path) { return parse_pose_file(read_file(path), path); }
+
 CalibrationFile parse_result(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);
   const Location top{source, ""};
@@ -422,11 +457,12 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
   if (root["child"] && root["child"].IsScalar()) file.context.child = root["child"].Scalar();
   file.T_parent_camera.pose = read_pose(root, top);
   const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
-  const YAML::Node covariance = require(root, "covariance", top, hint);
-  file.T_parent_camera.covariance =
-      from_row_major_6x6(as_numbers<36>(require(covariance, "pose", top / "covariance", hint),
-                                        top / "covariance" / "pose", "6x6 covariance, ROS order"));
+  file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
   if (root["samples_used"]) file.samples_used = static_cast<int>(as_double(root["samples_used"], top / "samples_used"));
+  // The noise model the calibration used (samples results only).
+  if (const YAML::Node noise = root["noise"]; noise && noise.IsMap() && noise["model"] && noise["model"]["effector"]) {
+    file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
+  }
   return file;
 }
 

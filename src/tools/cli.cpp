@@ -10,6 +10,8 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/monte_carlo_study.h"
+#include "handeye_covariance/core/object_pose.h"
+#include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/ros/bag.h"
@@ -289,12 +291,134 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
   return kOk;
 }
 
+/// A pose given on the command line: a pose file (YAML), or 7 numbers x,y,z,qx,qy,qz,qw.
+io::PoseFile pose_argument(const std::string& value, const std::string& option) {
+  const std::string extension = std::filesystem::path(value).extension().string();
+  if (extension == ".yaml" || extension == ".yml" || std::filesystem::exists(value)) return io::read_pose_file(value);
+  const std::vector<double> v = parse_list(value, option);
+  if (v.size() != 7) {
+    throw HandEyeError(ErrorCode::WrongLength, "expected 7 numbers x,y,z,qx,qy,qz,qw, got " + std::to_string(v.size()),
+                       option, "give a pose file (.yaml) or x,y,z,qx,qy,qz,qw in m");
+  }
+  io::PoseFile file;
+  const Eigen::Quaterniond q = checked_unit_quaternion(Eigen::Quaterniond(v[6], v[3], v[4], v[5]), option);
+  file.value.pose = se3::make_pose(q.toRotationMatrix(), Eigen::Vector3d(v[0], v[1], v[2]));
+  return file;
+}
+
+/// The covariance of a pose argument: isotropic sigmas when given, else the
+/// file's own covariance, else `fallback` (the calibration's noise model), said aloud.
+Matrix6d covariance_of(const io::PoseFile& pose, const po::variables_map& vm, const std::string& prefix,
+                       const std::optional<DecoupledCovariance>& fallback, const std::string& fallback_name,
+                       std::ostream& out) {
+  const std::string mm = prefix + "-sigma-mm", deg = prefix + "-sigma-deg";
+  if (vm.count(mm) || vm.count(deg)) {
+    if (!vm.count(mm) || !vm.count(deg)) {
+      throw HandEyeError(ErrorCode::MissingKey, "give both --" + mm + " and --" + deg, "--" + prefix,
+                         "state the translation and the rotation 1 sigma (0 for exact)");
+    }
+    const double sigma_t = vm[mm].as<double>() * 1e-3, sigma_R = vm[deg].as<double>() * M_PI / 180.0;
+    if (!(sigma_t >= 0.0) || !(sigma_R >= 0.0)) {
+      throw HandEyeError(ErrorCode::InvalidNoise, "a 1 sigma must be a number >= 0", "--" + mm + "/--" + deg,
+                         "give the standard deviation per axis, e.g. 0.3 (mm) and 0.05 (deg)");
+    }
+    return DecoupledCovariance{sigma_R * sigma_R * Eigen::Matrix3d::Identity(),
+                               sigma_t * sigma_t * Eigen::Matrix3d::Identity()}.as_pose_covariance();
+  }
+  if (pose.has_covariance) return pose.value.covariance;
+  if (!fallback) {
+    throw HandEyeError(ErrorCode::MissingKey, "no covariance for the " + prefix + " pose", "--" + prefix,
+                       "add `covariance:` to its file, or give --" + mm + " and --" + deg);
+  }
+  out << "  (" << prefix << " covariance: " << fallback_name << ")\n";
+  return fallback->as_pose_covariance();
+}
+
+int compose_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  std::string calibration_path, object_arg, effector_arg, output, base_frame, object_frame = "object";
+  std::vector<std::string> point_args;
+  po::options_description options(
+      "compose: the object's pose in the robot base with its covariance (paper eq. 68): robot pose, X and detection");
+  options.add_options()("help,h", "show this help")(
+      "calibration,c", po::value(&calibration_path)->required(), "result file of `solve`, `bag` or the node")(
+      "object", po::value(&object_arg)->required(),
+      "T_camera_object: a pose file (YAML, covariance optional) or x,y,z,qx,qy,qz,qw")(
+      "object-sigma-mm", po::value<double>(), "1 sigma per axis of the detection's translation")(
+      "object-sigma-deg", po::value<double>(), "1 sigma per axis of the detection's rotation")(
+      "effector", po::value(&effector_arg), "T_base_effector when the image was taken (eye_in_hand): file or 7 numbers")(
+      "robot-sigma-mm", po::value<double>(), "1 sigma per axis of the robot's translation")(
+      "robot-sigma-deg", po::value<double>(), "1 sigma per axis of the robot's rotation")(
+      "point", po::value(&point_args), "x,y,z of a point on the object (e.g. a hole), in m; repeatable")(
+      "base-frame", po::value(&base_frame), "name of the base frame (default: from the files, else base_link)")(
+      "object-frame", po::value(&object_frame), "name of the object frame (default object)")(
+      "output,o", po::value(&output), "write T_base_object with its covariance (pose file YAML)");
+  po::variables_map vm;
+  if (!parse("compose", "--calibration FILE --object POSE [--effector POSE] [--point x,y,z]... [--output FILE]",
+             options, args, vm, out)) {
+    return kOk;
+  }
+  const io::CalibrationFile calibration = io::read_result(calibration_path);
+  if (!calibration.context.setup) {
+    throw HandEyeError(ErrorCode::MissingKey, "the calibration does not say eye_in_hand or eye_to_hand",
+                       calibration_path + ": setup", "add `setup: eye_in_hand` or `setup: eye_to_hand` to it");
+  }
+  const Setup setup = *calibration.context.setup;
+  const auto noise_part = [&](bool robot) -> std::optional<DecoupledCovariance> {
+    if (!calibration.noise) return std::nullopt;
+    return robot ? calibration.noise->robot : calibration.noise->camera;
+  };
+  ObjectPoseInput input;
+  input.setup = setup;
+  input.X = calibration.T_parent_camera;
+  std::ostringstream notes;
+  const io::PoseFile object = pose_argument(object_arg, "--object");
+  input.T_camera_object = {object.value.pose, covariance_of(object, vm, "object", noise_part(false),
+                                                            "the calibration pattern's noise from " + calibration_path,
+                                                            notes)};
+  if (setup == Setup::EyeInHand) {
+    if (effector_arg.empty()) {
+      throw HandEyeError(ErrorCode::MissingKey, "eye_in_hand needs the robot pose when the image was taken",
+                         "--effector", "give T_base_effector as a pose file or x,y,z,qx,qy,qz,qw");
+    }
+    const io::PoseFile effector = pose_argument(effector_arg, "--effector");
+    input.T_base_effector = {effector.value.pose,
+                             covariance_of(effector, vm, "robot", noise_part(true),
+                                           "the robot noise from " + calibration_path, notes)};
+    if (base_frame.empty()) base_frame = effector.parent;
+  } else if (!effector_arg.empty()) {
+    notes << "  (--effector ignored: eye_to_hand, X is T_base_camera)\n";
+  }
+  if (base_frame.empty()) {
+    base_frame = setup == Setup::EyeToHand && !calibration.context.parent.empty() ? calibration.context.parent : "base_link";
+  }
+  std::vector<Eigen::Vector3d> points;
+  for (const std::string& p : point_args) {
+    const std::vector<double> v = parse_list(p, "--point");
+    if (v.size() != 3) {
+      throw HandEyeError(ErrorCode::WrongLength, "a point is x,y,z", "--point " + p, "give three numbers in m");
+    }
+    points.emplace_back(v[0], v[1], v[2]);
+  }
+  const ObjectPose result = object_in_base(input);
+  out << io::object_summary(result, base_frame, object_frame, points) << notes.str();
+  if (!output.empty()) {
+    io::ResultContext context;
+    context.parent = base_frame;
+    context.child = object_frame;
+    io::write_file_atomically(output, io::format_pose_file(result.T_base_object, context));
+    out << "  written to            " << output << "\n";
+  }
+  return kOk;
+}
+
 const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
                  solve_command}},
       {"sim", {"write a simulated session with known truth: a samples file, or a rosbag (--output x.bag)", sim_command}},
       {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore", bag_command}},
+      {"compose", {"the object's pose in the robot base with its covariance: robot pose + X + detection (eq. 68)",
+                   compose_command}},
       {"validate", {"Monte-Carlo check of the covariance (paper section IV-A): epsilon, NEES, coverage, plots",
                     validate_command}},
   };

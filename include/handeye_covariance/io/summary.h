@@ -4,12 +4,20 @@
 
 #include <string>
 
+#include <vector>
+
+#include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
 namespace io {
 
 std::string human_summary(const Calibration& calibration, const ResultContext& context);
+
+/// T_base_object with 1 sigma per axis, each term's share of the position
+/// variance, and each point's worst-axis 1 sigma (`handeye compose`).
+std::string object_summary(const ObjectPose& object, const std::string& base, const std::string& object_frame,
+                           const std::vector<Eigen::Vector3d>& points);
 
 }  // namespace io
 }  // namespace handeye

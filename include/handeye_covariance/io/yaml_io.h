@@ -67,9 +67,22 @@ struct CalibrationFile {
   ResultContext context;
   PoseWithCovariance T_parent_camera;
   int samples_used = 0;
+  std::optional<MeasurementNoise> noise;  // `noise.model` of a samples result: what the covariance assumed
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
+
+/// A pose with an optional covariance (a detection, a robot pose):
+///   translation: [x, y, z], rotation: [qx, qy, qz, qw], parent?, child?,
+///   covariance?: {pose: [36 numbers, ROS order]} or {rotation: [9], translation: [9]}
+/// A result file is one too.
+struct PoseFile {
+  PoseWithCovariance value;
+  bool has_covariance = false;
+  std::string parent, child;
+};
+PoseFile parse_pose_file(const std::string& text, const std::string& source);
+PoseFile read_pose_file(const std::string& path);
 
 /// Session settings from a YAML file with the node's parameter names (the
 /// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
