@@ -1,0 +1,178 @@
+#include "handeye_covariance/ros/object_localizer.h"
+
+#include <std_msgs/String.h>
+#include <tf2/exceptions.h>
+
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/covariance_markers.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/ros/params.h"
+
+namespace handeye {
+
+namespace {
+
+/// Isotropic 6x6 from 1 sigma in mm and degrees.
+Matrix6d isotropic(double sigma_mm, double sigma_deg) {
+  const double t = sigma_mm * 1e-3, r = sigma_deg * M_PI / 180.0;
+  return DecoupledCovariance{r * r * Eigen::Matrix3d::Identity(), t * t * Eigen::Matrix3d::Identity()}
+      .as_pose_covariance();
+}
+
+}  // namespace
+
+ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_node)
+    : node_(node), private_node_(private_node), tf_listener_(tf_buffer_) {
+  setup_ = param(private_node_, "eye_on_hand", true) ? Setup::EyeInHand : Setup::EyeToHand;
+  base_frame_ = param<std::string>(private_node_, "robot_base_frame", "base_link");
+  effector_frame_ = param<std::string>(private_node_, "robot_effector_frame", "tool0");
+  camera_frame_ = param<std::string>(private_node_, "tracking_base_frame", "camera_optical_frame");
+  object_frame_ = param<std::string>(private_node_, "object_frame", "object");
+  tag_ids_ = param(private_node_, "object_tag_ids", std::vector<int>{});
+  publish_tf_ = param(private_node_, "publish_tf", false);
+  tf_timeout_ = param(private_node_, "tf_timeout", 0.5);
+
+  // X from a result file when given; the calibration topic replaces it on every /calibrate.
+  std::optional<MeasurementNoise> calibration_noise;
+  const std::string calibration_file = param<std::string>(private_node_, "calibration_file", "");
+  if (!calibration_file.empty()) {
+    const io::CalibrationFile file = io::read_result(calibration_file);
+    if (file.context.setup && *file.context.setup != setup_) {
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         std::string("the calibration is ") + to_string(*file.context.setup) +
+                             " but ~eye_on_hand says " + to_string(setup_),
+                         calibration_file, "set ~eye_on_hand to match, or give the other calibration");
+    }
+    X_ = file.T_parent_camera;
+    calibration_noise = file.noise;
+    ROS_INFO("X from %s (%s)", calibration_file.c_str(), sigma_label(*X_).c_str());
+  }
+
+  // The robot's pose noise: parameters, else the calibration's noise model, else exact (said aloud).
+  if (private_node_.hasParam("robot_sigma_mm") || private_node_.hasParam("robot_sigma_deg")) {
+    robot_covariance_ = isotropic(param(private_node_, "robot_sigma_mm", 0.0), param(private_node_, "robot_sigma_deg", 0.0));
+  } else if (calibration_noise) {
+    robot_covariance_ = calibration_noise->robot.as_pose_covariance();
+  } else if (setup_ == Setup::EyeInHand) {
+    ROS_WARN("no ~robot_sigma_mm/~robot_sigma_deg and no noise model in the calibration: the robot pose is "
+             "taken as exact, which understates the object's covariance");
+  }
+  // Detections without a covariance: parameters, else the calibration pattern's noise, else refused.
+  if (private_node_.hasParam("object_sigma_mm") || private_node_.hasParam("object_sigma_deg")) {
+    detection_fallback_ = isotropic(param(private_node_, "object_sigma_mm", 0.0), param(private_node_, "object_sigma_deg", 0.0));
+  } else if (calibration_noise) {
+    detection_fallback_ = calibration_noise->camera.as_pose_covariance();
+  }
+
+  object_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("object_pose", 10);
+  markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("markers", 1);
+  refusal_pub_ = private_node_.advertise<std_msgs::String>("refusal", 10, true);
+  calibration_sub_ = node_.subscribe("calibration", 1, &ObjectLocalizer::on_calibration, this);
+  const std::string input = param<std::string>(private_node_, "object_input", "pose_with_covariance");
+  const std::string topic = param<std::string>(private_node_, "object_topic", "object_detections");
+  if (input == "tags") {
+    detections_sub_ = node_.subscribe(topic, 10, &ObjectLocalizer::on_tags, this);
+  } else if (input == "pose_with_covariance") {
+    detections_sub_ = node_.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+        topic, 10, [this](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) { locate(detection_of(*msg)); });
+  } else {
+    throw std::invalid_argument("~object_input must be tags or pose_with_covariance, not `" + input + "`");
+  }
+}
+
+void ObjectLocalizer::on_calibration(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+  const std::string& parent = setup_ == Setup::EyeInHand ? effector_frame_ : base_frame_;
+  if (msg->header.frame_id != parent) {
+    refuse({"calibration_frame", "a calibration in frame `" + msg->header.frame_id + "` was ignored: X must be T_" +
+                                     parent + "_camera. Check ~eye_on_hand and the frame parameters"});
+    return;
+  }
+  const PoseWithCovariance X = conversions::to_core(msg->pose);
+  std::lock_guard<std::mutex> lock(mutex_);
+  X_ = X;
+  ROS_INFO("X updated from the calibration topic (%s)", sigma_label(X).c_str());
+}
+
+void ObjectLocalizer::on_tags(const TagDetectionArray::ConstPtr& msg) {
+  std::optional<Refusal> refusal;
+  const std::optional<Detection> detection = select_detection(*msg, tag_ids_, refusal);
+  if (refusal) refuse(*refusal);
+  if (detection) locate(*detection);
+}
+
+void ObjectLocalizer::locate(const Detection& detection) {
+  std::optional<PoseWithCovariance> X;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    X = X_;
+  }
+  if (!X) {
+    refuse({"no_calibration", "no calibration yet: call /calibrate on the calibration node, or set ~calibration_file"});
+    return;
+  }
+  if (!detection.frame.empty() && detection.frame != camera_frame_) {
+    refuse({"detection_frame", "a detection in frame `" + detection.frame + "` was ignored; X is calibrated for `" +
+                                   camera_frame_ + "` (set ~tracking_base_frame)"});
+    return;
+  }
+  ObjectPoseInput input;
+  input.setup = setup_;
+  input.X = *X;
+  input.T_camera_object.pose = conversions::to_eigen(detection.pose);
+  if (detection.covariance) {
+    input.T_camera_object.covariance = detection.covariance->as_pose_covariance();
+  } else if (detection_fallback_) {
+    input.T_camera_object.covariance = *detection_fallback_;
+  } else {
+    refuse({"no_detection_covariance", "a detection without a covariance was ignored: set ~object_sigma_mm and "
+                                       "~object_sigma_deg, or use a calibration file with a noise model"});
+    return;
+  }
+  if (setup_ == Setup::EyeInHand) {
+    try {  // the robot pose when the image was taken, never the latest
+      input.T_base_effector = {
+          conversions::to_eigen(tf_buffer_.lookupTransform(base_frame_, effector_frame_, detection.stamp,
+                                                           ros::Duration(tf_timeout_)).transform),
+          robot_covariance_};
+    } catch (const tf2::TransformException& e) {
+      refuse({"no_robot_tf", "no TF " + base_frame_ + " -> " + effector_frame_ + " at the detection stamp " +
+                                 std::to_string(detection.stamp.toSec()) + ": " + e.what()});
+      return;
+    }
+  }
+  ObjectPose object;
+  try {
+    object = object_in_base(input);
+  } catch (const HandEyeError& e) {
+    refuse({"invalid_input", e.what()});
+    return;
+  }
+  geometry_msgs::PoseWithCovarianceStamped out;
+  out.header.stamp = detection.stamp;
+  out.header.frame_id = base_frame_;
+  out.pose = conversions::to_msg(object.T_base_object);
+  object_pub_.publish(out);
+  markers_pub_.publish(covariance_markers(object.T_base_object, base_frame_, detection.stamp, {3.0, 0.05, object_frame_}));
+  if (publish_tf_) {
+    geometry_msgs::TransformStamped tf;
+    tf.header = out.header;
+    tf.child_frame_id = object_frame_;
+    tf.transform = conversions::to_transform_msg(object.T_base_object.pose);
+    tf_broadcaster_.sendTransform(tf);
+  }
+}
+
+void ObjectLocalizer::refuse(const Refusal& refusal) {
+  int count = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    count = ++refusals_[refusal.kind];
+  }
+  std_msgs::String msg;
+  msg.data = refusal.kind + ": " + refusal.message;
+  refusal_pub_.publish(msg);
+  // The first of each kind in full, then every 100th, so a steady stream does not flood the log.
+  if (count == 1 || count % 100 == 0) ROS_WARN("object_localizer (%d x %s): %s", count, refusal.kind.c_str(), refusal.message.c_str());
+}
+
+}  // namespace handeye
