@@ -237,3 +237,46 @@ TEST(Cli, ComposeRefusesMissingOrBadPosesAndWritesNothing) {
 }
 
 }  // namespace compose_test
+
+namespace noise_test {
+
+TEST(Cli, NoiseMeasuresTheSimulatedNoiseAndSolveAcceptsIt) {
+  const std::string samples = temp("n_samples.yaml"), noise = temp("n_noise.yaml"), result = temp("n_result.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 400 --seed 12 --pattern-translation-noise-mm 0.3"
+                " --pattern-rotation-noise-deg 0.04 --robot-translation-noise-mm 0 --robot-rotation-noise-deg 0")
+                .exit_code, 0);
+  const CliRun r = run("noise --input " + samples + " --output " + noise);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("Noise from residuals: 400 samples"), std::string::npos) << r.out;
+  // The block is what the node's ~noise_config and `solve --noise` read.
+  const handeye::MeasurementNoise measured = handeye::io::read_noise_file(noise);
+  const double dof = 398.0, band = 4.0 * std::sqrt(2.0 / dof);  // 4 sigma of a variance estimate
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_NEAR(measured.camera.translation(axis, axis) / std::pow(0.3e-3, 2), 1.0, band) << axis;
+    EXPECT_NEAR(measured.camera.rotation(axis, axis) / std::pow(0.04 * M_PI / 180, 2), 1.0, band) << axis;
+  }
+  const CliRun solved = run("solve --input " + samples + " --noise " + noise + " --output " + result);
+  ASSERT_EQ(solved.exit_code, 0) << solved.err;
+  EXPECT_NE(solved.out.find("noise                 given"), std::string::npos) << solved.out;
+}
+
+TEST(Cli, NoiseRefusesWhatItCannotMeasure) {
+  const std::string samples = temp("n2_samples.yaml"), noise = temp("n2_noise.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 8 --seed 13").exit_code, 0);
+  CliRun r = run("noise --input " + samples + " --source repeated --output " + noise);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("hold the robot still"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(noise));
+  r = run("noise --input " + samples + " --source guess --output " + noise);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown source"), std::string::npos) << r.err;
+  const std::string hand = temp("n2_hand.yaml"), hand_result = temp("n2_hand_result.yaml");
+  ASSERT_EQ(run("sim --output " + hand + " --setup eye_to_hand --samples 8").exit_code, 0);
+  ASSERT_EQ(run("solve --input " + hand + " --output " + hand_result).exit_code, 0);
+  r = run("noise --input " + samples + " --calibration " + hand_result + " --output " + noise);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("another setup"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(noise));
+}
+
+}  // namespace noise_test

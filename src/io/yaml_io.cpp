@@ -279,6 +279,32 @@ std::string format_samples(const SampleSet& set) {
 
 // ---------------------------------------------------------------- motions
 
+std::string format_noise_estimate(const NoiseEstimate& estimate) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  out << YAML::Key << "noise" << YAML::Value;
+  emit_noise(out, estimate.noise, "effector", "pattern");
+  out << YAML::Key << "estimate" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "source" << YAML::Value << to_string(estimate.source);
+  out << YAML::Key << "samples_used" << YAML::Value << estimate.samples_used;
+  if (estimate.source == NoiseSource::RepeatedObservations) out << YAML::Key << "groups" << YAML::Value << estimate.groups;
+  out << YAML::Key << "dof" << YAML::Value << estimate.dof;
+  out << YAML::Key << "relative_variance_sigma" << YAML::Value << std::sqrt(2.0 / estimate.dof);
+  out << YAML::Key << "robot_identified" << YAML::Value << estimate.robot_identified;
+  const auto sigmas = [&](const char* key, const Matrix3d& covariance, double unit) {
+    const Vector3d sigma = covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * unit;
+    out << YAML::Key << key << YAML::Value;
+    emit_numbers(out, sigma.data(), 3);
+  };
+  sigmas("pattern_sigma_mm", estimate.noise.camera.translation, 1e3);
+  sigmas("pattern_sigma_deg", estimate.noise.camera.rotation, 180.0 / M_PI);
+  sigmas("effector_sigma_mm", estimate.noise.robot.translation, 1e3);
+  sigmas("effector_sigma_deg", estimate.noise.robot.rotation, 180.0 / M_PI);
+  out << YAML::Key << "notes" << YAML::Value << estimate.notes;
+  out << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
 MotionSet parse_motions(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);
   const Location top{source, ""};

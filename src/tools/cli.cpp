@@ -10,6 +10,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/monte_carlo_study.h"
+#include "handeye_covariance/core/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/simulation.h"
@@ -49,17 +50,25 @@ std::string default_result_path(const std::string& input) {
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  std::string input, output;
+  std::string input, output, noise_path;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
+      "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
   po::variables_map vm;
-  if (!parse("solve", "--input FILE [--output FILE]", options, args, vm, out)) return kOk;
+  if (!parse("solve", "--input FILE [--noise FILE] [--output FILE]", options, args, vm, out)) return kOk;
   if (output.empty()) output = default_result_path(input);
 
-  const io::Input data = io::read_input(input);
+  io::Input data = io::read_input(input);
+  if (!noise_path.empty()) {
+    if (!std::holds_alternative<SampleSet>(data)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "--noise applies to samples files", input,
+                         "put the motions' noise in the motions file's `noise: {A, B}` block");
+    }
+    std::get<SampleSet>(data).noise = io::read_noise_file(noise_path);
+  }
   const bool from_samples = std::holds_alternative<SampleSet>(data);
   const Calibration calibration = from_samples ? solve(std::get<SampleSet>(data)) : solve(std::get<MotionSet>(data));
   const io::ResultContext context =
@@ -411,6 +420,93 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
   return kOk;
 }
 
+int noise_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  std::string input, calibration_path, source = "auto", output;
+  RepeatedObservationOptions grouping;
+  double group_mm = grouping.group_translation * 1e3, group_deg = grouping.group_rotation * 180.0 / M_PI;
+  po::options_description options("noise: measure the pose noise (paper eq. 64-67) and write a `noise` block");
+  options.add_options()("help,h", "show this help")(
+      "input,i", po::value(&input)->required(), "samples file (YAML)")(
+      "calibration,c", po::value(&calibration_path),
+      "X from this result file (residuals); default: solved from the input itself")(
+      "source", po::value(&source),
+      "repeated (the robot held poses while the camera saw the pattern several times), residuals, or auto "
+      "(repeated when poses repeat, else residuals; the default)")(
+      "robot-sigma-mm", po::value<double>(), "residuals: the robot's known 1 sigma per axis, subtracted")(
+      "robot-sigma-deg", po::value<double>(), "residuals: the robot's known rotation 1 sigma per axis")(
+      "group-mm", po::value(&group_mm), "repeated: effector poses this close are one held pose (default 1)")(
+      "group-deg", po::value(&group_deg), "repeated: ... and this close in rotation (default 0.1)")(
+      "output,o", po::value(&output), "noise file; default: <input stem>_noise.yaml in the current directory");
+  po::variables_map vm;
+  if (!parse("noise", "--input FILE [--calibration FILE] [--source auto|repeated|residuals] [--output FILE]", options,
+             args, vm, out)) {
+    return kOk;
+  }
+  if (source != "auto" && source != "repeated" && source != "residuals") {
+    throw HandEyeError(ErrorCode::MalformedFile, "unknown source `" + source + "`", "--source",
+                       "use auto, repeated or residuals");
+  }
+  if (output.empty()) output = std::filesystem::path(input).stem().string() + "_noise.yaml";
+  grouping.group_translation = group_mm * 1e-3;
+  grouping.group_rotation = group_deg * M_PI / 180.0;
+  const SampleSet samples = io::read_samples(input);
+
+  std::optional<NoiseEstimate> estimate;
+  if (source != "residuals") {
+    try {
+      estimate = noise_from_repeated_observations(samples, grouping);
+    } catch (const HandEyeError& e) {
+      if (source == "repeated" || e.code() != ErrorCode::NoiseUnidentifiable) throw;
+      out << "No pose was held for repeated observations; using the residuals against X.\n";
+    }
+  }
+  if (!estimate) {
+    std::optional<DecoupledCovariance> robot;
+    if (vm.count("robot-sigma-mm") || vm.count("robot-sigma-deg")) {
+      io::PoseFile none;
+      robot = DecoupledCovariance{};
+      const Matrix6d c = covariance_of(none, vm, "robot", std::nullopt, "", out);
+      robot->rotation = c.bottomRightCorner<3, 3>();
+      robot->translation = c.topLeftCorner<3, 3>();
+    }
+    if (!calibration_path.empty()) {
+      const io::CalibrationFile calibration = io::read_result(calibration_path);
+      if (calibration.context.setup && *calibration.context.setup != samples.setup) {
+        throw HandEyeError(ErrorCode::MalformedFile, "the calibration is for another setup", calibration_path + ": setup",
+                           "give the result file of this setup (" + std::string(to_string(samples.setup)) + ")");
+      }
+      estimate = noise_from_residuals(samples, calibration.T_parent_camera.pose, false, robot);
+    } else {
+      SampleSet unlabelled = samples;  // its own noise block is what is being measured
+      unlabelled.noise.reset();
+      for (PoseSample& s : unlabelled.samples) s.noise.reset();
+      estimate = noise_from_residuals(samples, solve(unlabelled).T_parent_camera, true, robot);
+    }
+  }
+  const NoiseEstimate& e = *estimate;
+  const auto per_axis = [](const Eigen::Matrix3d& covariance, double unit) {
+    const Eigen::Vector3d s = covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * unit;
+    char text[96];
+    std::snprintf(text, sizeof text, "%8.4f %8.4f %8.4f", s.x(), s.y(), s.z());
+    return std::string(text);
+  };
+  out << "Noise from " << to_string(e.source) << ": " << e.samples_used << " samples"
+      << (e.source == NoiseSource::RepeatedObservations ? " at " + std::to_string(e.groups) + " held poses" : "")
+      << ", " << number_text(e.dof) << " dof (each variance +-" << number_text(100.0 * std::sqrt(2.0 / e.dof), 2)
+      << "% at 1 sigma)\n";
+  out << "  pattern 1 sigma [mm]   " << per_axis(e.noise.camera.translation, 1e3) << "   (camera x, y, z)\n";
+  out << "  pattern 1 sigma [deg]  " << per_axis(e.noise.camera.rotation, 180.0 / M_PI) << "\n";
+  out << "  robot 1 sigma [mm]     " << per_axis(e.noise.robot.translation, 1e3)
+      << (e.robot_identified ? "" : "   (not identifiable from residuals: as given, else 0)") << "\n";
+  out << "  robot 1 sigma [deg]    " << per_axis(e.noise.robot.rotation, 180.0 / M_PI) << "\n";
+  for (const std::string& note : e.notes) out << "  note: " << note << "\n";
+  io::write_file_atomically(output, io::format_noise_estimate(e));
+  out << "  written to             " << output << "\n"
+      << "  use it: handeye solve --input " << input << " --noise " << output
+      << "   (node: noise_config:=" << output << ")\n";
+  return kOk;
+}
+
 const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
@@ -419,6 +515,8 @@ const std::map<std::string, Command>& commands() {
       {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore", bag_command}},
       {"compose", {"the object's pose in the robot base with its covariance: robot pose + X + detection (eq. 68)",
                    compose_command}},
+      {"noise", {"measure the pose noise from repeated observations or residuals (eq. 64-67); write a noise block",
+                 noise_command}},
       {"validate", {"Monte-Carlo check of the covariance (paper section IV-A): epsilon, NEES, coverage, plots",
                     validate_command}},
   };

@@ -15,6 +15,7 @@
 #include <variant>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/noise_estimation.h"
 #include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/core/tag_layout.h"
 
@@ -45,6 +46,11 @@ using Input = std::variant<SampleSet, MotionSet>;
 Input read_input(const std::string& path);
 
 std::string format_samples(const SampleSet& samples);
+
+/// The file `handeye noise` writes: a `noise: {effector, pattern}` block, which
+/// read_noise_file, the node's ~noise_config and `solve --noise` accept, and an
+/// `estimate:` block saying how it was measured (source, dof, 1 sigma per axis).
+std::string format_noise_estimate(const NoiseEstimate& estimate);
 std::string format_motions(const MotionSet& motions);
 
 /// What the result file says besides the calibration itself.

@@ -1,0 +1,172 @@
+#include "handeye_covariance/core/noise_estimation.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/validation.h"
+
+namespace handeye {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+const char* to_string(NoiseSource source) {
+  return source == NoiseSource::RepeatedObservations ? "repeated_observations" : "residuals";
+}
+
+Isometry3d mean_pose(const std::vector<Isometry3d>& poses) {
+  if (poses.empty()) throw std::invalid_argument("mean_pose of no poses");
+  Matrix3d R = poses.front().linear();
+  Vector3d t = Vector3d::Zero();
+  for (const Isometry3d& p : poses) t += p.translation();
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    Vector3d step = Vector3d::Zero();
+    for (const Isometry3d& p : poses) step += so3::log(p.linear() * R.transpose());
+    step /= static_cast<double>(poses.size());
+    R = so3::exp(step) * R;  // eq. (66), re-centred on the current mean
+    if (step.norm() < 1e-13) break;
+  }
+  return se3::make_pose(R, t / static_cast<double>(poses.size()));
+}
+
+namespace {
+
+/// Eq. (64-65): the left-perturbation error of `pose` about `mean`, ROS order.
+Vector6d error_about(const Isometry3d& pose, const Isometry3d& mean) {
+  Vector6d e;
+  e.head<3>() = pose.translation() - mean.translation();
+  e.tail<3>() = so3::log(pose.linear() * mean.linear().transpose());
+  return e;
+}
+
+/// The nearest PSD matrix (negative eigenvalues set to 0); notes when it clipped.
+Matrix3d clip_to_psd(const Matrix3d& C, const std::string& what, std::vector<std::string>& notes) {
+  const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(0.5 * (C + C.transpose()));
+  if (eig.eigenvalues().minCoeff() >= 0.0) return 0.5 * (C + C.transpose());
+  notes.push_back(what + ": the given robot noise explains more than the residuals along one axis; "
+                         "that variance was set to 0 (the robot noise is likely overstated)");
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+}
+
+DecoupledCovariance blocks(const Matrix6d& C) { return {C.bottomRightCorner<3, 3>(), C.topLeftCorner<3, 3>()}; }
+
+void check_samples(const SampleSet& samples) {
+  for (std::size_t i = 0; i < samples.samples.size(); ++i) {
+    const std::string where = "samples[" + std::to_string(i) + "]";
+    check_pose(samples.samples[i].T_base_effector, where + ".effector");
+    check_pose(samples.samples[i].T_camera_pattern, where + ".pattern");
+  }
+}
+
+}  // namespace
+
+NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const RepeatedObservationOptions& options) {
+  check_samples(samples);
+  // Greedy grouping by the effector pose: a held pose is far tighter than the
+  // distance between poses of a session (centimetres, degrees).
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < samples.samples.size(); ++i) {
+    const Isometry3d& E = samples.samples[i].T_base_effector;
+    auto same_pose = [&](const std::vector<std::size_t>& g) {
+      const Isometry3d& first = samples.samples[g.front()].T_base_effector;
+      return (E.translation() - first.translation()).norm() <= options.group_translation &&
+             so3::log(E.linear() * first.linear().transpose()).norm() <= options.group_rotation;
+    };
+    auto it = std::find_if(groups.begin(), groups.end(), same_pose);
+    if (it == groups.end()) {
+      groups.push_back({i});
+    } else {
+      it->push_back(i);
+    }
+  }
+  Matrix6d robot = Matrix6d::Zero(), camera = Matrix6d::Zero();
+  NoiseEstimate estimate;
+  estimate.source = NoiseSource::RepeatedObservations;
+  for (const auto& g : groups) {
+    if (g.size() < 2) continue;
+    std::vector<Isometry3d> E, P;
+    for (std::size_t i : g) {
+      E.push_back(samples.samples[i].T_base_effector);
+      P.push_back(samples.samples[i].T_camera_pattern);
+    }
+    const Isometry3d E_mean = mean_pose(E), P_mean = mean_pose(P);
+    for (std::size_t k = 0; k < g.size(); ++k) {
+      const Vector6d e = error_about(E[k], E_mean), p = error_about(P[k], P_mean);
+      robot += e * e.transpose();
+      camera += p * p.transpose();
+    }
+    ++estimate.groups;
+    estimate.samples_used += static_cast<int>(g.size());
+    estimate.dof += static_cast<double>(g.size() - 1);  // each group's mean absorbs one sample
+  }
+  if (estimate.dof < 4.0) {
+    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                       std::to_string(estimate.groups) + " pose(s) were seen more than once, giving " +
+                           number_text(estimate.dof) + " degrees of freedom (need >= 4)",
+                       "samples", "hold the robot still and take 5-10 samples at each of a few poses "
+                                  "(effector poses within 1 mm and 0.1 deg count as one), or use the residuals "
+                                  "against a calibration (--source residuals)");
+  }
+  estimate.noise.robot = blocks(robot / estimate.dof);
+  estimate.noise.camera = blocks(camera / estimate.dof);
+  estimate.robot_identified = true;
+  estimate.notes.push_back("robot noise = the scatter of the reported effector pose while it is held still "
+                           "(not its repeatability between approaches)");
+  return estimate;
+}
+
+NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X, bool X_fitted_to_these_samples,
+                                   const std::optional<DecoupledCovariance>& robot_noise) {
+  check_samples(samples);
+  check_pose(X, "calibration");
+  if (robot_noise) check_covariance(*robot_noise, "robot noise");
+  const std::size_t n = samples.samples.size();
+  const double fitted = 1.0 + (X_fitted_to_these_samples ? 1.0 : 0.0);  // Y, and X: 6 parameters each
+  if (n < 4 || static_cast<double>(n) - fitted < 3.0) {
+    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                       std::to_string(n) + " samples are too few to estimate the noise from residuals",
+                       "samples", "record at least 10 samples (30+ for a 25% accurate variance)");
+  }
+  const bool in_hand = samples.setup == Setup::EyeInHand;
+  // The pattern's fixed pose from each sample: eye_in_hand T_base_pattern = E X P,
+  // eye_to_hand T_effector_pattern = E^-1 X P; its mean is eq. (66-67).
+  std::vector<Isometry3d> Y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const PoseSample& s = samples.samples[i];
+    Y[i] = (in_hand ? s.T_base_effector : s.T_base_effector.inverse()) * X * s.T_camera_pattern;
+  }
+  const Isometry3d Y_mean = mean_pose(Y);
+  Matrix6d residual = Matrix6d::Zero(), robot_part = Matrix6d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const PoseSample& s = samples.samples[i];
+    // The expected pattern pose P_bar = X^-1 V Y with V = E^-1 (in hand) or E (to hand).
+    const Isometry3d& E = s.T_base_effector;
+    const Isometry3d V = in_hand ? E.inverse() : E;
+    const Vector6d e = error_about(s.T_camera_pattern, X.inverse() * V * Y_mean);  // eq. (64-65)
+    residual += e * e.transpose();
+    if (robot_noise) {  // what the robot's noise adds to this residual, to first order
+      const Matrix6d J = compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, Y_mean) *
+                         (in_hand ? inverse_jacobian(E) : Matrix6d::Identity());
+      robot_part += J * robot_noise->as_pose_covariance() * J.transpose();
+    }
+  }
+  NoiseEstimate estimate;
+  estimate.source = NoiseSource::Residuals;
+  estimate.samples_used = static_cast<int>(n);
+  estimate.dof = static_cast<double>(n) - fitted;  // Y's (and X's) fit absorbs about one sample each
+  Matrix6d camera = residual / estimate.dof;
+  if (robot_noise) {
+    camera -= robot_part / static_cast<double>(n);
+    estimate.noise.robot = *robot_noise;
+    estimate.notes.push_back("the given robot noise was subtracted from the residuals");
+  } else {
+    estimate.notes.push_back("robot taken as exact: the pattern noise includes the robot's (conservative)");
+  }
+  estimate.noise.camera.rotation = clip_to_psd(camera.bottomRightCorner<3, 3>(), "pattern rotation", estimate.notes);
+  estimate.noise.camera.translation = clip_to_psd(camera.topLeftCorner<3, 3>(), "pattern translation", estimate.notes);
+  return estimate;
+}
+
+}  // namespace handeye
