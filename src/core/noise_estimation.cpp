@@ -31,6 +31,16 @@ Isometry3d mean_pose(const std::vector<Isometry3d>& poses) {
   return se3::make_pose(R, t / static_cast<double>(poses.size()));
 }
 
+Isometry3d pattern_pose(const SampleSet& samples, const Isometry3d& X) {
+  const bool in_hand = samples.setup == Setup::EyeInHand;
+  std::vector<Isometry3d> Y;
+  Y.reserve(samples.samples.size());
+  for (const PoseSample& s : samples.samples) {
+    Y.push_back((in_hand ? s.T_base_effector : s.T_base_effector.inverse()) * X * s.T_camera_pattern);
+  }
+  return mean_pose(Y);
+}
+
 namespace {
 
 /// Eq. (64-65): the left-perturbation error of `pose` about `mean`, ROS order.
@@ -130,14 +140,7 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X
                        "samples", "record at least 10 samples (30+ for a 25% accurate variance)");
   }
   const bool in_hand = samples.setup == Setup::EyeInHand;
-  // The pattern's fixed pose from each sample: eye_in_hand T_base_pattern = E X P,
-  // eye_to_hand T_effector_pattern = E^-1 X P; its mean is eq. (66-67).
-  std::vector<Isometry3d> Y(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const PoseSample& s = samples.samples[i];
-    Y[i] = (in_hand ? s.T_base_effector : s.T_base_effector.inverse()) * X * s.T_camera_pattern;
-  }
-  const Isometry3d Y_mean = mean_pose(Y);
+  const Isometry3d Y_mean = pattern_pose(samples, X);  // eq. (66-67)
   Matrix6d residual = Matrix6d::Zero(), robot_part = Matrix6d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     const PoseSample& s = samples.samples[i];

@@ -60,4 +60,9 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Eigen::Isomet
 /// the current mean so it holds near pi too) and the arithmetic mean of t.
 Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses);
 
+/// The pattern's fixed pose as the samples and X see it (eq. 68's chain,
+/// averaged by mean_pose): T_base_pattern = E X P (eye_in_hand) or
+/// T_effector_pattern = E^-1 X P (eye_to_hand).
+Eigen::Isometry3d pattern_pose(const SampleSet& samples, const Eigen::Isometry3d& X);
+
 }  // namespace handeye

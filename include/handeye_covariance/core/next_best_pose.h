@@ -1,0 +1,94 @@
+// Which pose to add next, and how many more (the paper's stated future work):
+// candidates for the next effector pose are ranked by the covariance of X the
+// estimator predicts once that pose is added. The prediction is the full
+// first-order propagation of estimator.h, run on the current samples plus the
+// candidate's noise-free predicted sample, with the session's noise (given or
+// estimated).
+//
+// Criteria:
+//   object_sigma: the worst-axis 1 sigma of an object's position at the working
+//     distance on the camera's optical axis (what the node's ~status reports);
+//   determinant: log det of X's 6x6 covariance (D-optimal; its ranking does not
+//     depend on the units of translation and rotation).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/noise_estimation.h"
+#include "handeye_covariance/core/simulation.h"
+
+namespace handeye {
+
+enum class SuggestCriterion { ObjectSigma, Determinant };
+const char* to_string(SuggestCriterion criterion);  // "object_sigma" / "determinant"
+/// Throws HandEyeError(MalformedFile) naming the valid values.
+SuggestCriterion criterion_from_string(const std::string& name);
+
+struct SuggestOptions {
+  SuggestCriterion criterion = SuggestCriterion::ObjectSigma;
+  double working_distance = 0.7;  // m, along the camera's optical axis
+  /// Sampled candidates (when none are given): views of the pattern within
+  /// these limits ...
+  int candidates = 150;
+  ViewpointOptions views;
+  /// ... reachable from the current effector pose in one move ...
+  double max_step_translation = 0.5;            // m
+  double max_step_rotation = 90.0 * M_PI / 180.0;  // rad
+  /// ... and distinct from every sample (as the sampler requires).
+  double min_translation = 0.01;                // m
+  double min_rotation = 2.0 * M_PI / 180.0;     // rad
+  unsigned seed = 1;
+};
+
+struct ScoredPose {
+  Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();  // what the camera should see there
+  double score = 0.0;          // the criterion after adding this pose (smaller is better)
+  double object_sigma = 0.0;   // m, after adding it (always reported)
+  Matrix6d predicted_covariance = Matrix6d::Zero();
+};
+
+struct Suggestion {
+  double current_score = 0.0;
+  double current_object_sigma = 0.0;   // m
+  std::vector<ScoredPose> ranked;      // best first
+  int considered = 0;                  // candidates scored
+  int refused = 0;                     // candidates the prediction refused (degenerate with the samples)
+};
+
+/// The criterion for a covariance of X.
+double criterion_value(const Matrix6d& covariance, SuggestCriterion criterion, double working_distance);
+/// Worst-axis 1 sigma (m) of a point at `working_distance` on the optical axis, in X's parent frame.
+double object_sigma(const Matrix6d& covariance, double working_distance);
+
+/// The effector pose that shows the camera `T_camera_pattern`.
+Eigen::Isometry3d effector_for_view(Setup setup, const Eigen::Isometry3d& X, const Eigen::Isometry3d& pattern,
+                                    const Eigen::Isometry3d& T_camera_pattern);
+
+/// Candidate effector poses: random views of the pattern (options.views) that
+/// are within one move of the last sample's effector pose and distinct from
+/// every sample. Deterministic for a given options.seed.
+std::vector<Eigen::Isometry3d> sample_candidates(const SampleSet& samples, const Calibration& calibration,
+                                                 const SuggestOptions& options);
+
+/// Ranks `candidates` (effector poses) by the predicted criterion. Needs the
+/// current calibration of `samples`. Throws NoData for no candidates.
+Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibration,
+                           const std::vector<Eigen::Isometry3d>& candidates, const SuggestOptions& options);
+
+/// "How many more, and which": greedily adds the best candidate (its predicted
+/// sample) until the object sigma reaches `target_object_sigma` or `max_poses`
+/// are added. Each step draws fresh candidates from the last added pose, unless
+/// `fixed_candidates` are given (then each is used at most once).
+struct Plan {
+  std::vector<ScoredPose> poses;  // in order; poses[i].object_sigma is after adding poses[0..i]
+  bool reached = false;
+  double start_object_sigma = 0.0;
+};
+Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double target_object_sigma, int max_poses,
+                const SuggestOptions& options, const std::vector<Eigen::Isometry3d>& fixed_candidates = {});
+
+}  // namespace handeye

@@ -1,0 +1,156 @@
+#include "handeye_covariance/core/next_best_pose.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "handeye_covariance/core/errors.h"
+
+namespace handeye {
+
+using Eigen::Isometry3d;
+
+const char* to_string(SuggestCriterion criterion) {
+  return criterion == SuggestCriterion::ObjectSigma ? "object_sigma" : "determinant";
+}
+
+SuggestCriterion criterion_from_string(const std::string& name) {
+  if (name == "object_sigma") return SuggestCriterion::ObjectSigma;
+  if (name == "determinant") return SuggestCriterion::Determinant;
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown criterion `" + name + "`", "criterion",
+                     "use object_sigma (an object's 1 sigma at the working distance) or determinant");
+}
+
+double object_sigma(const Matrix6d& covariance, double working_distance) {
+  return max_sigma(point_covariance({Isometry3d::Identity(), covariance}, Eigen::Vector3d(0, 0, working_distance)));
+}
+
+double criterion_value(const Matrix6d& covariance, SuggestCriterion criterion, double working_distance) {
+  if (criterion == SuggestCriterion::ObjectSigma) return object_sigma(covariance, working_distance);
+  // log det through Cholesky: stable at the 1e-40 scale a 6x6 of mm and mrad has.
+  const Eigen::LLT<Matrix6d> llt(covariance);
+  if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
+  return 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+}
+
+Isometry3d effector_for_view(Setup setup, const Isometry3d& X, const Isometry3d& pattern, const Isometry3d& P) {
+  // eye_in_hand: E X P = T_base_pattern; eye_to_hand: E T_effector_pattern = X P.
+  return setup == Setup::EyeInHand ? pattern * P.inverse() * X.inverse() : X * P * pattern.inverse();
+}
+
+namespace {
+
+double angle_between(const Isometry3d& a, const Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle();
+}
+
+bool distinct_from_all(const Isometry3d& E, const std::vector<PoseSample>& samples, const SuggestOptions& o) {
+  for (const PoseSample& s : samples) {
+    if ((E.translation() - s.T_base_effector.translation()).norm() < o.min_translation &&
+        angle_between(E, s.T_base_effector) < o.min_rotation) {
+      return false;
+    }
+  }
+  return true;
+}
+
+/// The samples with one more, noise-free predicted sample at effector pose E,
+/// and the session's noise as the global block, so the prediction uses it.
+SampleSet with_candidate(const SampleSet& samples, const MeasurementNoise& noise, const PoseSample& candidate) {
+  SampleSet set = samples;
+  if (!set.noise) set.noise = noise;
+  set.samples.push_back(candidate);
+  return set;
+}
+
+}  // namespace
+
+std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibration& calibration,
+                                          const SuggestOptions& options) {
+  if (samples.samples.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "no samples to suggest from", "samples", "take at least 3 samples first");
+  }
+  Rng rng(options.seed);
+  const Isometry3d pattern = pattern_pose(samples, calibration.T_parent_camera);
+  const Isometry3d& current = samples.samples.back().T_base_effector;
+  std::vector<Isometry3d> candidates;
+  for (int draw = 0; draw < 50 * options.candidates && static_cast<int>(candidates.size()) < options.candidates; ++draw) {
+    const Isometry3d E = effector_for_view(samples.setup, calibration.T_parent_camera, pattern, random_view(rng, options.views));
+    if ((E.translation() - current.translation()).norm() > options.max_step_translation ||
+        angle_between(E, current) > options.max_step_rotation || !distinct_from_all(E, samples.samples, options)) {
+      continue;
+    }
+    candidates.push_back(E);
+  }
+  return candidates;
+}
+
+Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibration,
+                           const std::vector<Isometry3d>& candidates, const SuggestOptions& options) {
+  if (candidates.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "no candidate pose to rank", "candidates",
+                       "give candidate poses, or widen the reach limits (max_step_translation, max_step_rotation)");
+  }
+  const Isometry3d& X = calibration.T_parent_camera;
+  const Isometry3d pattern = pattern_pose(samples, X);
+  const bool in_hand = samples.setup == Setup::EyeInHand;
+  Suggestion suggestion;
+  suggestion.current_score = criterion_value(calibration.pose_covariance, options.criterion, options.working_distance);
+  suggestion.current_object_sigma = object_sigma(calibration.pose_covariance, options.working_distance);
+  SolverOptions solver;
+  for (const Isometry3d& E : candidates) {
+    PoseSample candidate;
+    candidate.T_base_effector = E;
+    // What the camera would see there: eq. (68) solved for the pattern pose.
+    candidate.T_camera_pattern = X.inverse() * (in_hand ? E.inverse() : E) * pattern;
+    ++suggestion.considered;
+    try {
+      const Calibration predicted = solve(with_candidate(samples, calibration.noise, candidate), solver);
+      ScoredPose scored;
+      scored.T_base_effector = E;
+      scored.T_camera_pattern = candidate.T_camera_pattern;
+      scored.predicted_covariance = predicted.pose_covariance;
+      scored.score = criterion_value(predicted.pose_covariance, options.criterion, options.working_distance);
+      scored.object_sigma = object_sigma(predicted.pose_covariance, options.working_distance);
+      suggestion.ranked.push_back(scored);
+    } catch (const HandEyeError&) {
+      ++suggestion.refused;  // e.g. a candidate the input checks refuse; others remain
+    }
+  }
+  std::stable_sort(suggestion.ranked.begin(), suggestion.ranked.end(),
+                   [](const ScoredPose& a, const ScoredPose& b) { return a.score < b.score; });
+  return suggestion;
+}
+
+Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double target_object_sigma, int max_poses,
+                const SuggestOptions& options, const std::vector<Isometry3d>& fixed_candidates) {
+  Plan plan;
+  plan.start_object_sigma = object_sigma(calibration.pose_covariance, options.working_distance);
+  plan.reached = plan.start_object_sigma <= target_object_sigma;
+  SampleSet planned = samples;
+  if (!planned.noise) planned.noise = calibration.noise;
+  std::vector<Isometry3d> remaining = fixed_candidates;
+  SuggestOptions step_options = options;
+  while (!plan.reached && static_cast<int>(plan.poses.size()) < max_poses) {
+    step_options.seed = options.seed + static_cast<unsigned>(plan.poses.size());
+    const std::vector<Isometry3d> candidates =
+        fixed_candidates.empty() ? sample_candidates(planned, calibration, step_options) : remaining;
+    if (candidates.empty()) break;
+    const Suggestion s = rank_candidates(planned, calibration, candidates, step_options);
+    if (s.ranked.empty()) break;
+    const ScoredPose& best = s.ranked.front();
+    plan.poses.push_back(best);
+    PoseSample added;
+    added.T_base_effector = best.T_base_effector;
+    added.T_camera_pattern = best.T_camera_pattern;
+    planned.samples.push_back(added);
+    plan.reached = best.object_sigma <= target_object_sigma;
+    if (!fixed_candidates.empty()) {
+      remaining.erase(std::find_if(remaining.begin(), remaining.end(), [&](const Isometry3d& E) {
+        return E.isApprox(best.T_base_effector);
+      }));
+    }
+  }
+  return plan;
+}
+
+}  // namespace handeye
