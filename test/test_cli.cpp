@@ -8,6 +8,8 @@
 #include <sstream>
 #include <sys/wait.h>
 
+#include <yaml-cpp/yaml.h>
+
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/io/yaml_io.h"
 
@@ -280,3 +282,61 @@ TEST(Cli, NoiseRefusesWhatItCannotMeasure) {
 }
 
 }  // namespace noise_test
+
+namespace suggest_test {
+
+TEST(Cli, SuggestRanksNextPosesAndPlansToTheTarget) {
+  const std::string samples = temp("s_samples.yaml"), out = temp("s_out.yaml"), candidates = temp("s_candidates.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 6 --seed 14").exit_code, 0);
+  const CliRun r = run("suggest --input " + samples + " --target-mm 0.4 --count 4 --output " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("Next poses, best first"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("To reach 0.4 mm: "), std::string::npos) << r.out;
+  const YAML::Node file = YAML::LoadFile(out);
+  ASSERT_EQ(file["suggestions"].size(), 4u);
+  const double now = file["current_object_sigma_mm"].as<double>();
+  double previous = 0.0;
+  for (const YAML::Node& s : file["suggestions"]) {
+    const double sigma = s["object_sigma_mm"].as<double>();
+    EXPECT_LT(sigma, now);
+    EXPECT_GE(sigma, previous);  // best first
+    previous = sigma;
+  }
+  EXPECT_TRUE(file["plan"]["reached"].as<bool>());
+  const YAML::Node plan = file["plan"]["poses"];
+  ASSERT_GT(plan.size(), 0u);
+  EXPECT_LE(plan[plan.size() - 1]["object_sigma_mm"].as<double>(), 0.4);
+
+  // The suggestions, fed back as candidates, are ranked the same way.
+  std::string text = "candidates:\n";
+  for (int i = 3; i >= 0; --i) {  // reversed
+    const YAML::Node s = file["suggestions"][i];
+    text += "  - {translation: [" + s["translation"][0].as<std::string>() + ", " + s["translation"][1].as<std::string>() +
+            ", " + s["translation"][2].as<std::string>() + "], rotation: [" + s["rotation"][0].as<std::string>() + ", " +
+            s["rotation"][1].as<std::string>() + ", " + s["rotation"][2].as<std::string>() + ", " +
+            s["rotation"][3].as<std::string>() + "]}\n";
+  }
+  handeye::io::write_file_atomically(candidates, text);
+  const std::string again = temp("s_again.yaml");
+  ASSERT_EQ(run("suggest --input " + samples + " --candidates " + candidates + " --count 1 --output " + again).exit_code, 0);
+  EXPECT_NEAR(YAML::LoadFile(again)["suggestions"][0]["object_sigma_mm"].as<double>(),
+              file["suggestions"][0]["object_sigma_mm"].as<double>(), 1e-9);
+}
+
+TEST(Cli, SuggestRefusesBadRequests) {
+  const std::string samples = temp("s2_samples.yaml"), out = temp("s2_out.yaml"), bad = temp("s2_bad.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 6 --seed 15").exit_code, 0);
+  CliRun r = run("suggest --input " + samples + " --criterion trace --output " + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown criterion"), std::string::npos) << r.err;
+  handeye::io::write_file_atomically(bad, "candidates:\n  - {translation: [0, 0, 0.5], rotation: [0, 0, 0, 3]}\n");
+  r = run("suggest --input " + samples + " --candidates " + bad + " --output " + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("candidates[0].rotation"), std::string::npos) << r.err;
+  r = run("suggest --input " + samples + " --reach-mm 0.001 --output " + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("widen the reach"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+}  // namespace suggest_test

@@ -279,6 +279,45 @@ std::string format_samples(const SampleSet& set) {
 
 // ---------------------------------------------------------------- motions
 
+std::vector<Isometry3d> parse_candidate_poses(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  const YAML::Node list = require_list(root, "candidates", top);
+  std::vector<Isometry3d> poses;
+  for (std::size_t i = 0; i < list.size(); ++i) poses.push_back(read_pose(list[i], (top / "candidates")[i]));
+  return poses;
+}
+
+std::vector<Isometry3d> read_candidate_poses(const std::string& path) {
+  return parse_candidate_poses(read_file(path), path);
+}
+
+std::string format_suggestions(const Suggestion& suggestion, int count, const Plan& plan, double target_object_sigma,
+                               const SuggestOptions& options) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  out << YAML::Key << "criterion" << YAML::Value << to_string(options.criterion);
+  out << YAML::Key << "working_distance" << YAML::Value << options.working_distance;
+  out << YAML::Key << "current_object_sigma_mm" << YAML::Value << suggestion.current_object_sigma * 1e3;
+  const auto emit_scored = [&](const ScoredPose& p) {
+    out << YAML::BeginMap;
+    emit_pose(out, p.T_base_effector);
+    out << YAML::Key << "object_sigma_mm" << YAML::Value << p.object_sigma * 1e3;
+    out << YAML::Key << "score" << YAML::Value << p.score;
+    out << YAML::EndMap;
+  };
+  out << YAML::Key << "suggestions" << YAML::Value << YAML::BeginSeq;  // T_base_effector, best first
+  for (int i = 0; i < count && i < static_cast<int>(suggestion.ranked.size()); ++i) emit_scored(suggestion.ranked[i]);
+  out << YAML::EndSeq;
+  out << YAML::Key << "plan" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "target_object_sigma_mm" << YAML::Value << target_object_sigma * 1e3;
+  out << YAML::Key << "reached" << YAML::Value << plan.reached;
+  out << YAML::Key << "poses" << YAML::Value << YAML::BeginSeq;
+  for (const ScoredPose& p : plan.poses) emit_scored(p);
+  out << YAML::EndSeq << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
 std::string format_noise_estimate(const NoiseEstimate& estimate) {
   YAML::Emitter out;
   new_emitter(out) << YAML::BeginMap;

@@ -507,6 +507,83 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
   return kOk;
 }
 
+int suggest_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
+  std::string input, candidates_path, criterion = "object_sigma", output;
+  int count = 5, max_poses = 30;
+  double target_mm = 1.0, reach_mm = 500.0, reach_deg = 90.0;
+  SuggestOptions options;
+  po::options_description description(
+      "suggest: which poses to add next, and how many more reach the target (ranked by the predicted covariance)");
+  description.add_options()("help,h", "show this help")(
+      "input,i", po::value(&input)->required(), "samples file of the session so far (YAML, >= 3 samples)")(
+      "candidates", po::value(&candidates_path),
+      "candidate effector poses (YAML `candidates: [{translation, rotation}]`); default: sampled views of the pattern")(
+      "count,n", po::value(&count), "how many ranked next poses to print (default 5)")(
+      "criterion", po::value(&criterion), "object_sigma (default) or determinant")(
+      "working-distance", po::value(&options.working_distance), "m along the optical axis, for object_sigma (default 0.7)")(
+      "target-mm", po::value(&target_mm), "plan until the object 1 sigma reaches this (default 1.0)")(
+      "max-poses", po::value(&max_poses), "plan at most this many more poses (default 30)")(
+      "reach-mm", po::value(&reach_mm), "sampled candidates: at most this far from the last pose (default 500)")(
+      "reach-deg", po::value(&reach_deg), "sampled candidates: at most this rotation from the last pose (default 90)")(
+      "seed", po::value(&options.seed), "sampled candidates: random seed (default 1)")(
+      "output,o", po::value(&output), "write the suggestions and the plan (YAML)");
+  po::variables_map vm;
+  if (!parse("suggest", "--input FILE [--candidates FILE] [--criterion object_sigma|determinant] [--target-mm 1]",
+             description, args, vm, out)) {
+    return kOk;
+  }
+  options.criterion = criterion_from_string(criterion);
+  if (!(options.working_distance > 0.0) || !(target_mm > 0.0) || count < 1 || max_poses < 0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "--working-distance and --target-mm must be > 0, --count >= 1",
+                       "options", "give positive values");
+  }
+  options.max_step_translation = reach_mm * 1e-3;
+  options.max_step_rotation = reach_deg * M_PI / 180.0;
+  const SampleSet samples = io::read_samples(input);
+  const Calibration calibration = solve(samples);
+  const std::vector<Eigen::Isometry3d> given =
+      candidates_path.empty() ? std::vector<Eigen::Isometry3d>{} : io::read_candidate_poses(candidates_path);
+  const std::vector<Eigen::Isometry3d> candidates =
+      candidates_path.empty() ? sample_candidates(samples, calibration, options) : given;
+  const Suggestion suggestion = rank_candidates(samples, calibration, candidates, options);
+  if (suggestion.ranked.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "every candidate was refused by the prediction", candidates_path.empty() ? "candidates" : candidates_path,
+                       "give candidates that rotate about new axes, or widen --reach-mm/--reach-deg");
+  }
+  const Plan plan = plan_poses(samples, calibration, target_mm * 1e-3, max_poses, options, given);
+
+  char line[320];
+  out << "Now: " << samples.samples.size() << " samples, object 1 sigma " << number_text(suggestion.current_object_sigma * 1e3)
+      << " mm at " << number_text(options.working_distance) << " m (worst axis); criterion " << to_string(options.criterion)
+      << ", " << suggestion.considered << " candidates" << (candidates_path.empty() ? " (sampled views)" : "")
+      << (suggestion.refused ? ", " + std::to_string(suggestion.refused) + " refused" : "") << "\n";
+  out << "Next poses, best first (T_base_effector):\n"
+         "   #  translation [m]                     quaternion [x y z w]                      object 1 sigma after [mm]\n";
+  for (int i = 0; i < count && i < static_cast<int>(suggestion.ranked.size()); ++i) {
+    const ScoredPose& p = suggestion.ranked[i];
+    Eigen::Quaterniond q(p.T_base_effector.linear());
+    if (q.w() < 0) q.coeffs() *= -1.0;
+    const Eigen::Vector3d t = p.T_base_effector.translation();
+    std::snprintf(line, sizeof line, "  %2d  %+.4f %+.4f %+.4f   %+.5f %+.5f %+.5f %+.5f   %.3f\n", i + 1, t.x(), t.y(),
+                  t.z(), q.x(), q.y(), q.z(), q.w(), p.object_sigma * 1e3);
+    out << line;
+  }
+  if (plan.reached) {
+    out << "To reach " << number_text(target_mm) << " mm: " << plan.poses.size() << " more pose(s)"
+        << (plan.poses.empty() ? " (already there)" : ", predicted " + number_text(plan.poses.empty() ? 0.0 : plan.poses.back().object_sigma * 1e3) + " mm after them") << "\n";
+  } else {
+    out << "To reach " << number_text(target_mm) << " mm: not within " << plan.poses.size() << " more pose(s) (predicted "
+        << number_text(plan.poses.empty() ? suggestion.current_object_sigma * 1e3 : plan.poses.back().object_sigma * 1e3)
+        << " mm after them); lower the noise, widen the reach, or relax the target\n";
+  }
+  out << "  (first-order prediction at the current estimate; the node's /suggest_pose gives the same live)\n";
+  if (!output.empty()) {
+    io::write_file_atomically(output, io::format_suggestions(suggestion, count, plan, target_mm * 1e-3, options));
+    out << "  written to " << output << "\n";
+  }
+  return kOk;
+}
+
 const std::map<std::string, Command>& commands() {
   static const std::map<std::string, Command> table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
@@ -517,6 +594,8 @@ const std::map<std::string, Command>& commands() {
                    compose_command}},
       {"noise", {"measure the pose noise from repeated observations or residuals (eq. 64-67); write a noise block",
                  noise_command}},
+      {"suggest", {"which poses to add next and how many more reach a target sigma (predicted covariance)",
+                   suggest_command}},
       {"validate", {"Monte-Carlo check of the covariance (paper section IV-A): epsilon, NEES, coverage, plots",
                     validate_command}},
   };

@@ -15,6 +15,7 @@
 #include <variant>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/next_best_pose.h"
 #include "handeye_covariance/core/noise_estimation.h"
 #include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/core/tag_layout.h"
@@ -46,6 +47,16 @@ using Input = std::variant<SampleSet, MotionSet>;
 Input read_input(const std::string& path);
 
 std::string format_samples(const SampleSet& samples);
+
+/// Candidate effector poses (T_base_effector) for the next-best-pose
+/// suggestions: `candidates: [{translation: [x, y, z], rotation: [qx, qy, qz, qw]}, ...]`.
+std::vector<Eigen::Isometry3d> parse_candidate_poses(const std::string& text, const std::string& source);
+std::vector<Eigen::Isometry3d> read_candidate_poses(const std::string& path);
+
+/// What `handeye suggest` writes: the ranked next poses and the plan to the
+/// target. Its `suggestions` list has the `candidates` format's pose keys.
+std::string format_suggestions(const Suggestion& suggestion, int count, const Plan& plan, double target_object_sigma,
+                               const SuggestOptions& options);
 
 /// The file `handeye noise` writes: a `noise: {effector, pattern}` block, which
 /// read_noise_file, the node's ~noise_config and `solve --noise` accept, and an
