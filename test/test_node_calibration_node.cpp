@@ -94,6 +94,34 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_LE((file.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-12);
   EXPECT_LE((file.T_parent_camera.covariance - X.covariance).norm(), 1e-18);
 
+  // Next-best pose: ~status names one, /suggest_pose ranks and plans.
+  EXPECT_TRUE(status.latest.has_suggestion) << status.latest.last_event;
+  EXPECT_EQ(status.latest.next_pose.header.frame_id, "base_link");
+  EXPECT_LT(status.latest.next_pose_object_error_mm, status.latest.object_error_mm);
+  SuggestPose suggest;
+  suggest.request.count = 5;
+  suggest.request.target_mm = 0.7 * status.latest.object_error_mm;
+  ASSERT_TRUE(test::call(kNs + "suggest_pose", suggest));
+  ASSERT_TRUE(suggest.response.success) << suggest.response.message;
+  ASSERT_EQ(suggest.response.poses.size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(suggest.response.poses[i].header.frame_id, "base_link");
+    EXPECT_LT(suggest.response.predicted_object_error_mm[i], suggest.response.current_object_error_mm);
+    if (i > 0) {
+      EXPECT_GE(suggest.response.predicted_object_error_mm[i], suggest.response.predicted_object_error_mm[i - 1]);
+    }
+  }
+  EXPECT_GT(suggest.response.poses_to_target, 0) << suggest.response.message;
+  EXPECT_EQ(static_cast<int>(suggest.response.plan.size()), suggest.response.poses_to_target);
+  std::printf("suggest_pose: object 1 sigma %.3f mm now, %.3f mm after the best pose; %s\n",
+              suggest.response.current_object_error_mm, suggest.response.predicted_object_error_mm[0],
+              suggest.response.message.c_str());
+  SuggestPose bad;
+  bad.request.criterion = "trace";
+  ASSERT_TRUE(test::call(kNs + "suggest_pose", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("unknown criterion"), std::string::npos) << bad.response.message;
+
   // Services, including bad input.
   ListSamples list;
   ASSERT_TRUE(test::call(kNs + "list_samples", list));
@@ -126,6 +154,10 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ASSERT_TRUE(test::call(kNs + "calibrate", too_few));
   EXPECT_FALSE(too_few.response.success);
   EXPECT_NE(too_few.response.message.find("TooFewMotions"), std::string::npos) << too_few.response.message;
+  SuggestPose none;
+  ASSERT_TRUE(test::call(kNs + "suggest_pose", none));
+  EXPECT_FALSE(none.response.success);
+  EXPECT_NE(none.response.message.find("no estimate yet"), std::string::npos) << none.response.message;
 
   LoadSamples missing;
   missing.request.path = "/nonexistent/samples.yaml";

@@ -35,6 +35,10 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   config_.calibration_file = expand_home(config_.calibration_file);
   config_.session_file = expand_home(config_.session_file);
   if (!config_.noise_config.empty()) noise_ = io::read_noise_file(expand_home(config_.noise_config));
+  criterion_from_string(config_.suggest_criterion);  // refuse a typo at start, not at the first sample
+  if (!config_.candidate_poses_file.empty()) {
+    candidate_poses_ = io::read_candidate_poses(expand_home(config_.candidate_poses_file));
+  }
 
   if (config_.resume && std::filesystem::exists(config_.session_file)) {
     sampler_.set_samples(io::read_samples(config_.session_file).samples);
@@ -55,6 +59,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
       node_.advertiseService("save_samples", &CalibrationNode::save_samples, this),
       node_.advertiseService("load_samples", &CalibrationNode::load_samples, this),
       node_.advertiseService("save_calibration", &CalibrationNode::save_calibration, this),
+      node_.advertiseService("suggest_pose", &CalibrationNode::suggest_pose, this),
   };
 
   detection_node_.setCallbackQueue(&detection_queue_);
@@ -158,12 +163,17 @@ void CalibrationNode::samples_changed(const std::string& event) {
     ROS_ERROR("could not save the session: %s", e.what());
   }
   estimate_.reset();
+  next_pose_.reset();
   if (sampler_.samples().size() >= 3) {
     try {
-      estimate_ = solve(sample_set());
+      const SampleSet set = sample_set();
+      estimate_ = solve(set);
       publish_estimate(*estimate_);
+      const SuggestOptions options = suggest_options(config_.suggest_criterion);
+      const Suggestion s = rank_candidates(set, *estimate_, candidates(set, options), options);
+      if (!s.ranked.empty()) next_pose_ = s.ranked.front();
     } catch (const HandEyeError& e) {
-      last_event_ = event + "; no estimate yet: " + e.what();
+      last_event_ = event + (estimate_ ? "; no next pose: " : "; no estimate yet: ") + e.what();
     }
   }
   publish_status();
@@ -192,6 +202,13 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
     status.object_error_mm =
         max_sigma(point_covariance(X, Eigen::Vector3d(0, 0, config_.working_distance))) * 1e3;
     status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
+  }
+  if (next_pose_) {
+    status.has_suggestion = true;
+    status.next_pose.header.stamp = status.header.stamp;
+    status.next_pose.header.frame_id = config_.frames.base;
+    status.next_pose.pose = conversions::to_pose_msg(next_pose_->T_base_effector);
+    status.next_pose_object_error_mm = next_pose_->object_sigma * 1e3;
   }
   status_pub_.publish(status);
 }
@@ -357,6 +374,69 @@ bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibr
     res.message = "saved to " + res.path;
   } catch (const HandEyeError& e) {
     res.success = false;
+    res.message = e.what();
+  }
+  return true;
+}
+
+}  // namespace handeye
+
+namespace handeye {
+
+SuggestOptions CalibrationNode::suggest_options(const std::string& criterion) const {
+  SuggestOptions options;
+  options.criterion = criterion_from_string(criterion.empty() ? config_.suggest_criterion : criterion);
+  options.working_distance = config_.working_distance;
+  options.candidates = config_.suggest_candidates;
+  options.max_step_translation = config_.reach_translation;
+  options.max_step_rotation = config_.reach_rotation;
+  options.min_translation = config_.sampler.min_translation;
+  options.min_rotation = config_.sampler.min_rotation;
+  options.seed = static_cast<unsigned>(sampler_.samples().size());  // fresh candidates after each sample
+  return options;
+}
+
+std::vector<Eigen::Isometry3d> CalibrationNode::candidates(const SampleSet& set, const SuggestOptions& options) const {
+  return candidate_poses_.empty() ? sample_candidates(set, *estimate_, options) : candidate_poses_;
+}
+
+bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!estimate_) {
+    res.message = "no estimate yet: " + std::to_string(sampler_.samples().size()) +
+                  " sample(s); take at least 3 (rotating about different axes) first";
+    return true;
+  }
+  try {
+    const SampleSet set = sample_set();
+    const SuggestOptions options = suggest_options(req.criterion);
+    const Suggestion s = rank_candidates(set, *estimate_, candidates(set, options), options);
+    if (s.ranked.empty()) {
+      throw HandEyeError(ErrorCode::NoData, "every candidate was refused by the prediction", "candidates",
+                         "give candidates that rotate about new axes, or raise reach_translation_mm/reach_rotation_deg");
+    }
+    const double target = (req.target_mm > 0.0 ? req.target_mm : config_.target_tolerance_mm) * 1e-3;
+    const Plan plan = plan_poses(set, *estimate_, target, 30, options, candidate_poses_);
+    const auto stamped = [&](const Eigen::Isometry3d& E) {
+      geometry_msgs::PoseStamped pose;
+      pose.header.stamp = ros::Time::now();
+      pose.header.frame_id = config_.frames.base;
+      pose.pose = conversions::to_pose_msg(E);
+      return pose;
+    };
+    const int count = req.count > 0 ? req.count : 5;
+    for (int i = 0; i < count && i < static_cast<int>(s.ranked.size()); ++i) {
+      res.poses.push_back(stamped(s.ranked[i].T_base_effector));
+      res.predicted_object_error_mm.push_back(s.ranked[i].object_sigma * 1e3);
+    }
+    for (const ScoredPose& p : plan.poses) res.plan.push_back(stamped(p.T_base_effector));
+    res.current_object_error_mm = s.current_object_sigma * 1e3;
+    res.poses_to_target = plan.reached ? static_cast<int>(plan.poses.size()) : -1;
+    res.success = true;
+    res.message = plan.reached ? std::to_string(plan.poses.size()) + " more pose(s) reach " +
+                                     number_text(target * 1e3) + " mm (predicted)"
+                               : "the target " + number_text(target * 1e3) + " mm is not reached within 30 more poses";
+  } catch (const HandEyeError& e) {
     res.message = e.what();
   }
   return true;

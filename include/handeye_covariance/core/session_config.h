@@ -25,6 +25,13 @@ struct SessionConfig {
   double tf_poll_rate = 30.0;            // Hz
   double working_distance = 0.7;         // m
   double target_tolerance_mm = 1.0;
+  // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
+  // within one move of the last pose, or a file of candidate effector poses.
+  std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
+  int suggest_candidates = 150;
+  double reach_translation = 0.5;                  // m
+  double reach_rotation = 90.0 * M_PI / 180.0;     // rad
+  std::string candidate_poses_file;                // empty: sampled
   SamplerOptions sampler;
 
   Setup setup() const { return eye_on_hand ? Setup::EyeInHand : Setup::EyeToHand; }
@@ -58,6 +65,11 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("tf_poll_rate", c.tf_poll_rate, 1.0);
   visit("working_distance", c.working_distance, 1.0);
   visit("target_tolerance_mm", c.target_tolerance_mm, 1.0);
+  visit("suggest_criterion", c.suggest_criterion, 1.0);
+  visit("suggest_candidates", c.suggest_candidates, 1.0);
+  visit("reach_translation_mm", c.reach_translation, mm);
+  visit("reach_rotation_deg", c.reach_rotation, deg);
+  visit("candidate_poses_file", c.candidate_poses_file, 1.0);
   visit("auto_sample", c.sampler.auto_sample, 1.0);
   visit("still_window", c.sampler.still_window, 1.0);
   visit("still_translation_mm", c.sampler.still_translation, mm);

@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/next_best_pose.h"
 #include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/observations.h"
@@ -44,6 +45,10 @@ class CalibrationNode {
   bool save_samples(SaveSamples::Request&, SaveSamples::Response&);
   bool load_samples(LoadSamples::Request&, LoadSamples::Response&);
   bool save_calibration(SaveCalibration::Request&, SaveCalibration::Response&);
+  bool suggest_pose(SuggestPose::Request&, SuggestPose::Response&);
+  /// The options and candidates for a suggestion (lock held; needs estimate_).
+  SuggestOptions suggest_options(const std::string& criterion) const;
+  std::vector<Eigen::Isometry3d> candidates(const SampleSet& set, const SuggestOptions& options) const;
 
   /// After the samples changed (lock held): persist, re-estimate, publish status.
   void samples_changed(const std::string& event);
@@ -70,6 +75,8 @@ class CalibrationNode {
   Sampler sampler_;
   std::optional<Calibration> estimate_;    // from the accepted samples, for ~status
   std::optional<Calibration> calibration_; // from the last successful /calibrate
+  std::optional<ScoredPose> next_pose_;    // the best next pose for the current samples, for ~status
+  std::vector<Eigen::Isometry3d> candidate_poses_;  // from config_.candidate_poses_file
   std::string last_event_ = "started";
   ros::Time last_tf_stamp_;
 };

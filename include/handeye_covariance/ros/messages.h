@@ -9,6 +9,7 @@
 #include "handeye_covariance/Reset.h"
 #include "handeye_covariance/SaveCalibration.h"
 #include "handeye_covariance/SaveSamples.h"
+#include "handeye_covariance/SuggestPose.h"
 #include "handeye_covariance/TagDetection.h"
 #include "handeye_covariance/TagDetectionArray.h"
 #include "handeye_covariance/TakeSample.h"
@@ -22,6 +23,7 @@ using handeye_covariance::RemoveSample;
 using handeye_covariance::Reset;
 using handeye_covariance::SaveCalibration;
 using handeye_covariance::SaveSamples;
+using handeye_covariance::SuggestPose;
 using handeye_covariance::TagDetection;
 using handeye_covariance::TagDetectionArray;
 using handeye_covariance::TakeSample;
