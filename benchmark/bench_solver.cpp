@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/next_best_pose.h"
 #include "handeye_covariance/core/simulation.h"
 
 namespace {
@@ -52,5 +53,20 @@ void BM_SolveSamplesEstimatedNoise(benchmark::State& state) {
 BENCHMARK(BM_SolveSamplesEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
+
+// One next-best-pose suggestion: 150 sampled candidates ranked by the predicted
+// covariance for a session of n samples (what the node does after each sample).
+void BM_SuggestNextPose(benchmark::State& state) {
+  Rng rng(3);
+  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                              static_cast<int>(state.range(0)), paper_noise(1e-5));
+  const Calibration c = solve(s.samples);
+  const SuggestOptions options;
+  for (auto _ : state) {
+    const Suggestion suggestion = rank_candidates(s.samples, c, sample_candidates(s.samples, c, options), options);
+    benchmark::DoNotOptimize(suggestion.ranked.front().score);
+  }
+}
+BENCHMARK(BM_SuggestNextPose)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

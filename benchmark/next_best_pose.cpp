@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
       if (strategy == Strategy::Random) random_mean = mean;
       std::printf("| %s | %s | %.1f | %d | %d | %s | %.2f |\n", to_string(setup), name(strategy), mean,
                   counts[counts.size() / 2], counts.back(),
-                  strategy == Strategy::Random ? "1" : (std::to_string(static_cast<int>(std::lround(100.0 * (1.0 - mean / random_mean)))) + "% fewer").c_str(),
+                  strategy == Strategy::Random ? "reference" : (std::to_string(static_cast<int>(std::lround(100.0 * (1.0 - mean / random_mean)))) + "% fewer").c_str(),
                   nees);
       std::fflush(stdout);
     }
