@@ -19,10 +19,16 @@ MeasurementNoise sim_noise() {
 
 TEST(NextBestPose, CriteriaAreTheObjectSigmaAndTheLogDeterminant) {
   Matrix6d C = Matrix6d::Zero();
-  C.diagonal() << 1e-8, 4e-8, 2e-8, 1e-8, 1e-8, 1e-8;
-  // A point 0.7 m along z: its x and y pick up 0.7^2 * 1e-8 from the rotation about y and x; y is worst.
-  EXPECT_NEAR(object_sigma(C, 0.7), std::sqrt(4e-8 + 0.49e-8), 1e-12);
-  EXPECT_NEAR(criterion_value(C, SuggestCriterion::Determinant, 0.7), std::log(C.determinant()), 1e-9);
+  C.diagonal() << 1e-8, 4e-8, 2e-8, 1e-8, 4e-8, 9e-8;
+  // A point 0.7 m along the optical axis of a camera aligned with its parent:
+  // x and y pick up 0.7^2 times the variance about y and x; y is worst.
+  const PoseWithCovariance aligned{Eigen::Isometry3d::Identity(), C};
+  EXPECT_NEAR(object_sigma(aligned, 0.7), std::sqrt(4e-8 + 0.49e-8), 1e-12);
+  EXPECT_NEAR(criterion_value(aligned, SuggestCriterion::Determinant, 0.7), std::log(C.determinant()), 1e-9);
+  // A camera looking along the parent's x: the lever arm turns with X, and y
+  // now picks up the rotation about z.
+  const PoseWithCovariance turned{Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY())), C};
+  EXPECT_NEAR(object_sigma(turned, 0.7), std::sqrt(4e-8 + 0.49 * 9e-8), 1e-12);
   EXPECT_EQ(criterion_from_string("determinant"), SuggestCriterion::Determinant);
   EXPECT_THROW(criterion_from_string("trace"), HandEyeError);
 }

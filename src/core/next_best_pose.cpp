@@ -20,14 +20,15 @@ SuggestCriterion criterion_from_string(const std::string& name) {
                      "use object_sigma (an object's 1 sigma at the working distance) or determinant");
 }
 
-double object_sigma(const Matrix6d& covariance, double working_distance) {
-  return max_sigma(point_covariance({Isometry3d::Identity(), covariance}, Eigen::Vector3d(0, 0, working_distance)));
+double object_sigma(const PoseWithCovariance& X, double working_distance) {
+  // The lever arm is X's rotation applied to the camera-frame point.
+  return max_sigma(point_covariance(X, Eigen::Vector3d(0, 0, working_distance)));
 }
 
-double criterion_value(const Matrix6d& covariance, SuggestCriterion criterion, double working_distance) {
-  if (criterion == SuggestCriterion::ObjectSigma) return object_sigma(covariance, working_distance);
+double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, double working_distance) {
+  if (criterion == SuggestCriterion::ObjectSigma) return object_sigma(X, working_distance);
   // log det through Cholesky: stable at the 1e-40 scale a 6x6 of mm and mrad has.
-  const Eigen::LLT<Matrix6d> llt(covariance);
+  const Eigen::LLT<Matrix6d> llt(X.covariance);
   if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
   return 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
 }
@@ -94,8 +95,9 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
   const Isometry3d pattern = pattern_pose(samples, X);
   const bool in_hand = samples.setup == Setup::EyeInHand;
   Suggestion suggestion;
-  suggestion.current_score = criterion_value(calibration.pose_covariance, options.criterion, options.working_distance);
-  suggestion.current_object_sigma = object_sigma(calibration.pose_covariance, options.working_distance);
+  const PoseWithCovariance current{X, calibration.pose_covariance};
+  suggestion.current_score = criterion_value(current, options.criterion, options.working_distance);
+  suggestion.current_object_sigma = object_sigma(current, options.working_distance);
   SolverOptions solver;
   for (const Isometry3d& E : candidates) {
     PoseSample candidate;
@@ -109,8 +111,9 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
       scored.T_base_effector = E;
       scored.T_camera_pattern = candidate.T_camera_pattern;
       scored.predicted_covariance = predicted.pose_covariance;
-      scored.score = criterion_value(predicted.pose_covariance, options.criterion, options.working_distance);
-      scored.object_sigma = object_sigma(predicted.pose_covariance, options.working_distance);
+      const PoseWithCovariance after{predicted.T_parent_camera, predicted.pose_covariance};
+      scored.score = criterion_value(after, options.criterion, options.working_distance);
+      scored.object_sigma = object_sigma(after, options.working_distance);
       suggestion.ranked.push_back(scored);
     } catch (const HandEyeError&) {
       ++suggestion.refused;  // e.g. a candidate the input checks refuse; others remain
@@ -124,7 +127,7 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
 Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double target_object_sigma, int max_poses,
                 const SuggestOptions& options, const std::vector<Isometry3d>& fixed_candidates) {
   Plan plan;
-  plan.start_object_sigma = object_sigma(calibration.pose_covariance, options.working_distance);
+  plan.start_object_sigma = object_sigma({calibration.T_parent_camera, calibration.pose_covariance}, options.working_distance);
   plan.reached = plan.start_object_sigma <= target_object_sigma;
   SampleSet planned = samples;
   if (!planned.noise) planned.noise = calibration.noise;

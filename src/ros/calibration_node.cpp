@@ -199,8 +199,7 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
       status.sigma_rotation_deg[i] = std::sqrt(std::max(0.0, X.covariance(i + 3, i + 3))) / kDeg;
     }
     // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
-    status.object_error_mm =
-        max_sigma(point_covariance(X, Eigen::Vector3d(0, 0, config_.working_distance))) * 1e3;
+    status.object_error_mm = object_sigma(X, config_.working_distance) * 1e3;
     status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
   }
   if (next_pose_) {

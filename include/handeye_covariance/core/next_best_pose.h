@@ -59,10 +59,11 @@ struct Suggestion {
   int refused = 0;                     // candidates the prediction refused (degenerate with the samples)
 };
 
-/// The criterion for a covariance of X.
-double criterion_value(const Matrix6d& covariance, SuggestCriterion criterion, double working_distance);
-/// Worst-axis 1 sigma (m) of a point at `working_distance` on the optical axis, in X's parent frame.
-double object_sigma(const Matrix6d& covariance, double working_distance);
+/// The criterion for X with its covariance.
+double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, double working_distance);
+/// Worst-axis 1 sigma (m) of a point at `working_distance` on the camera's
+/// optical axis, in X's parent frame (the node's ~status object_error_mm).
+double object_sigma(const PoseWithCovariance& X, double working_distance);
 
 /// The effector pose that shows the camera `T_camera_pattern`.
 Eigen::Isometry3d effector_for_view(Setup setup, const Eigen::Isometry3d& X, const Eigen::Isometry3d& pattern,
