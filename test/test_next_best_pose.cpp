@@ -86,42 +86,44 @@ TEST(NextBestPose, RankingPredictsWhatAddingThePoseGives) {
 TEST(NextBestPose, APlansPredictedCovarianceIsHonestUnderMonteCarlo) {
   // Plan 6 poses from 3, then measure M noisy sessions at the 9 poses: the
   // covariance predicted before any of them was measured must match the errors.
-  const handeye::Setup setup = Setup::EyeInHand;
-  const MeasurementNoise noise = sim_noise();
-  Rng rng(6);
-  const Eigen::Isometry3d X = typical_X(setup);
-  const SimulatedSession start = simulate_session(rng, setup, X, 3, noise);
-  SuggestOptions options;
-  options.candidates = 60;
-  const Plan plan = plan_poses(start.samples, solve(start.samples), 0.0, 6, options);
-  ASSERT_EQ(plan.poses.size(), 6u);
-  for (std::size_t i = 1; i < plan.poses.size(); ++i) EXPECT_LT(plan.poses[i].object_sigma, plan.poses[i - 1].object_sigma);
-  const Matrix6d predicted = plan.poses.back().predicted_covariance;
-  std::vector<Eigen::Isometry3d> E;
-  for (const PoseSample& s : start.samples.samples) E.push_back(s.T_base_effector);
-  for (const ScoredPose& p : plan.poses) E.push_back(p.T_base_effector);
-  MonteCarloAccumulator planned, solved;
-  for (int m = 0; m < 1000; ++m) {
-    SampleSet session = start.samples;
-    session.samples.clear();
-    for (const Eigen::Isometry3d& e : E) {
-      PoseSample s;
-      s.T_base_effector = perturb(rng, e, noise.robot);
-      s.T_camera_pattern = perturb(rng, X.inverse() * e.inverse() * start.T_world_pattern, noise.camera);
-      session.samples.push_back(s);
-    }
-    const Calibration c = solve(session);
-    const Vector6d error = pose_error(c.T_parent_camera, X);
-    planned.add(error, predicted);
-    solved.add(error, c.pose_covariance);
+  for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
+    const MeasurementNoise noise = sim_noise();
+    Rng rng(6);
+    const Eigen::Isometry3d X = typical_X(setup);
+    const SimulatedSession start = simulate_session(rng, setup, X, 3, noise);
+    SuggestOptions options;
+    options.candidates = 60;
+    const Plan plan = plan_poses(start.samples, solve(start.samples), 0.0, 6, options);
+    ASSERT_EQ(plan.poses.size(), 6u);
+    for (std::size_t i = 1; i < plan.poses.size(); ++i) EXPECT_LT(plan.poses[i].object_sigma, plan.poses[i - 1].object_sigma);
+    const Matrix6d predicted = plan.poses.back().predicted_covariance;
+    std::vector<Eigen::Isometry3d> E;
+    for (const PoseSample& s : start.samples.samples) E.push_back(s.T_base_effector);
+    for (const ScoredPose& p : plan.poses) E.push_back(p.T_base_effector);
+    MonteCarloAccumulator planned, solved;
+    for (int m = 0; m < 1000; ++m) {
+      SampleSet session = start.samples;
+      session.samples.clear();
+      for (const Eigen::Isometry3d& e : E) {
+        PoseSample s;
+        s.T_base_effector = perturb(rng, e, noise.robot);
+        s.T_camera_pattern = perturb(
+            rng, X.inverse() * (setup == Setup::EyeInHand ? e.inverse() : e) * start.T_world_pattern, noise.camera);
+        session.samples.push_back(s);
+      }
+      const Calibration c = solve(session);
+      const Vector6d error = pose_error(c.T_parent_camera, X);
+      planned.add(error, predicted);
+      solved.add(error, c.pose_covariance);
   }
   const MonteCarloSummary p = planned.summary(), s = solved.summary();
-  std::printf("plan: object sigma %.3f -> %.3f mm in 6 poses; NEES of the planned covariance R %.2f t %.2f 6-dof %.2f "
-              "(each solve's: %.2f)\n", plan.start_object_sigma * 1e3, plan.poses.back().object_sigma * 1e3,
+  std::printf("%s plan: object sigma %.3f -> %.3f mm in 6 poses; NEES of the planned covariance R %.2f t %.2f 6-dof %.2f "
+              "(each solve's: %.2f)\n", to_string(setup), plan.start_object_sigma * 1e3, plan.poses.back().object_sigma * 1e3,
               p.rotation.nees_mean, p.translation.nees_mean, p.pose.nees_mean, s.pose.nees_mean);
   EXPECT_NEAR(p.pose.nees_mean, 6.0, 0.4);
   EXPECT_NEAR(p.rotation.nees_mean, 3.0, 0.25);
   EXPECT_NEAR(p.translation.nees_mean, 3.0, 0.25);
+  }
 }
 
 }  // namespace
