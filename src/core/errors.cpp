@@ -23,6 +23,7 @@ const char* to_string(ErrorCode code) {
     case ErrorCode::NoData: return "NoData";
     case ErrorCode::IoError: return "IoError";
     case ErrorCode::InvalidLayout: return "InvalidLayout";
+    case ErrorCode::TooManyOutliers: return "TooManyOutliers";
   }
   return "Unknown";
 }

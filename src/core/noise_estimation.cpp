@@ -72,6 +72,19 @@ void check_samples(const SampleSet& samples) {
 
 }  // namespace
 
+SampleResidual sample_residual(Setup setup, const PoseSample& sample, const Isometry3d& X, const Isometry3d& pattern) {
+  // The expected pattern pose P_bar = X^-1 V Y with V = E^-1 (in hand) or E (to hand).
+  const bool in_hand = setup == Setup::EyeInHand;
+  const Isometry3d& E = sample.T_base_effector;
+  const Isometry3d V = in_hand ? E.inverse() : E;
+  SampleResidual r;
+  // P = exp(e) P_bar, so d e = -d P_bar for the effector's part.
+  r.error = error_about(sample.T_camera_pattern, X.inverse() * V * pattern);  // eq. (64-65)
+  r.d_effector = -compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, pattern) *
+                 (in_hand ? inverse_jacobian(E) : Matrix6d::Identity());
+  return r;
+}
+
 NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const RepeatedObservationOptions& options) {
   check_samples(samples);
   // Greedy grouping by the effector pose: a held pose is far tighter than the
@@ -139,21 +152,12 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X
                        std::to_string(n) + " samples are too few to estimate the noise from residuals",
                        "samples", "record at least 10 samples (30+ for a 25% accurate variance)");
   }
-  const bool in_hand = samples.setup == Setup::EyeInHand;
   const Isometry3d Y_mean = pattern_pose(samples, X);  // eq. (66-67)
   Matrix6d residual = Matrix6d::Zero(), robot_part = Matrix6d::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const PoseSample& s = samples.samples[i];
-    // The expected pattern pose P_bar = X^-1 V Y with V = E^-1 (in hand) or E (to hand).
-    const Isometry3d& E = s.T_base_effector;
-    const Isometry3d V = in_hand ? E.inverse() : E;
-    const Vector6d e = error_about(s.T_camera_pattern, X.inverse() * V * Y_mean);  // eq. (64-65)
-    residual += e * e.transpose();
-    if (robot_noise) {  // what the robot's noise adds to this residual, to first order
-      const Matrix6d J = compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, Y_mean) *
-                         (in_hand ? inverse_jacobian(E) : Matrix6d::Identity());
-      robot_part += J * robot_noise->as_pose_covariance() * J.transpose();
-    }
+  for (const PoseSample& s : samples.samples) {
+    const SampleResidual r = sample_residual(samples.setup, s, X, Y_mean);
+    residual += r.error * r.error.transpose();
+    if (robot_noise) robot_part += r.d_effector * robot_noise->as_pose_covariance() * r.d_effector.transpose();
   }
   NoiseEstimate estimate;
   estimate.source = NoiseSource::Residuals;

@@ -25,6 +25,7 @@ enum class ErrorCode {
   NoData,                    // a bag or stream without usable detections or samples
   IoError,                   // file cannot be read or written
   InvalidLayout,             // a tag pattern layout without tags, with a bad size or a duplicate id
+  TooManyOutliers,           // more samples disagree with the rest than outlier rejection may drop
 };
 
 /// A number for a message, with `significant_digits` digits ("0.0484", "1.2e-05").

@@ -94,6 +94,13 @@ struct Calibration {
   /// camera noise, robot taken as exact) when none was given.
   MeasurementNoise noise;
   std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
+
+  /// Samples left out by solve_robust (outliers.h), indices into its input.
+  struct Rejected {
+    int index = 0;
+    std::string reason;
+  };
+  std::vector<Rejected> rejected;
 };
 
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of

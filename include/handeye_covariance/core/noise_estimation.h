@@ -60,6 +60,16 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Eigen::Isomet
 /// the current mean so it holds near pi too) and the arithmetic mean of t.
 Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses);
 
+/// One sample's pattern pose against the pattern's fixed pose `pattern`
+/// (eq. 64-65 about P_bar = X^-1 E^-1 pattern, or X^-1 E pattern eye-to-hand),
+/// and its first-order sensitivity to the effector pose's noise.
+struct SampleResidual {
+  Vector6d error = Vector6d::Zero();                 // ROS order, camera frame
+  Matrix6d d_effector = Matrix6d::Zero();            // d error / d effector perturbation
+};
+SampleResidual sample_residual(Setup setup, const PoseSample& sample, const Eigen::Isometry3d& X,
+                               const Eigen::Isometry3d& pattern);
+
 /// The pattern's fixed pose as the samples and X see it (eq. 68's chain,
 /// averaged by mean_pose): T_base_pattern = E X P (eye_in_hand) or
 /// T_effector_pattern = E^-1 X P (eye_to_hand).

@@ -1,0 +1,40 @@
+// Outlier rejection for pose samples: wrong detections (a flipped tag pose, a
+// detection paired with the wrong robot pose) must not corrupt X.
+//
+//  1. Consensus, before any X exists. For every pair of samples, A X = X B
+//     demands that A and B rotate by the same angle and have the same screw
+//     pitch (omega . t), whatever X is (Chen's screw congruence). A sample
+//     that disagrees with most others is rejected. Scales are robust (median
+//     lower quartile of the differences over all pairs), with floors for noise-free input.
+//  2. Residual gating after the solve. Each sample's pattern pose is compared
+//     with what X, its robot pose and the pattern's mean pose predict (eq.
+//     64-65); its Mahalanobis distance under the camera noise plus the robot
+//     noise mapped through the chain must stay below the chi2(6) 0.9999 quantile.
+//     The worst offender is dropped and X re-solved, one at a time.
+// At most `max_rejected_fraction` of the samples are rejected; beyond that the
+// session is refused as inconsistent.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/estimator.h"
+
+namespace handeye {
+
+struct OutlierOptions {
+  double consensus_sigmas = 6.0;            // a pair disagrees beyond this many robust sigmas
+  double min_angle_gate = 0.1 * M_PI / 180.0;  // rad: floors of the gates (noise-free input)
+  double min_pitch_gate = 0.2e-3;           // m
+  double min_pitch_angle = 5.0 * M_PI / 180.0;  // pitch is compared only for rotations beyond this
+  double disagreeing_share = 0.5;           // a sample disagreeing with more than this share of others is rejected
+  double residual_gate = 27.86;             // chi2(6) 0.9999 quantile
+  double max_rejected_fraction = 0.3;
+};
+
+/// Solves with outlier rejection; Calibration::rejected lists what was
+/// dropped (indices into `samples`) and why. Throws like solve(), and
+/// TooManyOutliers when more than max_rejected_fraction would be rejected.
+Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver = {}, const OutlierOptions& options = {});
+
+}  // namespace handeye

@@ -1,0 +1,145 @@
+#include "handeye_covariance/core/outliers.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/noise_estimation.h"
+
+namespace handeye {
+
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+
+namespace {
+
+double degrees(double radians) { return radians * 180.0 / M_PI; }
+
+/// Robust sigma of |differences| (half-normal) from their lower quartile,
+/// q25 = 0.3186 sigma: it holds while fewer than 75% of the pairs are bad (the
+/// median breaks at 50%, which 30% bad samples already reach: 1 - 0.7^2 = 51%).
+double robust_sigma(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 4, values.end());
+  return values[values.size() / 4] / 0.3186;
+}
+
+struct PairCheck {
+  int i = 0, j = 0;
+  double angle_difference = 0.0;           // rad
+  std::optional<double> pitch_difference;  // m, when both rotate enough for a stable axis
+};
+
+/// Stage 1: samples whose motions to most others break screw congruence.
+std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const OutlierOptions& o) {
+  const int n = static_cast<int>(samples.samples.size());
+  std::vector<PairCheck> pairs;
+  pairs.reserve(static_cast<std::size_t>(n) * (n - 1) / 2);
+  std::vector<double> angles, pitches;
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      const MotionPair m = motion_between(samples.setup, samples.samples[i], samples.samples[j]);
+      const Eigen::AngleAxisd a(m.A.linear()), b(m.B.linear());
+      PairCheck c{i, j, std::abs(a.angle() - b.angle()), std::nullopt};
+      if (std::min(a.angle(), b.angle()) > o.min_pitch_angle) {
+        c.pitch_difference = std::abs(a.axis().dot(m.A.translation()) - b.axis().dot(m.B.translation()));
+        pitches.push_back(*c.pitch_difference);
+      }
+      angles.push_back(c.angle_difference);
+      pairs.push_back(c);
+    }
+  }
+  const double angle_gate = std::max(o.min_angle_gate, o.consensus_sigmas * robust_sigma(angles));
+  const double pitch_gate = std::max(o.min_pitch_gate, o.consensus_sigmas * robust_sigma(pitches));
+  std::vector<int> disagreements(n, 0), checks(n, 0);
+  for (const PairCheck& c : pairs) {
+    const bool bad = c.angle_difference > angle_gate || (c.pitch_difference && *c.pitch_difference > pitch_gate);
+    for (int s : {c.i, c.j}) {
+      ++checks[s];
+      disagreements[s] += bad ? 1 : 0;
+    }
+  }
+  std::vector<Calibration::Rejected> rejected;
+  for (int s = 0; s < n; ++s) {
+    const double share = checks[s] ? static_cast<double>(disagreements[s]) / checks[s] : 0.0;
+    if (share > o.disagreeing_share) {
+      rejected.push_back({s, "its motions to " + std::to_string(disagreements[s]) + " of " + std::to_string(checks[s]) +
+                                 " other samples break A X = X B (robot and camera rotation angles or screw pitches "
+                                 "differ beyond " + number_text(degrees(angle_gate), 2) + " deg / " +
+                                 number_text(pitch_gate * 1e3, 2) + " mm): a wrong detection or a mismatched stamp"});
+    }
+  }
+  return rejected;
+}
+
+SampleSet without(const SampleSet& samples, const std::vector<int>& dropped) {
+  SampleSet kept = samples;
+  kept.samples.clear();
+  for (int i = 0; i < static_cast<int>(samples.samples.size()); ++i) {
+    if (std::find(dropped.begin(), dropped.end(), i) == dropped.end()) kept.samples.push_back(samples.samples[i]);
+  }
+  return kept;
+}
+
+}  // namespace
+
+Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, const OutlierOptions& o) {
+  const int n = static_cast<int>(samples.samples.size());
+  const int max_rejected = static_cast<int>(std::floor(o.max_rejected_fraction * n));
+  const auto too_many = [&](int count) {
+    return HandEyeError(ErrorCode::TooManyOutliers,
+                        std::to_string(count) + " of " + std::to_string(n) +
+                            " samples disagree with the rest (at most " + std::to_string(max_rejected) +
+                            " may be dropped)",
+                        "samples", "check the detections and the stamp pairing (robot TF at the image time), "
+                                   "and that the pattern is the configured one; then record the session again");
+  };
+  std::vector<Calibration::Rejected> rejected = n >= 6 ? consensus(samples, o) : std::vector<Calibration::Rejected>{};
+  if (static_cast<int>(rejected.size()) > max_rejected) throw too_many(static_cast<int>(rejected.size()));
+  std::vector<int> dropped;
+  for (const auto& r : rejected) dropped.push_back(r.index);
+
+  // Stage 2: residual gating, one sample at a time.
+  for (;;) {
+    std::vector<int> kept_index;
+    for (int i = 0; i < n; ++i) {
+      if (std::find(dropped.begin(), dropped.end(), i) == dropped.end()) kept_index.push_back(i);
+    }
+    const SampleSet kept = without(samples, dropped);
+    Calibration c = solve(kept, solver);
+    const Isometry3d pattern = pattern_pose(kept, c.T_parent_camera);
+    int worst = -1;
+    double worst_distance = o.residual_gate;
+    for (std::size_t k = 0; k < kept.samples.size(); ++k) {
+      const PoseSample& s = kept.samples[k];
+      const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
+      const SampleResidual r = sample_residual(kept.setup, s, c.T_parent_camera, pattern);
+      if (r.error.norm() < 1e-9) continue;  // noise-free input: nothing to gate
+      const Matrix6d S = noise.camera.as_pose_covariance() +
+                         r.d_effector * noise.robot.as_pose_covariance() * r.d_effector.transpose();
+      const Eigen::LDLT<Matrix6d> ldlt(S);
+      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) continue;  // a zero-noise axis
+      const double d2 = r.error.dot(ldlt.solve(r.error));
+      if (d2 > worst_distance) {
+        worst_distance = d2;
+        worst = static_cast<int>(k);
+      }
+    }
+    if (worst < 0 || kept.samples.size() <= 4) {
+      std::sort(rejected.begin(), rejected.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+      c.rejected = rejected;
+      if (!rejected.empty()) {
+        c.warnings.push_back(std::to_string(rejected.size()) + " sample(s) rejected as outliers (see `rejected`)");
+      }
+      return c;
+    }
+    if (static_cast<int>(dropped.size()) + 1 > max_rejected) throw too_many(static_cast<int>(dropped.size()) + 1);
+    const int index = kept_index[worst];
+    dropped.push_back(index);
+    rejected.push_back({index, "its pattern pose is " + number_text(std::sqrt(worst_distance), 3) +
+                                   " sigma (Mahalanobis, 6 dof) from what X and its robot pose predict; gate " +
+                                   number_text(std::sqrt(o.residual_gate), 3) + " sigma"});
+  }
+}
+
+}  // namespace handeye

@@ -1,0 +1,132 @@
+// Outlier rejection: 10% gross outliers of the two kinds users meet (a flipped
+// tag pose, a detection paired with the wrong robot pose) must not move X
+// beyond 3 sigma, and clean sessions must keep their samples.
+#include "handeye_covariance/core/outliers.h"
+
+#include "handeye_covariance/core/monte_carlo.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+MeasurementNoise sim_noise() {
+  const double deg = M_PI / 180.0;
+  MeasurementNoise noise;
+  noise.camera = {std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.5e-3, 2) * Eigen::Matrix3d::Identity()};
+  noise.robot = {std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity()};
+  return noise;
+}
+
+/// The planar-target ambiguity of PnP: the pattern seen tilted the other way
+/// (its normal mirrored about the line of sight), at the same position.
+Eigen::Isometry3d flipped(const Eigen::Isometry3d& T_camera_pattern) {
+  const Eigen::Vector3d sight = T_camera_pattern.translation().normalized();
+  const Eigen::Vector3d normal = T_camera_pattern.linear().col(2);
+  const Eigen::Vector3d mirrored = 2.0 * normal.dot(sight) * sight - normal;
+  Eigen::Isometry3d out = T_camera_pattern;
+  out.linear() = Eigen::Quaterniond::FromTwoVectors(normal, mirrored).toRotationMatrix() * T_camera_pattern.linear();
+  return out;
+}
+
+struct Injected {
+  SampleSet samples;
+  std::vector<int> outliers;
+};
+
+/// n samples; every 10th has a flipped pattern pose or another sample's pattern pose.
+Injected with_outliers(Rng& rng, handeye::Setup setup, int n, bool estimated_noise) {
+  SimulatedSession s = simulate_session(rng, setup, typical_X(setup), n, sim_noise());
+  Injected out{s.samples, {}};
+  for (int i = 5; i < n; i += 10) {
+    PoseSample& sample = out.samples.samples[i];
+    sample.T_camera_pattern = (i / 10) % 2 == 0 ? flipped(sample.T_camera_pattern)
+                                                : s.samples.samples[i - 3].T_camera_pattern;  // wrong stamp
+    out.outliers.push_back(i);
+  }
+  if (estimated_noise) out.samples.noise.reset();
+  return out;
+}
+
+TEST(Outliers, TenPercentGrossOutliersAreRejectedAndXStaysWithin3Sigma) {
+  int sessions = 0, missed = 0, false_rejections = 0, beyond = 0;
+  for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
+    for (bool estimated : {false, true}) {
+      for (unsigned seed = 1; seed <= 10; ++seed) {
+        Rng rng(seed + (setup == Setup::EyeToHand ? 100 : 0));
+        const Injected in = with_outliers(rng, setup, 30, estimated);
+        std::optional<Calibration> plain;  // the plain estimator refuses most of these (AngleMismatch)
+        try {
+          plain = solve(in.samples);
+        } catch (const HandEyeError&) {
+        }
+        const Calibration robust = solve_robust(in.samples);
+        const Eigen::Isometry3d X = typical_X(setup);
+        std::vector<int> rejected;
+        for (const auto& r : robust.rejected) rejected.push_back(r.index);
+        for (int o : in.outliers) missed += std::count(rejected.begin(), rejected.end(), o) ? 0 : 1;
+        for (int r : rejected) false_rejections += std::count(in.outliers.begin(), in.outliers.end(), r) ? 0 : 1;
+        // The robust result is the outlier-free solve (the samples removed by hand) ...
+        SampleSet oracle = in.samples;
+        oracle.samples.clear();
+        for (int i = 0; i < 30; ++i) {
+          if (!std::count(in.outliers.begin(), in.outliers.end(), i)) oracle.samples.push_back(in.samples.samples[i]);
+        }
+        const Calibration o = solve(oracle);
+        EXPECT_TRUE(robust.T_parent_camera.isApprox(o.T_parent_camera, 1e-9)) << seed;
+        EXPECT_TRUE(robust.pose_covariance.isApprox(o.pose_covariance, 1e-9)) << seed;
+        // ... so X is within "3 sigma" of the truth: the 6-dof Mahalanobis distance
+        // below the chi2(6) quantile of 3 sigma's two-sided probability, 0.9973.
+        const Vector6d e = pose_error(robust.T_parent_camera, X);
+        if (e.dot(robust.pose_covariance.ldlt().solve(e)) > 20.06) ++beyond;
+        ++sessions;
+        if (seed == 1) {
+          char without[96] = "refused by the plain estimator";
+          if (plain) {
+            const Vector6d ep = pose_error(plain->T_parent_camera, X);
+            std::snprintf(without, sizeof without, "off by %.2f mm / %.3f deg without rejection",
+                          ep.head<3>().norm() * 1e3, ep.tail<3>().norm() * 180 / M_PI);
+          }
+          std::printf("%s, noise %s: %s; with it off by %.3f mm / %.4f deg (1 sigma %.3f mm / %.4f deg), %zu rejected\n",
+                      to_string(setup), estimated ? "estimated" : "given", without, e.head<3>().norm() * 1e3,
+                      e.tail<3>().norm() * 180 / M_PI, max_sigma(robust.translation_covariance) * 1e3,
+                      max_sigma(robust.rotation_covariance) * 180 / M_PI, robust.rejected.size());
+        }
+      }
+    }
+  }
+  std::printf("%d sessions: %d outliers missed, %d good samples rejected, %d X beyond 3 sigma (6-dof)\n", sessions,
+              missed, false_rejections, beyond);
+  EXPECT_EQ(missed, 0);
+  EXPECT_LE(false_rejections, sessions / 10);
+  EXPECT_LE(beyond, 1);  // 0.0027 x 40 sessions: about 0.1 expected
+}
+
+TEST(Outliers, CleanSessionsKeepTheirSamplesAndTheirCovariance) {
+  int false_rejections = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    Rng rng(100 + seed);
+    const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 25, sim_noise());
+    const Calibration robust = solve_robust(s.samples);
+    false_rejections += static_cast<int>(robust.rejected.size());
+    if (robust.rejected.empty()) {
+      EXPECT_TRUE(robust.pose_covariance.isApprox(solve(s.samples).pose_covariance, 1e-12));
+    }
+  }
+  EXPECT_LE(false_rejections, 1) << "the gates are at chi2 0.9999 and 6 robust sigmas";
+}
+
+TEST(Outliers, TooManyDisagreeingSamplesAreRefused) {
+  Rng rng(7);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, sim_noise());
+  for (int i = 0; i < 5; ++i) s.samples.samples[2 * i + 1].T_camera_pattern = random_view(rng, {});
+  try {
+    solve_robust(s.samples);
+    FAIL() << "5 of 12 random pattern poses accepted";
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), ErrorCode::TooManyOutliers) << e.what();
+    EXPECT_NE(std::string(e.what()).find("stamp pairing"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace handeye
