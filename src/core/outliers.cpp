@@ -83,6 +83,16 @@ SampleSet without(const SampleSet& samples, const std::vector<int>& dropped) {
 
 }  // namespace
 
+Calibration solve_samples(const SampleSet& samples, bool reject) {
+  return reject ? solve_robust(samples) : solve(samples);
+}
+
+SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration) {
+  std::vector<int> dropped;
+  for (const auto& r : calibration.rejected) dropped.push_back(r.index);
+  return without(samples, dropped);
+}
+
 Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, const OutlierOptions& o) {
   const int n = static_cast<int>(samples.samples.size());
   const int max_rejected = static_cast<int>(std::floor(o.max_rejected_fraction * n));
@@ -108,20 +118,48 @@ Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, 
     const SampleSet kept = without(samples, dropped);
     Calibration c = solve(kept, solver);
     const Isometry3d pattern = pattern_pose(kept, c.T_parent_camera);
-    int worst = -1;
-    double worst_distance = o.residual_gate;
-    for (std::size_t k = 0; k < kept.samples.size(); ++k) {
+    // Squared Mahalanobis distance of each sample's residual (eq. 64-65) under its
+    // predicted covariance: its camera noise, its robot noise mapped through the
+    // chain, and the estimation error of X and of the pattern's mean pose, which
+    // every residual shares (P_bar = X^-1 V Y_bar, Y_bar = mean_j V_j^-1 X P_j).
+    const bool in_hand = kept.setup == Setup::EyeInHand;
+    const Isometry3d& X = c.T_parent_camera;
+    const std::size_t m = kept.samples.size();
+    Matrix6d dY_dX = Matrix6d::Zero(), Y_noise = Matrix6d::Zero();
+    for (const PoseSample& s : kept.samples) {
+      const Isometry3d V_inverse = in_hand ? s.T_base_effector : s.T_base_effector.inverse();
+      const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
+      dY_dX += compose_jacobian_right(V_inverse) * compose_jacobian_left(X, s.T_camera_pattern) / static_cast<double>(m);
+      const Matrix6d G = compose_jacobian_right(V_inverse * X) / static_cast<double>(m);
+      Y_noise += G * noise.camera.as_pose_covariance() * G.transpose();
+    }
+    std::vector<double> distance(m, 0.0);
+    for (std::size_t k = 0; k < m; ++k) {
       const PoseSample& s = kept.samples[k];
       const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
-      const SampleResidual r = sample_residual(kept.setup, s, c.T_parent_camera, pattern);
+      const SampleResidual r = sample_residual(kept.setup, s, X, pattern);
       if (r.error.norm() < 1e-9) continue;  // noise-free input: nothing to gate
+      const Isometry3d V = in_hand ? s.T_base_effector.inverse() : s.T_base_effector;
+      const Matrix6d dP_dY = compose_jacobian_right(X.inverse() * V);
+      const Matrix6d dP_dX = compose_jacobian_left(X.inverse(), V * pattern) * inverse_jacobian(X) + dP_dY * dY_dX;
       const Matrix6d S = noise.camera.as_pose_covariance() +
-                         r.d_effector * noise.robot.as_pose_covariance() * r.d_effector.transpose();
+                         r.d_effector * noise.robot.as_pose_covariance() * r.d_effector.transpose() +
+                         dP_dX * c.pose_covariance * dP_dX.transpose() + dP_dY * Y_noise * dP_dY.transpose();
       const Eigen::LDLT<Matrix6d> ldlt(S);
       if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) continue;  // a zero-noise axis
-      const double d2 = r.error.dot(ldlt.solve(r.error));
-      if (d2 > worst_distance) {
-        worst_distance = d2;
+      distance[k] = r.error.dot(ldlt.solve(r.error));
+    }
+    // A detector's decoupled covariance may still understate a correlated truth:
+    // when the typical distance exceeds chi2(6)'s median (5.35), the gate scales
+    // with it, so samples are judged against each other.
+    std::vector<double> sorted = distance;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double gate = o.residual_gate * std::max(1.0, sorted[sorted.size() / 2] / 5.348);
+    int worst = -1;
+    double worst_distance = gate;
+    for (std::size_t k = 0; k < distance.size(); ++k) {
+      if (distance[k] > worst_distance) {
+        worst_distance = distance[k];
         worst = static_cast<int>(k);
       }
     }
@@ -138,7 +176,7 @@ Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, 
     dropped.push_back(index);
     rejected.push_back({index, "its pattern pose is " + number_text(std::sqrt(worst_distance), 3) +
                                    " sigma (Mahalanobis, 6 dof) from what X and its robot pose predict; gate " +
-                                   number_text(std::sqrt(o.residual_gate), 3) + " sigma"});
+                                   number_text(std::sqrt(gate), 3) + " sigma"});
   }
 }
 

@@ -474,6 +474,12 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   }
   out << YAML::EndMap;
   out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << calibration.warnings;
+  out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;  // outliers left out, indices into the input
+  for (const auto& r : calibration.rejected) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << r.index << YAML::Key << "reason"
+        << YAML::Value << r.reason << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <set>
 
+#include "handeye_covariance/core/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -167,10 +168,11 @@ void CalibrationNode::samples_changed(const std::string& event) {
   if (sampler_.samples().size() >= 3) {
     try {
       const SampleSet set = sample_set();
-      estimate_ = solve(set);
+      estimate_ = solve_samples(set, config_.reject_outliers);
       publish_estimate(*estimate_);
+      const SampleSet kept = without_rejected(set, *estimate_);
       const SuggestOptions options = suggest_options(config_.suggest_criterion);
-      const Suggestion s = rank_candidates(set, *estimate_, candidates(set, options), options);
+      const Suggestion s = rank_candidates(kept, *estimate_, candidates(kept, options), options);
       if (!s.ranked.empty()) next_pose_ = s.ranked.front();
     } catch (const HandEyeError& e) {
       last_event_ = event + (estimate_ ? "; no next pose: " : "; no estimate yet: ") + e.what();
@@ -201,6 +203,10 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
     // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
     status.object_error_mm = object_sigma(X, config_.working_distance) * 1e3;
     status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
+    for (const auto& r : estimate_->rejected) {
+      status.rejected_samples.push_back(r.index);
+      status.rejected_reasons.push_back(r.reason);
+    }
   }
   if (next_pose_) {
     status.has_suggestion = true;
@@ -231,7 +237,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
   const SampleSet set = sample_set();
   try {
-    calibration_ = solve(set);
+    calibration_ = solve_samples(set, config_.reject_outliers);
   } catch (const HandEyeError& e) {
     res.success = false;
     res.message = e.what();
@@ -255,6 +261,10 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
   res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
   res.warnings = c.warnings;
+  for (const auto& r : c.rejected) {
+    res.rejected_samples.push_back(r.index);
+    res.rejected_reasons.push_back(r.reason);
+  }
   res.message = "X = T_" + config_.parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
                 " samples; worst-axis 1 sigma " + number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
@@ -407,7 +417,7 @@ bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Respo
     return true;
   }
   try {
-    const SampleSet set = sample_set();
+    const SampleSet set = without_rejected(sample_set(), *estimate_);
     const SuggestOptions options = suggest_options(req.criterion);
     const Suggestion s = rank_candidates(set, *estimate_, candidates(set, options), options);
     if (s.ranked.empty()) {

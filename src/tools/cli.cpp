@@ -12,6 +12,7 @@
 #include "handeye_covariance/core/monte_carlo_study.h"
 #include "handeye_covariance/core/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
+#include "handeye_covariance/core/outliers.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/io/summary.h"
@@ -51,10 +52,12 @@ std::string default_result_path(const std::string& input) {
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string input, output, noise_path;
+  bool keep_outliers = false;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
       "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
+      "keep-outliers", po::bool_switch(&keep_outliers), "samples: do not reject wrong detections (they are by default)")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
   po::variables_map vm;
@@ -70,7 +73,8 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
     std::get<SampleSet>(data).noise = io::read_noise_file(noise_path);
   }
   const bool from_samples = std::holds_alternative<SampleSet>(data);
-  const Calibration calibration = from_samples ? solve(std::get<SampleSet>(data)) : solve(std::get<MotionSet>(data));
+  const Calibration calibration =
+      from_samples ? solve_samples(std::get<SampleSet>(data), !keep_outliers) : solve(std::get<MotionSet>(data));
   const io::ResultContext context =
       from_samples ? io::context_of(std::get<SampleSet>(data)) : io::context_of(std::get<MotionSet>(data));
   io::write_file_atomically(output, io::format_result(calibration, context));
@@ -193,7 +197,7 @@ int bag_command(const std::vector<std::string>& args, std::ostream& out, std::os
   if (!config.noise_config.empty()) noise = io::read_noise_file(config.noise_config);
   ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
   const BagReplay replay = replay_bag(bag_path, config, noise, [&](double f) { progress(f); });
-  const Calibration calibration = solve(replay.samples);  // before writing anything
+  const Calibration calibration = solve_samples(replay.samples, config.reject_outliers);  // before writing anything
 
   out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
   for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
@@ -480,7 +484,10 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
       SampleSet unlabelled = samples;  // its own noise block is what is being measured
       unlabelled.noise.reset();
       for (PoseSample& s : unlabelled.samples) s.noise.reset();
-      estimate = noise_from_residuals(samples, solve(unlabelled).T_parent_camera, true, robot);
+      // Outliers would inflate the estimate: measure on the samples that agree.
+      const Calibration fitted = solve_robust(unlabelled);
+      for (const auto& r : fitted.rejected) out << "  left out samples[" << r.index << "]: " << r.reason << "\n";
+      estimate = noise_from_residuals(without_rejected(samples, fitted), fitted.T_parent_camera, true, robot);
     }
   }
   const NoiseEstimate& e = *estimate;
@@ -539,8 +546,9 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   }
   options.max_step_translation = reach_mm * 1e-3;
   options.max_step_rotation = reach_deg * M_PI / 180.0;
-  const SampleSet samples = io::read_samples(input);
-  const Calibration calibration = solve(samples);
+  const SampleSet all = io::read_samples(input);
+  const Calibration calibration = solve_robust(all);
+  const SampleSet samples = without_rejected(all, calibration);  // plan from the consistent samples
   const std::vector<Eigen::Isometry3d> given =
       candidates_path.empty() ? std::vector<Eigen::Isometry3d>{} : io::read_candidate_poses(candidates_path);
   const std::vector<Eigen::Isometry3d> candidates =

@@ -8,9 +8,13 @@
 //     lower quartile of the differences over all pairs), with floors for noise-free input.
 //  2. Residual gating after the solve. Each sample's pattern pose is compared
 //     with what X, its robot pose and the pattern's mean pose predict (eq.
-//     64-65); its Mahalanobis distance under the camera noise plus the robot
-//     noise mapped through the chain must stay below the chi2(6) 0.9999 quantile.
-//     The worst offender is dropped and X re-solved, one at a time.
+//     64-65). Its Mahalanobis distance is taken under the predicted covariance
+//     of that residual: camera noise, robot noise mapped through the chain, and
+//     the estimation error of X and of the mean pose. It must stay below the
+//     chi2(6) 0.9999 quantile, scaled up by (median distance / chi2(6) median)
+//     when that exceeds 1 (a detector's decoupled covariance can understate a
+//     correlated truth). The worst offender is dropped and X re-solved, one at
+//     a time.
 // At most `max_rejected_fraction` of the samples are rejected; beyond that the
 // session is refused as inconsistent.
 #pragma once
@@ -36,5 +40,11 @@ struct OutlierOptions {
 /// dropped (indices into `samples`) and why. Throws like solve(), and
 /// TooManyOutliers when more than max_rejected_fraction would be rejected.
 Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver = {}, const OutlierOptions& options = {});
+
+/// solve_robust, or plain solve when `reject` is false: one switch for every tool.
+Calibration solve_samples(const SampleSet& samples, bool reject);
+
+/// The samples without those `calibration.rejected` names.
+SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);
 
 }  // namespace handeye

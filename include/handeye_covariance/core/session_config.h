@@ -25,6 +25,7 @@ struct SessionConfig {
   double tf_poll_rate = 30.0;            // Hz
   double working_distance = 0.7;         // m
   double target_tolerance_mm = 1.0;
+  bool reject_outliers = true;  // outliers.h: consensus + residual gating before the covariance
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
@@ -65,6 +66,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("tf_poll_rate", c.tf_poll_rate, 1.0);
   visit("working_distance", c.working_distance, 1.0);
   visit("target_tolerance_mm", c.target_tolerance_mm, 1.0);
+  visit("reject_outliers", c.reject_outliers, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
   visit("reach_translation_mm", c.reach_translation, mm);
