@@ -340,3 +340,26 @@ TEST(Cli, SuggestRefusesBadRequests) {
 }
 
 }  // namespace suggest_test
+
+namespace outlier_test {
+
+TEST(Cli, SolveRejectsAWrongDetectionAndReportsIt) {
+  const std::string samples = temp("o_samples.yaml"), corrupted = temp("o_corrupted.yaml"), result = temp("o_result.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --samples 20 --seed 16").exit_code, 0);
+  handeye::SampleSet set = handeye::io::read_samples(samples);
+  set.samples[7].T_camera_pattern = set.samples[4].T_camera_pattern;  // paired with the wrong robot pose
+  handeye::io::write_file_atomically(corrupted, handeye::io::format_samples(set));
+  const CliRun r = run("solve --input " + corrupted + " --output " + result);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("rejected samples[7]:"), std::string::npos) << r.out;
+  const YAML::Node file = YAML::LoadFile(result);
+  ASSERT_EQ(file["rejected"].size(), 1u);
+  EXPECT_EQ(file["rejected"][0]["index"].as<int>(), 7);
+  EXPECT_EQ(file["samples_used"].as<int>(), 19);
+  // Without rejection the estimator refuses the set (the motion angles disagree).
+  const CliRun kept = run("solve --keep-outliers --input " + corrupted + " --output " + temp("o_kept.yaml"));
+  EXPECT_EQ(kept.exit_code, 2);
+  EXPECT_NE(kept.err.find("AngleMismatch"), std::string::npos) << kept.err;
+}
+
+}  // namespace outlier_test

@@ -176,6 +176,28 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_LE((conversions::to_eigen(again.response.calibration.pose.pose).matrix() - X.pose.matrix()).norm(), 1e-9)
       << "save/load round trip changed the result";
 
+  // A wrong detection (sample 3 paired with sample 0's pattern pose) is left out
+  // and named in the response and in ~status.
+  SampleSet corrupted = io::read_samples(save.request.path);
+  corrupted.samples[3].T_camera_pattern = corrupted.samples[0].T_camera_pattern;
+  io::write_file_atomically("/tmp/handeye_covariance_rostest/corrupted_samples.yaml", io::format_samples(corrupted));
+  LoadSamples load_corrupted;
+  load_corrupted.request.path = "/tmp/handeye_covariance_rostest/corrupted_samples.yaml";
+  ASSERT_TRUE(test::call(kNs + "load_samples", load_corrupted));
+  ASSERT_TRUE(load_corrupted.response.success) << load_corrupted.response.message;
+  Calibrate with_outlier;
+  ASSERT_TRUE(test::call(kNs + "calibrate", with_outlier));
+  ASSERT_TRUE(with_outlier.response.success) << with_outlier.response.message;
+  ASSERT_EQ(with_outlier.response.rejected_samples.size(), 1u);
+  EXPECT_EQ(with_outlier.response.rejected_samples[0], 3);
+  EXPECT_NE(with_outlier.response.rejected_reasons[0].find("A X = X B"), std::string::npos)
+      << with_outlier.response.rejected_reasons[0];
+  EXPECT_TRUE(test::wait_for([&] { return status.latest.rejected_samples.size() == 1; }, 5.0));
+  EXPECT_LE((conversions::to_eigen(with_outlier.response.calibration.pose.pose).translation() - X.pose.translation()).norm(),
+            3.0 * std::sqrt(X.covariance.topLeftCorner<3, 3>().trace()))
+      << "the outlier moved X";
+  ASSERT_TRUE(test::call(kNs + "load_samples", load));  // back to the real session
+
   // Manual sampling: once the robot stands still (at most ~2 s away), one sample
   // may be taken; the same pose a second time is refused as a near duplicate.
   TakeSample take;
