@@ -14,7 +14,11 @@ Vector3d sample_gaussian(Rng& rng, const Matrix3d& covariance) {
   // Eigen-decomposition rather than Cholesky so singular (e.g. zero) noise works.
   const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(covariance);
   std::normal_distribution<double> normal(0.0, 1.0);
-  Vector3d z(normal(rng), normal(rng), normal(rng));
+  // Draws in a fixed order (z, y, x). Three draws as constructor arguments are
+  // unsequenced: gcc drew them right to left and clang left to right, so seeded
+  // data differed between compilers. This keeps gcc's order (and every figure).
+  const double z2 = normal(rng), z1 = normal(rng), z0 = normal(rng);
+  const Vector3d z(z0, z1, z2);
   const Vector3d sd = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
   return eig.eigenvectors() * sd.cwiseProduct(z);
 }
@@ -25,7 +29,8 @@ Isometry3d random_pose(Rng& rng, double translation_extent) {
   const Eigen::Quaterniond q(std::sqrt(u1) * std::cos(u3), std::sqrt(1.0 - u1) * std::sin(u2),
                              std::sqrt(1.0 - u1) * std::cos(u2), std::sqrt(u1) * std::sin(u3));
   std::uniform_real_distribution<double> box(-translation_extent, translation_extent);
-  return se3::make_pose(q.toRotationMatrix(), Vector3d(box(rng), box(rng), box(rng)));
+  const double z = box(rng), y = box(rng), x = box(rng);  // a fixed order; see sample_gaussian
+  return se3::make_pose(q.toRotationMatrix(), Vector3d(x, y, z));
 }
 
 Isometry3d perturb(Rng& rng, const Isometry3d& pose, const DecoupledCovariance& noise) {
@@ -74,7 +79,10 @@ Isometry3d random_view(Rng& rng, const ViewpointOptions& options) {
   std::uniform_real_distribution<double> offset(-options.max_offset, options.max_offset);
   const Vector3d camera_position =
       so3::exp(tilt * tilt_axis) * Vector3d(0.0, 0.0, distance) +
-      R_pattern_camera * Vector3d(offset(rng), offset(rng), 0.0);
+      R_pattern_camera * [&] {
+        const double y = offset(rng), x = offset(rng);  // a fixed order; see sample_gaussian
+        return Vector3d(x, y, 0.0);
+      }();
   return se3::make_pose(R_pattern_camera, camera_position).inverse();
 }
 

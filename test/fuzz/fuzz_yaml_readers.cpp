@@ -1,0 +1,56 @@
+// libFuzzer target: every YAML reader of the package on the same bytes. A
+// reader may only return or throw HandEyeError (a named, actionable error);
+// anything else (another exception, a crash, a leak, undefined behaviour under
+// UBSan) is a bug. Readers that accept the input are followed by what a tool
+// would do next, on small inputs: the estimator (samples, motions) or the
+// object-pose chain (a result and a pose).
+//
+// Short run (./scripts/test):  fuzz_yaml_readers -runs=20000 test/fuzz/corpus/yaml
+// Long run (documented):      fuzz_yaml_readers -max_total_time=3600 -jobs=2 <a copy of the corpus>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/object_pose.h"
+#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/io/yaml_io.h"
+
+namespace {
+
+template <typename F>
+void named_errors_only(F&& f) {
+  try {
+    f();
+  } catch (const handeye::HandEyeError&) {
+    // expected: a refusal with its reason
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace handeye;
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  named_errors_only([&] {
+    const SampleSet s = io::parse_samples(text, "fuzz");
+    if (s.samples.size() <= 8) named_errors_only([&] { solve_robust(s); });
+    io::parse_samples(io::format_samples(s), "round trip");  // what we write, we read
+  });
+  named_errors_only([&] {
+    const MotionSet m = io::parse_motions(text, "fuzz");
+    if (m.motions.size() <= 8) named_errors_only([&] { solve(m); });
+  });
+  named_errors_only([&] {
+    const io::CalibrationFile c = io::parse_result(text, "fuzz");
+    ObjectPoseInput in;
+    in.X = c.T_parent_camera;
+    in.T_camera_object = c.T_parent_camera;
+    in.T_base_effector = c.T_parent_camera;
+    named_errors_only([&] { object_in_base(in); });
+  });
+  named_errors_only([&] { io::parse_pose_file(text, "fuzz"); });
+  named_errors_only([&] { io::parse_candidate_poses(text, "fuzz"); });
+  named_errors_only([&] { io::parse_tag_layout(text, "fuzz"); });
+  return 0;
+}
