@@ -2,9 +2,11 @@
 
 #include <tf2/exceptions.h>
 
+#include <cmath>
 #include <set>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 
 namespace handeye {
@@ -59,6 +61,21 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
   if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-3) {
     result.refusal = Refusal{"bad_quaternion", "a detection's quaternion has norm " + number_text(norm) +
                                                    "; expected a unit quaternion"};
+    return result;
+  }
+  if (detection.covariance) {
+    try {  // a sample with a NaN or negative variance would poison every later solve
+      check_covariance(*detection.covariance, "detection covariance");
+    } catch (const HandEyeError& e) {
+      result.refusal = Refusal{"bad_covariance", std::string("a detection's covariance is unusable: ") + e.what() +
+                                                     ". Fix the detector, or send an all-zero covariance to use the "
+                                                     "configured noise"};
+      return result;
+    }
+  }
+  if (!std::isfinite(detection.pose.position.x) || !std::isfinite(detection.pose.position.y) ||
+      !std::isfinite(detection.pose.position.z)) {
+    result.refusal = Refusal{"bad_position", "a detection's position is NaN or Inf"};
     return result;
   }
   Observation o;
