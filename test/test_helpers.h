@@ -37,6 +37,15 @@ inline Vector6d pose_perturbation(const Eigen::Isometry3d& perturbed, const Eige
   return d;
 }
 
+/// `handeye sim`'s default noise: pattern 0.5 mm / 0.05 deg, robot 0.05 mm / 0.01 deg (1 sigma per axis).
+inline MeasurementNoise sim_noise() {
+  const double deg = M_PI / 180.0;
+  MeasurementNoise noise;
+  noise.camera = {std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.5e-3, 2) * Eigen::Matrix3d::Identity()};
+  noise.robot = {std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity()};
+  return noise;
+}
+
 /// Applies a perturbation (dt, xi_R) to a pose: R = exp(xi_R) R, t = t + dt.
 inline Eigen::Isometry3d apply(const Eigen::Isometry3d& pose, const Vector6d& d) {
   return se3::make_pose(so3::exp(d.tail<3>()) * pose.linear(), pose.translation() + d.head<3>());

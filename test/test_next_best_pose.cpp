@@ -9,14 +9,6 @@
 namespace handeye {
 namespace {
 
-MeasurementNoise sim_noise() {
-  const double deg = M_PI / 180.0;
-  MeasurementNoise noise;
-  noise.camera = {std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.5e-3, 2) * Eigen::Matrix3d::Identity()};
-  noise.robot = {std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity()};
-  return noise;
-}
-
 TEST(NextBestPose, CriteriaAreTheObjectSigmaAndTheLogDeterminant) {
   Matrix6d C = Matrix6d::Zero();
   C.diagonal() << 1e-8, 4e-8, 2e-8, 1e-8, 4e-8, 9e-8;
@@ -36,7 +28,7 @@ TEST(NextBestPose, CriteriaAreTheObjectSigmaAndTheLogDeterminant) {
 TEST(NextBestPose, CandidatesAreReachableDistinctViews) {
   for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
     Rng rng(4);
-    const SimulatedSession session = simulate_session(rng, setup, typical_X(setup), 5, sim_noise());
+    const SimulatedSession session = simulate_session(rng, setup, typical_X(setup), 5, test::sim_noise());
     const Calibration c = solve(session.samples);
     SuggestOptions options;
     options.max_step_translation = 0.3;
@@ -60,7 +52,7 @@ TEST(NextBestPose, CandidatesAreReachableDistinctViews) {
 
 TEST(NextBestPose, RankingPredictsWhatAddingThePoseGives) {
   Rng rng(5);
-  const SimulatedSession session = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 6, sim_noise());
+  const SimulatedSession session = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 6, test::sim_noise());
   const Calibration c = solve(session.samples);
   SuggestOptions options;
   options.candidates = 40;
@@ -87,7 +79,7 @@ TEST(NextBestPose, APlansPredictedCovarianceIsHonestUnderMonteCarlo) {
   // Plan 6 poses from 3, then measure M noisy sessions at the 9 poses: the
   // covariance predicted before any of them was measured must match the errors.
   for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
-    const MeasurementNoise noise = sim_noise();
+    const MeasurementNoise noise = test::sim_noise();
     Rng rng(6);
     const Eigen::Isometry3d X = typical_X(setup);
     const SimulatedSession start = simulate_session(rng, setup, X, 3, noise);

@@ -9,14 +9,6 @@
 namespace handeye {
 namespace {
 
-MeasurementNoise sim_noise() {
-  const double deg = M_PI / 180.0;
-  MeasurementNoise noise;
-  noise.camera = {std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.5e-3, 2) * Eigen::Matrix3d::Identity()};
-  noise.robot = {std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity()};
-  return noise;
-}
-
 /// The planar-target ambiguity of PnP: the pattern seen tilted the other way
 /// (its normal mirrored about the line of sight), at the same position.
 Eigen::Isometry3d flipped(const Eigen::Isometry3d& T_camera_pattern) {
@@ -35,7 +27,7 @@ struct Injected {
 
 /// n samples; every 10th has a flipped pattern pose or another sample's pattern pose.
 Injected with_outliers(Rng& rng, handeye::Setup setup, int n, bool estimated_noise) {
-  SimulatedSession s = simulate_session(rng, setup, typical_X(setup), n, sim_noise());
+  SimulatedSession s = simulate_session(rng, setup, typical_X(setup), n, test::sim_noise());
   Injected out{s.samples, {}};
   for (int i = 5; i < n; i += 10) {
     PoseSample& sample = out.samples.samples[i];
@@ -105,7 +97,7 @@ TEST(Outliers, CleanSessionsKeepTheirSamplesAndTheirCovariance) {
   int false_rejections = 0;
   for (unsigned seed = 1; seed <= 20; ++seed) {
     Rng rng(100 + seed);
-    const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 25, sim_noise());
+    const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 25, test::sim_noise());
     const Calibration robust = solve_robust(s.samples);
     false_rejections += static_cast<int>(robust.rejected.size());
     if (robust.rejected.empty()) {
@@ -117,7 +109,7 @@ TEST(Outliers, CleanSessionsKeepTheirSamplesAndTheirCovariance) {
 
 TEST(Outliers, TooManyDisagreeingSamplesAreRefused) {
   Rng rng(7);
-  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, sim_noise());
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, test::sim_noise());
   for (int i = 0; i < 5; ++i) s.samples.samples[2 * i + 1].T_camera_pattern = random_view(rng, {});
   try {
     solve_robust(s.samples);
