@@ -2,6 +2,8 @@
 
 #include <tf2/exceptions.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -18,6 +20,15 @@ namespace handeye {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+constexpr std::size_t kAgeWindow = 300;  // detections: 10 s at 30 Hz
+
+/// The q-quantile (0..1) of `values`, by the nearest rank.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(std::min<double>(values.size() - 1, std::floor(q * values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
 
 std::string expand_home(const std::string& path) {
   if (path.rfind("~/", 0) != 0) return path;
@@ -106,7 +117,11 @@ void CalibrationNode::on_tags(const TagDetectionArray::ConstPtr& msg) {
   std::optional<Refusal> refusal;
   const std::optional<Detection> detection = select_detection(*msg, config_.tag_ids, refusal);
   if (refusal) refuse(refusal->message);
-  if (detection) observe(*detection);
+  if (detection) {
+    observe(*detection);
+  } else {
+    record_handled(msg->header.stamp);
+  }
 }
 
 void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
@@ -123,6 +138,19 @@ void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
 }
 
 void CalibrationNode::observe(const Detection& detection) {
+  handle(detection);
+  record_handled(detection.stamp);
+}
+
+void CalibrationNode::record_handled(const ros::Time& stamp) {
+  const double age = stamp.isZero() ? 0.0 : (ros::Time::now() - stamp).toSec();
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++detections_received_;
+  detection_ages_.push_back(age);
+  if (detection_ages_.size() > kAgeWindow) detection_ages_.pop_front();
+}
+
+void CalibrationNode::handle(const Detection& detection) {
   // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.
   if (!detection.stamp.isZero()) {
     tf_buffer_.canTransform(config_.frames.base, config_.frames.effector, detection.stamp,
@@ -192,6 +220,11 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
   status.child_frame = config_.frames.camera;
   status.working_distance = config_.working_distance;
   status.target_tolerance_mm = config_.target_tolerance_mm;
+  status.detections_received = detections_received_;
+  const std::vector<double> ages(detection_ages_.begin(), detection_ages_.end());
+  status.detection_age_median_ms = quantile(ages, 0.5) * 1e3;
+  status.detection_age_p99_ms = quantile(ages, 0.99) * 1e3;
+  status.detection_age_max_ms = ages.empty() ? 0.0 : *std::max_element(ages.begin(), ages.end()) * 1e3;
   if (estimate_) {
     const PoseWithCovariance X{estimate_->T_parent_camera, estimate_->pose_covariance};
     status.has_estimate = true;

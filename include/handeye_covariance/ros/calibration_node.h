@@ -10,6 +10,8 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <cstdint>
+#include <deque>
 #include <mutex>
 #include <optional>
 
@@ -36,6 +38,9 @@ class CalibrationNode {
   void on_tags(const TagDetectionArray::ConstPtr& msg);
   void on_tf_poll(const ros::TimerEvent&);
   void observe(const Detection& detection);
+  void handle(const Detection& detection);
+  /// Counts a handled detection and its age (now - stamp) for ~status.
+  void record_handled(const ros::Time& stamp);
 
   bool calibrate(Calibrate::Request&, Calibrate::Response&);
   bool take_sample(TakeSample::Request&, TakeSample::Response&);
@@ -79,6 +84,8 @@ class CalibrationNode {
   std::vector<Eigen::Isometry3d> candidate_poses_;  // from config_.candidate_poses_file
   std::string last_event_ = "started";
   ros::Time last_tf_stamp_;
+  std::uint32_t detections_received_ = 0;
+  std::deque<double> detection_ages_;  // s, the last kAgeWindow handled detections
 };
 
 }  // namespace handeye
