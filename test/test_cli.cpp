@@ -12,28 +12,13 @@
 
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "cli_helpers.h"
 
 namespace {
 
-struct CliRun {
-  int exit_code;
-  std::string out, err;
-};
-
-CliRun run(const std::string& args) {
-  const std::string dir = ::testing::TempDir();
-  const std::string out_file = dir + "/cli_stdout", err_file = dir + "/cli_stderr";
-  const std::string command = std::string(HANDEYE_CLI) + " " + args + " >" + out_file + " 2>" + err_file;
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, handeye::io::read_file(out_file),
-          handeye::io::read_file(err_file)};
-}
-
-std::string temp(const std::string& name) {
-  const std::string path = ::testing::TempDir() + "/cli_" + name;
-  std::filesystem::remove(path);
-  return path;
-}
+using handeye::test::CliRun;
+using handeye::test::run;
+using handeye::test::temp;
 
 TEST(Cli, HelpListsTheSubcommands) {
   const CliRun r = run("--help");

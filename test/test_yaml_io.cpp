@@ -124,6 +124,29 @@ TEST(YamlIo, NamedErrorsSayWhereAndHowToFix) {
                      ErrorCode::InvalidNoise, "noise.effector.rotation");
 }
 
+std::string with_effector_matrix(const std::string& numbers) {
+  std::string text = kValid;
+  const std::string quaternion_form = "{translation: [0.1, 0.2, 0.3], rotation: [0, 0, 0, 1]}";
+  return text.replace(text.find(quaternion_form), quaternion_form.size(), "{matrix: [" + numbers + "]}");
+}
+
+TEST(YamlIo, PoseAsAMatrixIsTheSamePoseAndBadRotationsAreRefused) {
+  // A rotation of 30 deg about z, printed with 6 decimals as exported by a controller.
+  const Isometry3d expected = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, M_PI / 6)), Eigen::Vector3d(0.1, 0.2, 0.3));
+  const std::string rounded = "0.866025, -0.5, 0, 0.1,  0.5, 0.866025, 0, 0.2,  0, 0, 1, 0.3,  0, 0, 0, 1";
+  const Isometry3d read = io::parse_samples(with_effector_matrix(rounded), "test.yaml").samples[0].T_base_effector;
+  EXPECT_LT((read.matrix() - expected.matrix()).norm(), 1e-6);
+  EXPECT_LT((read.linear().transpose() * read.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-14);  // projected
+  // Sheared (a scale error of 1%), a reflection, a missing last row, too few numbers.
+  expect_parse_error(with_effector_matrix("1.01, 0, 0, 0.1,  0, 1, 0, 0.2,  0, 0, 1, 0.3,  0, 0, 0, 1"),
+                     ErrorCode::RotationNotOrthonormal, "samples[0].effector.matrix");
+  expect_parse_error(with_effector_matrix("-1, 0, 0, 0.1,  0, 1, 0, 0.2,  0, 0, 1, 0.3,  0, 0, 0, 1"),
+                     ErrorCode::RotationNotOrthonormal, "det = -1");
+  expect_parse_error(with_effector_matrix("1, 0, 0, 0.1,  0, 1, 0, 0.2,  0, 0, 1, 0.3,  0.1, 0.2, 0.3, 1"),
+                     ErrorCode::MalformedFile, "0 0 0 1");
+  expect_parse_error(with_effector_matrix("1, 0, 0,  0, 1, 0,  0, 0, 1"), ErrorCode::WrongLength, "expected 16");
+}
+
 TEST(YamlIo, ReadInputTellsSamplesFromMotions) {
   const std::string dir = ::testing::TempDir();
   io::write_file_atomically(dir + "/s.yaml", kValid);

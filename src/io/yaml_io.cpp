@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/SVD>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -83,8 +85,34 @@ std::array<double, N> as_numbers(const YAML::Node& node, const Location& at, con
   return values;
 }
 
+/// A 4x4 homogeneous matrix, row-major, as robot controllers and other tools
+/// export poses. Rounded printouts are accepted up to the quaternion reader's
+/// tolerance (|R^T R - I| <= 1e-3) and projected onto the nearest rotation
+/// (SVD); anything further off, or a reflection, is refused.
+Isometry3d read_pose_matrix(const YAML::Node& node, const Location& at) {
+  const auto m = as_numbers<16>(node, at, "4x4 homogeneous matrix, row-major");
+  if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the last row of a pose matrix must be 0 0 0 1", at.str(),
+                       "give T (maps child to parent) as 16 numbers, row-major; check that it is not transposed");
+  }
+  Matrix3d R;
+  R << m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10];
+  const double orthonormality = (R.transpose() * R - Matrix3d::Identity()).norm();
+  if (orthonormality > 1e-3 || R.determinant() <= 0.0) {
+    throw HandEyeError(ErrorCode::RotationNotOrthonormal,
+                       "the rotation block is not a rotation (|R^T R - I| = " + number_text(orthonormality, 4) +
+                           ", det = " + number_text(R.determinant(), 4) + ")",
+                       at.str(), "give a proper rotation (orthonormal, det +1) with enough digits; check the units and "
+                                 "the row/column order");
+  }
+  const Eigen::JacobiSVD<Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return se3::make_pose(svd.matrixU() * svd.matrixV().transpose(), Vector3d(m[3], m[7], m[11]));
+}
+
 Isometry3d read_pose(const YAML::Node& node, const Location& at) {
-  const std::string hint = "a pose is {translation: [x, y, z], rotation: [qx, qy, qz, qw]}";
+  const std::string hint =
+      "a pose is {translation: [x, y, z], rotation: [qx, qy, qz, qw]} or {matrix: [16 numbers, row-major]}";
+  if (node.IsMap() && node["matrix"]) return read_pose_matrix(node["matrix"], at / "matrix");
   const auto t = as_numbers<3>(require(node, "translation", at, hint), at / "translation", "translation x, y, z in m");
   const auto q = as_numbers<4>(require(node, "rotation", at, hint), at / "rotation", "quaternion qx, qy, qz, qw");
   const Eigen::Quaterniond unit =

@@ -1,5 +1,6 @@
 #include "handeye_covariance/ros/bag.h"
 
+#include <algorithm>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <rosbag/bag.h>
@@ -210,12 +211,20 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
                             ", not a TagDetectionArray, PoseWithCovarianceStamped or PoseStamped",
                         path, "point detections_topic at the detector's output");
         }
-        if (detection) detections.push_back(*detection);
+        if (detection) {
+          if (!detections.empty() && detection->stamp < detections.back().stamp) ++replay.stamps_went_back;
+          detections.push_back(*detection);
+        }
         if (progress && replay.messages[m.getTopic()] % 50 == 0) progress(0.5 * replay.messages[m.getTopic()] / total);
       }
       // The bag is ordered by receive time; the sampler needs capture (stamp) order.
+      // A stamp seen twice is the same image (a looping or duplicated recording): used once.
       std::stable_sort(detections.begin(), detections.end(),
                        [](const Detection& a, const Detection& b) { return a.stamp < b.stamp; });
+      const auto repeated = std::unique(detections.begin(), detections.end(),
+                                        [](const Detection& a, const Detection& b) { return a.stamp == b.stamp; });
+      replay.repeated_stamps = static_cast<int>(detections.end() - repeated);
+      detections.erase(repeated, detections.end());
       replay.detections = static_cast<int>(detections.size());
       for (std::size_t i = 0; i < detections.size(); ++i) {
         feed(detections[i]);
@@ -226,6 +235,14 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
   } catch (const rosbag::BagException& e) {
     throw HandEyeError(ErrorCode::IoError, std::string("the bag is corrupt or truncated: ") + e.what(), path,
                        "try `rosbag reindex` on a copy of it, or record again");
+  }
+  if (replay.detections == 0 && !replay.refusals.empty()) {  // messages came, but none held the pattern
+    const auto most = std::max_element(replay.refusals.begin(), replay.refusals.end(),
+                                       [](const auto& a, const auto& b) { return a.second < b.second; });
+    throw no_data("none of the " + std::to_string(replay.messages[config.detections_topic]) + " messages on `" +
+                      config.detections_topic + "` held the pattern; " + std::to_string(most->second) +
+                      " were refused: " + replay.refusal_examples[most->first],
+                  path, "set tag_ids (in --config) to the pattern's tag id(s), or [] to take a lone detection");
   }
   if (replay.detections == 0) {
     throw no_data("the bag has no detections on `" +

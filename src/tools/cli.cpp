@@ -206,6 +206,13 @@ int bag_command(const std::vector<std::string>& args, std::ostream& out, std::os
   for (const auto& [kind, count] : replay.refusals) {
     out << "  refused " << count << " x " << kind << ": " << replay.refusal_examples.at(kind) << "\n";
   }
+  if (replay.stamps_went_back > 0) {
+    out << "  header stamps went back " << replay.stamps_went_back
+        << " time(s) in the bag (a looping recording, or a detector publishing out of order): replayed in stamp order\n";
+  }
+  if (replay.repeated_stamps > 0) {
+    out << "  " << replay.repeated_stamps << " detection(s) repeat a stamp already seen (the same image twice): each used once\n";
+  }
   const io::ResultContext context = io::context_of(replay.samples);
   io::write_file_atomically(output, io::format_result(calibration, context));
   if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(replay.samples));

@@ -52,6 +52,8 @@ struct BagReplay {
   int observations = 0;                 // detections paired with a robot pose
   std::map<std::string, int> refusals;  // by kind: no_robot_tf, too_close, other_tags, ...
   std::map<std::string, std::string> refusal_examples;  // kind -> one full message
+  int stamps_went_back = 0;             // detections stamped before the previous one in the bag (a looping recording)
+  int repeated_stamps = 0;              // detections whose stamp was already seen: used once
   SampleSet samples;                    // with the noise model, ready to solve
   double duration = 0.0;                // s of bag
 };
