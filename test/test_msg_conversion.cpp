@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/ros/observations.h"
+
+#include <tf2/buffer_core.h>
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/vision/tag_renderer.h"
 #include "test_helpers.h"
@@ -49,6 +52,8 @@ TEST(MsgConversion, QuaternionNorm) {
   EXPECT_DOUBLE_EQ(conversions::quaternion_norm(q), 2.0);
 }
 
+// Every refusal of the detection -> sample path the node and the bag replay share,
+// each with its stable kind and a message that says what to fix.
 }  // namespace
 }  // namespace handeye
 
@@ -79,6 +84,72 @@ TEST(CameraInfoConversion, RoundTripsAndRefusesUncalibratedCameras) {
   sensor_msgs::CameraInfo odd = info;
   odd.D.resize(3);
   EXPECT_THROW(conversions::to_camera_model(odd), HandEyeError);
+}
+
+// Every refusal of the detection -> sample path the node and the bag replay share,
+// each with its stable kind and a message that says what to fix.
+TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
+  tf2::BufferCore tf;
+  geometry_msgs::TransformStamped robot;
+  robot.header.frame_id = "base_link";
+  robot.child_frame_id = "tool0";
+  robot.transform.rotation.w = 1.0;
+  for (double t : {10.0, 11.0}) {
+    robot.header.stamp = ros::Time(t);
+    tf.setTransform(robot, "test");
+  }
+  const SessionConfig config;
+  Detection good;
+  good.stamp = ros::Time(10.5);
+  good.pose.orientation.w = 1.0;
+  good.pose.position.z = 0.5;
+  ASSERT_TRUE(make_observation(tf, config, good).observation);
+
+  struct Row {
+    std::string kind, mentions;
+    std::function<void(Detection&)> edit;
+  };
+  const std::vector<Row> rows = {
+      {"zero_stamp", "image time", [](Detection& d) { d.stamp = ros::Time(); }},
+      {"bad_quaternion", "unit quaternion", [](Detection& d) { d.pose.orientation.w = 1.5; }},
+      {"bad_quaternion", "norm nan", [](Detection& d) { d.pose.orientation.x = std::nan(""); }},
+      {"bad_covariance", "all-zero covariance",
+       [](Detection& d) { d.covariance = DecoupledCovariance{-Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity()}; }},
+      {"bad_position", "NaN or Inf", [](Detection& d) { d.pose.position.y = INFINITY; }},
+      {"no_robot_tf", "robot state publisher", [](Detection& d) { d.stamp = ros::Time(12.0); }},
+      {"detection_frame", "tracking_base_frame", [](Detection& d) { d.frame = "other_camera"; }},
+  };
+  for (const Row& row : rows) {
+    Detection d = good;
+    row.edit(d);
+    const ObservationResult r = make_observation(tf, config, d);
+    ASSERT_TRUE(r.refusal) << row.kind;
+    EXPECT_FALSE(r.observation) << row.kind;
+    EXPECT_EQ(r.refusal->kind, row.kind);
+    EXPECT_NE(r.refusal->message.find(row.mentions), std::string::npos) << r.refusal->message;
+  }
+
+  // Choosing the pattern among the tags of a message.
+  TagDetectionArray tags;
+  tags.header.stamp = ros::Time(10.5);
+  TagDetection a, b;
+  a.id = {3};
+  b.id = {4};
+  a.pose.pose.pose = b.pose.pose.pose = good.pose;
+  tags.detections = {a, b};
+  std::optional<Refusal> refusal;
+  EXPECT_FALSE(select_detection(tags, {}, refusal));
+  ASSERT_TRUE(refusal);
+  EXPECT_NE(refusal->message.find("tag_ids"), std::string::npos) << refusal->message;
+  refusal.reset();
+  EXPECT_FALSE(select_detection(tags, {0}, refusal));
+  ASSERT_TRUE(refusal);
+  EXPECT_NE(refusal->message.find("tag_ids"), std::string::npos) << refusal->message;
+  refusal.reset();
+  const std::optional<Detection> chosen = select_detection(tags, {4}, refusal);
+  EXPECT_FALSE(refusal);
+  ASSERT_TRUE(chosen);
+  EXPECT_EQ(chosen->stamp, ros::Time(10.5));
 }
 
 }  // namespace
