@@ -110,7 +110,7 @@ TEST(ObjectLocalizer, PublishesEq68WithTheThreeCovariancesAndRefusesWithReasons)
   ASSERT_TRUE(rig.send(rig.detection(P, stamp + ros::Duration(0.01))));
   EXPECT_TRUE(test::wait_for([&] { return buffer.canTransform("base_link", "object", ros::Time(0)); }, 5.0));
 
-  // 3. Refusals: another camera's frame, no robot TF at the stamp, no covariance at all.
+  // 3. Refusals: another camera's frame, no robot TF at the stamp, no covariance at all, invalid numbers.
   ASSERT_TRUE(rig.send(rig.detection(P, ros::Time::now() - ros::Duration(0.1), "other_camera")));
   EXPECT_FALSE(rig.object);
   EXPECT_NE(rig.refusal.find("detection_frame"), std::string::npos) << rig.refusal;
@@ -120,6 +120,17 @@ TEST(ObjectLocalizer, PublishesEq68WithTheThreeCovariancesAndRefusesWithReasons)
   ASSERT_TRUE(rig.send(rig.detection({P.pose, Matrix6d::Zero()}, ros::Time::now() - ros::Duration(0.1))));
   EXPECT_FALSE(rig.object);
   EXPECT_NE(rig.refusal.find("no_detection_covariance"), std::string::npos) << rig.refusal;
+  PoseWithCovarianceStamped not_unit = rig.detection(P, ros::Time::now() - ros::Duration(0.1));
+  not_unit.pose.pose.orientation.w += 0.5;
+  ASSERT_TRUE(rig.send(not_unit));
+  EXPECT_FALSE(rig.object);
+  EXPECT_NE(rig.refusal.find("invalid_input"), std::string::npos) << rig.refusal;
+  EXPECT_NE(rig.refusal.find("QuaternionNotUnit"), std::string::npos) << rig.refusal;
+  PoseWithCovarianceStamped negative = rig.detection(P, ros::Time::now() - ros::Duration(0.1));
+  negative.pose.covariance[0] = -1e-6;  // a negative variance
+  ASSERT_TRUE(rig.send(negative));
+  EXPECT_FALSE(rig.object);
+  EXPECT_NE(rig.refusal.find("invalid_input"), std::string::npos) << rig.refusal;
 
   // 4. A calibration for the wrong parent frame is ignored, X stays.
   calibration.header.frame_id = "base_link";

@@ -3,6 +3,7 @@
 #include <std_msgs/String.h>
 #include <tf2/exceptions.h>
 
+#include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -113,6 +114,13 @@ void ObjectLocalizer::locate(const Detection& detection) {
   if (!detection.frame.empty() && detection.frame != camera_frame_) {
     refuse({"detection_frame", "a detection in frame `" + detection.frame + "` was ignored; X is calibrated for `" +
                                    camera_frame_ + "` (set ~tracking_base_frame)"});
+    return;
+  }
+  try {  // to_eigen would quietly normalise a wrong quaternion; refuse it, as make_observation does
+    const geometry_msgs::Quaternion& q = detection.pose.orientation;
+    checked_unit_quaternion(Eigen::Quaterniond(q.w, q.x, q.y, q.z), "the detection's orientation");
+  } catch (const HandEyeError& e) {
+    refuse({"invalid_input", e.what()});
     return;
   }
   ObjectPoseInput input;
