@@ -1,5 +1,6 @@
 // The real apriltag_detector node fed bad camera input (detector_refusals.test).
 // Its refusals are read where a user sees them: the log, on /rosout.
+#include <cv_bridge/cv_bridge.h>
 #include <gtest/gtest.h>
 #include <image_transport/image_transport.h>
 #include <ros/ros.h>
@@ -68,13 +69,7 @@ class Detector {
     std_msgs::Header header;
     header.stamp = ros::Time::now();
     header.frame_id = "camera_optical_frame";
-    sensor_msgs::ImagePtr msg(new sensor_msgs::Image);
-    msg->header = header;
-    msg->height = static_cast<uint32_t>(image.rows);
-    msg->width = static_cast<uint32_t>(image.cols);
-    msg->encoding = sensor_msgs::image_encodings::MONO8;
-    msg->step = static_cast<uint32_t>(image.cols);
-    msg->data.assign(image.data, image.data + image.total());
+    const sensor_msgs::ImagePtr msg = cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, image).toImageMsg();
     if (info) {
       sensor_msgs::CameraInfo stamped = *info;
       stamped.header = header;

@@ -119,12 +119,6 @@ TEST(CalibrationNode, BadServiceRequestsAreRefusedWithAReasonAndLoseNothing) {
   EXPECT_NE(remove.response.message.find("0..11"), std::string::npos) << remove.response.message;
   EXPECT_EQ(listed_samples(), 12);
 
-  SuggestPose suggest;
-  suggest.request.criterion = "smallest";
-  ASSERT_TRUE(test::call(kNs + "suggest_pose", suggest));
-  EXPECT_FALSE(suggest.response.success);
-  EXPECT_NE(suggest.response.message.find("object_sigma"), std::string::npos) << suggest.response.message;
-
   // A valid but degenerate session loads; /calibrate then refuses it and keeps the last calibration.
   LoadSamples degenerate;
   degenerate.request.path = write_file("translation.yaml", io::format_samples(parallel));

@@ -19,6 +19,7 @@
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/tag_renderer.h"
 
+#include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
 #include <sensor_msgs/image_encodings.h>
 
@@ -109,13 +110,7 @@ class RigSimulator {
     header.stamp = capture;
     header.frame_id = camera_;
     const cv::Mat image = renderer_->render(trajectory_.pattern_at(elapsed(capture)), rng_);
-    sensor_msgs::ImagePtr msg(new sensor_msgs::Image);
-    msg->header = header;
-    msg->height = static_cast<uint32_t>(image.rows);
-    msg->width = static_cast<uint32_t>(image.cols);
-    msg->encoding = sensor_msgs::image_encodings::MONO8;
-    msg->step = static_cast<uint32_t>(image.cols);
-    msg->data.assign(image.data, image.data + image.total());
+    const sensor_msgs::ImagePtr msg = cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, image).toImageMsg();
     sensor_msgs::CameraInfo info = conversions::to_camera_info(renderer_->camera());
     info.header = header;
     image_pub_.publish(msg);
