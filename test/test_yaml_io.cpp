@@ -116,6 +116,9 @@ TEST(YamlIo, NamedErrorsSayWhereAndHowToFix) {
   expect_parse_error(text.replace(text.find("0.5]"), 3, "abc"), ErrorCode::MalformedFile, "expected a number");
   text = kValid;
   expect_parse_error(text.replace(text.find("    pattern"), 57, ""), ErrorCode::MissingKey, "pattern");
+  // Found by fuzz_yaml_parse: a frame name that is not a name escaped as a yaml-cpp exception.
+  expect_parse_error("setup: eye_in_hand\nframes: {base: base_link, pattern: {a: b}}\nsamples: []\n",
+                     ErrorCode::MalformedFile, "frames.pattern");
   expect_parse_error(std::string(kValid) + "noise: {effector: {rotation: [1,0,0,0,1,0,0,0,1]}}\n",
                      ErrorCode::MissingKey, "noise.effector");
   expect_parse_error(std::string(kValid) +

@@ -62,6 +62,13 @@ double as_double(const YAML::Node& node, const Location& at) {
   }
 }
 
+std::string as_text(const YAML::Node& node, const Location& at) {
+  if (!node.IsScalar()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a name", at.str(), "write a plain name, e.g. base_link");
+  }
+  return node.Scalar();
+}
+
 template <std::size_t N>
 std::array<double, N> as_numbers(const YAML::Node& node, const Location& at, const std::string& what) {
   if (!node.IsSequence()) {
@@ -245,7 +252,7 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
   set.setup = read_setup(require(root, "setup", top, "add `setup: eye_in_hand` or `setup: eye_to_hand`"),
                          top / "setup");
   if (const YAML::Node frames = root["frames"]; frames && frames.IsMap()) {
-    auto name = [&](const char* key) { return frames[key] ? frames[key].as<std::string>() : std::string(); };
+    auto name = [&](const char* key) { return frames[key] ? as_text(frames[key], top / "frames" / key) : std::string(); };
     set.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
   }
   set.noise = optional_noise(root, top, "effector", "pattern");
@@ -613,6 +620,10 @@ TagLayout read_tag_layout(const std::string& path) { return parse_tag_layout(rea
 void read_session_config(const std::string& path, SessionConfig& config) {
   const YAML::Node root = load(read_file(path), path);
   const Location top{path, ""};
+  if (!root.IsNull() && !root.IsMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected `setting: value` lines", path,
+                       "see config/calibration_defaults.yaml for the settings and their form");
+  }
   std::set<std::string> known;
   for_each_setting(config, [&](const char* key, auto& member, double scale) {
     known.insert(key);
@@ -631,7 +642,7 @@ void read_session_config(const std::string& path, SessionConfig& config) {
     }
   });
   for (const auto& entry : root) {
-    const std::string key = entry.first.as<std::string>();
+    const std::string key = as_text(entry.first, top);
     if (!known.count(key)) {
       throw HandEyeError(ErrorCode::MalformedFile, "unknown setting `" + key + "`", path,
                          "use the node's parameter names (config/calibration_defaults.yaml, launch/calibrate.launch)");
