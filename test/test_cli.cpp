@@ -26,6 +26,10 @@ TEST(Cli, HelpListsTheSubcommands) {
   EXPECT_NE(r.out.find("solve"), std::string::npos);
   EXPECT_NE(r.out.find("sim"), std::string::npos);
   EXPECT_NE(r.out.find("bag"), std::string::npos);
+  // Every command name stands apart from its summary (a fixed width once printed "validateMonte-Carlo").
+  for (const char* name : {"solve", "sim", "bag", "compose", "noise", "suggest", "validate"}) {
+    EXPECT_NE(r.out.find("  " + std::string(name) + "  "), std::string::npos) << name << " in\n" << r.out;
+  }
   EXPECT_EQ(run("solve --help").exit_code, 0);
   EXPECT_NE(run("solve --help").out.find("--input"), std::string::npos);
 }

@@ -620,7 +620,11 @@ const std::map<std::string, Command>& commands() {
 void print_help(std::ostream& out) {
   out << "usage: handeye <command> [options]    (handeye <command> --help for its options)\n\n"
          "Hand-eye calibration AX = XB with the covariance of X.\n\ncommands:\n";
-  for (const auto& [name, command] : commands()) out << "  " << name << std::string(8 - name.size(), ' ') << command.summary << "\n";
+  std::size_t width = 0;
+  for (const auto& entry : commands()) width = std::max(width, entry.first.size());
+  for (const auto& [name, command] : commands()) {
+    out << "  " << name << std::string(width + 2 - name.size(), ' ') << command.summary << "\n";
+  }
   out << "\nexit codes: 0 success, 2 bad or degenerate input (reason on stderr, nothing written), "
          "1 internal error\n";
 }
