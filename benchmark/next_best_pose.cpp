@@ -62,7 +62,7 @@ Run run_session(Strategy strategy, Setup setup, unsigned seed, double target, in
     const Eigen::Isometry3d E =
         strategy == Strategy::Random ? pool.front() : rank_candidates(samples, c, pool, options).ranked.front().T_base_effector;
     // The robot goes there; the camera sees the true pattern, both with noise.
-    const Eigen::Isometry3d P = X.inverse() * (setup == Setup::EyeInHand ? E.inverse() : E) * session.T_world_pattern;
+    const Eigen::Isometry3d P = samples.rig.predicted_view(E, X, session.T_world_pattern);
     PoseSample s;
     s.T_base_effector = perturb(rng, E, noise.robot);
     s.T_camera_pattern = perturb(rng, P, noise.camera);

@@ -35,7 +35,7 @@ void expect_recovers_truth(Setup setup, unsigned seed) {
   const SimulatedBag bag = write_simulated_bag(path, options);
   EXPECT_LT(std::filesystem::file_size(path), 2u * 1024 * 1024);
   SessionConfig config;
-  config.eye_on_hand = setup == Setup::EyeInHand;
+  config.rig.setup = setup;
   const BagReplay replay = replay_bag(path, config, std::nullopt);
   EXPECT_EQ(replay.messages.at("/tf"), bag.tf_messages);
   EXPECT_EQ(replay.detections, bag.detections);

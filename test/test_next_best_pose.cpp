@@ -43,7 +43,7 @@ TEST(NextBestPose, CandidatesAreReachableDistinctViews) {
       const Eigen::Isometry3d P = c.T_parent_camera.inverse() * (setup == Setup::EyeInHand ? E.inverse() : E) * pattern;
       EXPECT_GE(P.translation().norm(), options.views.min_distance - 0.08);
       EXPECT_LE(P.translation().norm(), options.views.max_distance + 0.08);
-      EXPECT_TRUE(effector_for_view(setup, c.T_parent_camera, pattern, P).isApprox(E, 1e-9));
+      EXPECT_TRUE(session.samples.rig.effector_for_view(c.T_parent_camera, pattern, P).isApprox(E, 1e-9));
     }
     // Deterministic for a seed.
     EXPECT_TRUE(sample_candidates(session.samples, c, options).front().isApprox(candidates.front()));

@@ -44,7 +44,7 @@ std::string write_file(const std::string& name, const std::string& text) {
 SampleSet session(int n, Setup setup = Setup::EyeInHand) {
   Rng rng(17);
   SampleSet set = simulate_session(rng, setup, typical_X(setup), n, test::sim_noise()).samples;
-  if (setup == Setup::EyeInHand) set.frames = FrameNames{};  // the node's default frame names
+  if (setup == Setup::EyeInHand) set.rig.frames = FrameNames{};  // the node's default frame names
   return set;
 }
 

@@ -16,7 +16,7 @@ using test::pose_perturbation;
 ObjectPoseInput example_input(Setup setup) {
   Rng rng(3);
   ObjectPoseInput in;
-  in.setup = setup;
+  in.rig.setup = setup;
   in.T_base_effector.pose = random_pose(rng, 0.6);
   in.X.pose = typical_X(setup);
   in.T_camera_object.pose = random_view(rng, {});
@@ -88,7 +88,7 @@ TEST(ObjectPose, RefusesBadInputsNamingThem) {
   in.T_base_effector.pose.linear() *= 1.01;
   EXPECT_THROW(object_in_base(in), HandEyeError);
   // eye_to_hand ignores the robot pose entirely, even an invalid one.
-  in.setup = Setup::EyeToHand;
+  in.rig.setup = Setup::EyeToHand;
   EXPECT_NO_THROW(object_in_base(in));
 }
 
@@ -121,7 +121,7 @@ ObjectStudy run_object_study(Setup setup, int M, unsigned seed) {
     const Eigen::Isometry3d E = random_pose(rng, 0.5);
     const Eigen::Isometry3d truth = setup == Setup::EyeInHand ? E * X * P : X * P;
     ObjectPoseInput in;
-    in.setup = setup;
+    in.rig.setup = setup;
     in.T_base_effector = {perturb(rng, E, noise.robot), noise.robot.as_pose_covariance()};
     in.X = {c.T_parent_camera, c.pose_covariance};
     in.T_camera_object = {perturb(rng, P, noise.camera), noise.camera.as_pose_covariance()};

@@ -116,17 +116,17 @@ TEST(Sampler, DetectorNoiseBecomesPerSampleNoise) {
   detector.camera.rotation = 4e-6 * Eigen::Matrix3d::Identity();
   samples[1].noise = detector;
   // With configured noise: the detector's pattern noise and the configured robot noise.
-  SampleSet set = make_sample_set(Setup::EyeInHand, {}, configured, samples);
+  SampleSet set = make_sample_set(Rig{}, configured, samples);
   EXPECT_EQ(set.noise->camera.rotation, configured.camera.rotation);
   EXPECT_EQ(set.samples[1].noise->camera.rotation, detector.camera.rotation);
   EXPECT_EQ(set.samples[1].noise->robot.rotation, configured.robot.rotation);
   // Without: robot exact, and the detector's mean for the samples it did not cover.
-  set = make_sample_set(Setup::EyeInHand, {}, std::nullopt, samples);
+  set = make_sample_set(Rig{}, std::nullopt, samples);
   ASSERT_TRUE(set.noise.has_value());
   EXPECT_EQ(set.noise->camera.rotation, detector.camera.rotation);
   EXPECT_TRUE(set.noise->robot.rotation.isZero());
   // Neither: estimated.
-  EXPECT_FALSE(make_sample_set(Setup::EyeInHand, {}, std::nullopt, std::vector<PoseSample>(3)).noise.has_value());
+  EXPECT_FALSE(make_sample_set(Rig{}, std::nullopt, std::vector<PoseSample>(3)).noise.has_value());
 }
 
 }  // namespace

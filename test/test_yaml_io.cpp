@@ -38,8 +38,8 @@ TEST(YamlIo, SamplesRoundTripExactly) {
   SimulatedSession s = simulate_session(rng, Setup::EyeToHand, typical_X(Setup::EyeToHand), 7, paper_noise(1e-5));
   s.samples.samples[2].noise = paper_noise(1e-3);
   const SampleSet back = io::parse_samples(io::format_samples(s.samples), "memory");
-  EXPECT_EQ(back.setup, Setup::EyeToHand);
-  EXPECT_EQ(back.frames.camera, "camera_optical_frame");
+  EXPECT_EQ(back.rig.setup, Setup::EyeToHand);
+  EXPECT_EQ(back.rig.frames.camera, "camera_optical_frame");
   ASSERT_EQ(back.samples.size(), 7u);
   for (std::size_t i = 0; i < 7; ++i) {
     expect_same_pose(back.samples[i].T_base_effector, s.samples.samples[i].T_base_effector);

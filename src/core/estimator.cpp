@@ -689,21 +689,15 @@ Problem build(const SampleSet& set, int pair_window) {
     pattern[s].covariance = noise.camera;
     pattern[s].robot = false;
   }
-  const bool in_hand = set.setup == Setup::EyeInHand;
   for (std::size_t m = 0; m < p.pairs.size(); ++m) {
     const auto [i, j] = p.pairs[m];
-    const MotionPair motion = motion_between(set.setup, set.samples[i], set.samples[j]);
+    const MotionPair motion = motion_between(set.rig, set.samples[i], set.samples[j]);
     p.A.push_back(motion.A);
     p.B.push_back(motion.B);
-    const Isometry3d& Ei = set.samples[i].T_base_effector;
-    const Isometry3d& Ej = set.samples[j].T_base_effector;
     const Isometry3d& Pi = set.samples[i].T_camera_pattern;
     const Isometry3d& Pj = set.samples[j].T_camera_pattern;
-    // eye_in_hand A = Ej^-1 Ei; eye_to_hand A = Ej Ei^-1; B = Pj Pi^-1 (motion_between).
-    const Matrix6d dA_dEj = in_hand ? compose_jacobian_left(Ej.inverse(), Ei) * inverse_jacobian(Ej)
-                                    : compose_jacobian_left(Ej, Ei.inverse());
-    const Matrix6d dA_dEi = in_hand ? compose_jacobian_right(Ej.inverse())
-                                    : compose_jacobian_right(Ej) * inverse_jacobian(Ei);
+    // A = V_j V_i^-1 (rig.h); B = Pj Pi^-1.
+    const auto [dA_dEi, dA_dEj] = set.rig.robot_motion_jacobians(set.samples[i].T_base_effector, set.samples[j].T_base_effector);
     const int motion_index = static_cast<int>(m);
     effector[j].add({motion_index, true, p.add_jacobian(dA_dEj)});
     effector[i].add({motion_index, true, p.add_jacobian(dA_dEi)});

@@ -33,11 +33,6 @@ double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, 
   return 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
 }
 
-Isometry3d effector_for_view(Setup setup, const Isometry3d& X, const Isometry3d& pattern, const Isometry3d& P) {
-  // eye_in_hand: E X P = T_base_pattern; eye_to_hand: E T_effector_pattern = X P.
-  return setup == Setup::EyeInHand ? pattern * P.inverse() * X.inverse() : X * P * pattern.inverse();
-}
-
 namespace {
 
 double angle_between(const Isometry3d& a, const Isometry3d& b) {
@@ -75,7 +70,7 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
   const Isometry3d& current = samples.samples.back().T_base_effector;
   std::vector<Isometry3d> candidates;
   for (int draw = 0; draw < 50 * options.candidates && static_cast<int>(candidates.size()) < options.candidates; ++draw) {
-    const Isometry3d E = effector_for_view(samples.setup, calibration.T_parent_camera, pattern, random_view(rng, options.views));
+    const Isometry3d E = samples.rig.effector_for_view(calibration.T_parent_camera, pattern, random_view(rng, options.views));
     if ((E.translation() - current.translation()).norm() > options.max_step_translation ||
         angle_between(E, current) > options.max_step_rotation || !distinct_from_all(E, samples.samples, options)) {
       continue;
@@ -93,7 +88,6 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
   }
   const Isometry3d& X = calibration.T_parent_camera;
   const Isometry3d pattern = pattern_pose(samples, X);
-  const bool in_hand = samples.setup == Setup::EyeInHand;
   Suggestion suggestion;
   const PoseWithCovariance current{X, calibration.pose_covariance};
   suggestion.current_score = criterion_value(current, options.criterion, options.working_distance);
@@ -103,7 +97,7 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
     PoseSample candidate;
     candidate.T_base_effector = E;
     // What the camera would see there: eq. (68) solved for the pattern pose.
-    candidate.T_camera_pattern = X.inverse() * (in_hand ? E.inverse() : E) * pattern;
+    candidate.T_camera_pattern = samples.rig.predicted_view(E, X, pattern);
     ++suggestion.considered;
     try {
       const Calibration predicted = solve(with_candidate(samples, calibration.noise, candidate), solver);

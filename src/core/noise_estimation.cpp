@@ -32,12 +32,9 @@ Isometry3d mean_pose(const std::vector<Isometry3d>& poses) {
 }
 
 Isometry3d pattern_pose(const SampleSet& samples, const Isometry3d& X) {
-  const bool in_hand = samples.setup == Setup::EyeInHand;
   std::vector<Isometry3d> Y;
   Y.reserve(samples.samples.size());
-  for (const PoseSample& s : samples.samples) {
-    Y.push_back((in_hand ? s.T_base_effector : s.T_base_effector.inverse()) * X * s.T_camera_pattern);
-  }
+  for (const PoseSample& s : samples.samples) Y.push_back(samples.rig.pattern_pose(s.T_base_effector, X, s.T_camera_pattern));
   return mean_pose(Y);
 }
 
@@ -72,16 +69,14 @@ void check_samples(const SampleSet& samples) {
 
 }  // namespace
 
-SampleResidual sample_residual(Setup setup, const PoseSample& sample, const Isometry3d& X, const Isometry3d& pattern) {
-  // The expected pattern pose P_bar = X^-1 V Y with V = E^-1 (in hand) or E (to hand).
-  const bool in_hand = setup == Setup::EyeInHand;
+SampleResidual sample_residual(const Rig& rig, const PoseSample& sample, const Isometry3d& X, const Isometry3d& pattern) {
+  // The expected pattern pose P_bar = X^-1 V Y (rig.h).
   const Isometry3d& E = sample.T_base_effector;
-  const Isometry3d V = in_hand ? E.inverse() : E;
+  const Isometry3d V = rig.robot_link(E);
   SampleResidual r;
   // P = exp(e) P_bar, so d e = -d P_bar for the effector's part.
-  r.error = error_about(sample.T_camera_pattern, X.inverse() * V * pattern);  // eq. (64-65)
-  r.d_effector = -compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, pattern) *
-                 (in_hand ? inverse_jacobian(E) : Matrix6d::Identity());
+  r.error = error_about(sample.T_camera_pattern, rig.predicted_view(E, X, pattern));  // eq. (64-65)
+  r.d_effector = -compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, pattern) * rig.robot_link_jacobian(E);
   return r;
 }
 
@@ -155,7 +150,7 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X
   const Isometry3d Y_mean = pattern_pose(samples, X);  // eq. (66-67)
   Matrix6d residual = Matrix6d::Zero(), robot_part = Matrix6d::Zero();
   for (const PoseSample& s : samples.samples) {
-    const SampleResidual r = sample_residual(samples.setup, s, X, Y_mean);
+    const SampleResidual r = sample_residual(samples.rig, s, X, Y_mean);
     residual += r.error * r.error.transpose();
     if (robot_noise) robot_part += r.d_effector * robot_noise->as_pose_covariance() * r.d_effector.transpose();
   }

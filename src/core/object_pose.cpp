@@ -16,12 +16,12 @@ Matrix6d sandwich(const Matrix6d& J, const Matrix6d& covariance) { return J * co
 }  // namespace
 
 ObjectPose object_in_base(const ObjectPoseInput& input) {
-  const bool in_hand = input.setup == Setup::EyeInHand;
+  // Eq. (68): T = T_base_parent X P, T_base_parent = E (eye_in_hand) or the identity (eye_to_hand).
+  const bool in_hand = input.rig.eye_in_hand();
   if (in_hand) check(input.T_base_effector, "effector");
   check(input.X, "calibration");
   check(input.T_camera_object, "object");
-  // Eq. (68): T = E X P (eye_in_hand) or X P (eye_to_hand); E = identity drops out.
-  const Eigen::Isometry3d E = in_hand ? input.T_base_effector.pose : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d E = input.rig.camera_parent_in_base(input.T_base_effector.pose);
   const Eigen::Isometry3d& X = input.X.pose;
   const Eigen::Isometry3d& P = input.T_camera_object.pose;
   ObjectPose out;

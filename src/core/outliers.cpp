@@ -38,7 +38,7 @@ std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const Out
   std::vector<double> angles, pitches;
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
-      const MotionPair m = motion_between(samples.setup, samples.samples[i], samples.samples[j]);
+      const MotionPair m = motion_between(samples.rig, samples.samples[i], samples.samples[j]);
       const Eigen::AngleAxisd a(m.A.linear()), b(m.B.linear());
       PairCheck c{i, j, std::abs(a.angle() - b.angle()), std::nullopt};
       if (std::min(a.angle(), b.angle()) > o.min_pitch_angle) {
@@ -122,12 +122,12 @@ Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, 
     // predicted covariance: its camera noise, its robot noise mapped through the
     // chain, and the estimation error of X and of the pattern's mean pose, which
     // every residual shares (P_bar = X^-1 V Y_bar, Y_bar = mean_j V_j^-1 X P_j).
-    const bool in_hand = kept.setup == Setup::EyeInHand;
+    const Rig& rig = kept.rig;
     const Isometry3d& X = c.T_parent_camera;
     const std::size_t m = kept.samples.size();
     Matrix6d dY_dX = Matrix6d::Zero(), Y_noise = Matrix6d::Zero();
     for (const PoseSample& s : kept.samples) {
-      const Isometry3d V_inverse = in_hand ? s.T_base_effector : s.T_base_effector.inverse();
+      const Isometry3d V_inverse = rig.robot_link(s.T_base_effector).inverse();
       const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
       dY_dX += compose_jacobian_right(V_inverse) * compose_jacobian_left(X, s.T_camera_pattern) / static_cast<double>(m);
       const Matrix6d G = compose_jacobian_right(V_inverse * X) / static_cast<double>(m);
@@ -137,9 +137,9 @@ Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver, 
     for (std::size_t k = 0; k < m; ++k) {
       const PoseSample& s = kept.samples[k];
       const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
-      const SampleResidual r = sample_residual(kept.setup, s, X, pattern);
+      const SampleResidual r = sample_residual(rig, s, X, pattern);
       if (r.error.norm() < 1e-9) continue;  // noise-free input: nothing to gate
-      const Isometry3d V = in_hand ? s.T_base_effector.inverse() : s.T_base_effector;
+      const Isometry3d V = rig.robot_link(s.T_base_effector);
       const Matrix6d dP_dY = compose_jacobian_right(X.inverse() * V);
       const Matrix6d dP_dX = compose_jacobian_left(X.inverse(), V * pattern) * inverse_jacobian(X) + dP_dY * dY_dX;
       const Matrix6d S = noise.camera.as_pose_covariance() +

@@ -129,11 +129,10 @@ void Sampler::reset() {
   anchor_.reset();
 }
 
-SampleSet make_sample_set(Setup setup, const FrameNames& frames, const std::optional<MeasurementNoise>& configured,
+SampleSet make_sample_set(const Rig& rig, const std::optional<MeasurementNoise>& configured,
                           const std::vector<PoseSample>& samples) {
   SampleSet set;
-  set.setup = setup;
-  set.frames = frames;
+  set.rig = rig;
   set.noise = configured;
   set.samples = samples;
   const DecoupledCovariance robot = configured ? configured->robot : DecoupledCovariance{};

@@ -99,9 +99,8 @@ SimulatedSession simulate_session(Rng& rng, Setup setup, const Isometry3d& X, in
                                   const MeasurementNoise& noise, const ViewpointOptions& views) {
   SimulatedSession session;
   session.X = X;
-  session.samples.setup = setup;
+  session.samples.rig = {setup, {"base_link", "tool0", "camera_optical_frame", "tag_0"}};
   session.samples.noise = noise;
-  session.samples.frames = {"base_link", "tool0", "camera_optical_frame", "tag_0"};
   if (setup == Setup::EyeInHand) {
     // Pattern on the table 0.6 m in front of the robot.
     session.T_world_pattern =
@@ -113,8 +112,7 @@ SimulatedSession simulate_session(Rng& rng, Setup setup, const Isometry3d& X, in
   const Isometry3d& Y = session.T_world_pattern;
   for (int i = 0; i < n; ++i) {
     const Isometry3d P = random_view(rng, views);  // T_camera_pattern
-    // eye_in_hand: E X P = Y; eye_to_hand: E Y = X P.
-    const Isometry3d E = setup == Setup::EyeInHand ? Y * P.inverse() * X.inverse() : X * P * Y.inverse();
+    const Isometry3d E = session.samples.rig.effector_for_view(X, Y, P);
     PoseSample sample;
     sample.T_base_effector = perturb(rng, E, noise.robot);
     sample.T_camera_pattern = perturb(rng, P, noise.camera);
@@ -136,16 +134,14 @@ Isometry3d RigTrajectory::effector_at(double t) const {
 }
 
 Isometry3d RigTrajectory::pattern_at(double t) const {
-  const Isometry3d E = effector_at(t);
-  // eye_in_hand: E X P = Y;  eye_to_hand: E Y = X P.
-  return setup == Setup::EyeInHand ? X.inverse() * E.inverse() * T_world_pattern : X.inverse() * E * T_world_pattern;
+  return rig.predicted_view(effector_at(t), X, T_world_pattern);
 }
 
 RigTrajectory make_rig_trajectory(Rng& rng, Setup setup, const Isometry3d& X, int n, double pause, double move,
                                   const ViewpointOptions& views) {
   const SimulatedSession session = simulate_session(rng, setup, X, n, MeasurementNoise{}, views);
   RigTrajectory trajectory;
-  trajectory.setup = setup;
+  trajectory.rig = session.samples.rig;
   trajectory.X = X;
   trajectory.T_world_pattern = session.T_world_pattern;
   for (const PoseSample& sample : session.samples.samples) trajectory.poses.push_back(sample.T_base_effector);

@@ -155,11 +155,7 @@ std::optional<MeasurementNoise> optional_noise(const YAML::Node& map, const Loca
 }
 
 Setup read_setup(const YAML::Node& node, const Location& at) {
-  const std::string value = node.IsScalar() ? node.Scalar() : "";
-  if (value == "eye_in_hand") return Setup::EyeInHand;
-  if (value == "eye_to_hand") return Setup::EyeToHand;
-  throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + value + "`", at.str(),
-                     "write `setup: eye_in_hand` (camera on the flange) or `setup: eye_to_hand` (camera fixed)");
+  return setup_from_string(node.IsScalar() ? node.Scalar() : "", at.str());
 }
 
 YAML::Node load(const std::string& text, const std::string& source) {
@@ -249,11 +245,11 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);
   const Location top{source, ""};
   SampleSet set;
-  set.setup = read_setup(require(root, "setup", top, "add `setup: eye_in_hand` or `setup: eye_to_hand`"),
-                         top / "setup");
+  set.rig.setup = read_setup(require(root, "setup", top, "add `setup: eye_in_hand` or `setup: eye_to_hand`"),
+                             top / "setup");
   if (const YAML::Node frames = root["frames"]; frames && frames.IsMap()) {
     auto name = [&](const char* key) { return frames[key] ? as_text(frames[key], top / "frames" / key) : std::string(); };
-    set.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
+    set.rig.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
   }
   set.noise = optional_noise(root, top, "effector", "pattern");
   const YAML::Node list = require_list(root, "samples", top);
@@ -284,8 +280,8 @@ MeasurementNoise read_noise_file(const std::string& path) {
 std::string format_samples(const SampleSet& set) {
   YAML::Emitter out;
   new_emitter(out) << YAML::BeginMap;
-  out << YAML::Key << "setup" << YAML::Value << to_string(set.setup);
-  const FrameNames& f = set.frames;
+  out << YAML::Key << "setup" << YAML::Value << to_string(set.rig.setup);
+  const FrameNames& f = set.rig.frames;
   if (!(f.base.empty() && f.effector.empty() && f.camera.empty() && f.pattern.empty())) {
     out << YAML::Key << "frames" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "base" << YAML::Value << f.base << YAML::Key << "effector" << YAML::Value
@@ -435,9 +431,9 @@ Input read_input(const std::string& path) {
 
 ResultContext context_of(const SampleSet& samples) {
   ResultContext c;
-  c.setup = samples.setup;
-  c.parent = samples.setup == Setup::EyeInHand ? samples.frames.effector : samples.frames.base;
-  c.child = samples.frames.camera;
+  c.setup = samples.rig.setup;
+  c.parent = samples.rig.camera_parent_frame();
+  c.child = samples.rig.frames.camera;
   return c;
 }
 
@@ -633,6 +629,8 @@ void read_session_config(const std::string& path, SessionConfig& config) {
     try {
       if constexpr (std::is_same_v<T, double>) {
         member = as_double(node, top / key) * scale;
+      } else if constexpr (std::is_same_v<T, Setup>) {
+        member = setup_from_eye_on_hand(node.as<bool>());
       } else {
         member = node.as<T>();
       }

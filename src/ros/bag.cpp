@@ -35,7 +35,7 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   Rng rng(o.seed);
   SimulatedBag result;
   result.X = typical_X(o.setup);
-  result.frames = SessionConfig{}.frames;
+  result.frames = SessionConfig{}.rig.frames;
   const FrameNames& f = result.frames;
   const RigTrajectory trajectory = make_rig_trajectory(rng, o.setup, result.X, o.poses, o.pause, o.move);
   result.duration = trajectory.duration();
@@ -157,7 +157,7 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
       const bool is_static = m.getTopic() == "/tf_static";
       for (const geometry_msgs::TransformStamped& t : msg->transforms) {
         tf.setTransform(t, "bag", is_static);
-        if (t.header.frame_id == config.frames.camera && t.child_frame_id == config.frames.pattern) {
+        if (t.header.frame_id == config.rig.frames.camera && t.child_frame_id == config.rig.frames.pattern) {
           pattern_transforms.push_back(t);
         }
       }
@@ -231,7 +231,7 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
         if (progress && (i % 50 == 0 || i + 1 == detections.size())) progress(0.5 + 0.5 * (i + 1) / detections.size());
       }
     }
-    replay.samples = make_sample_set(config.setup(), config.frames, noise, sampler.samples());
+    replay.samples = make_sample_set(config.rig, noise, sampler.samples());
   } catch (const rosbag::BagException& e) {
     throw HandEyeError(ErrorCode::IoError, std::string("the bag is corrupt or truncated: ") + e.what(), path,
                        "try `rosbag reindex` on a copy of it, or record again");
@@ -246,7 +246,7 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
   }
   if (replay.detections == 0) {
     throw no_data("the bag has no detections on `" +
-                      (config.detection_input == "tf" ? config.frames.camera + " -> " + config.frames.pattern + " (TF)"
+                      (config.detection_input == "tf" ? config.rig.frames.camera + " -> " + config.rig.frames.pattern + " (TF)"
                                                       : config.detections_topic) +
                       "`",
                   path, "check that the detector ran while recording, and the detection_input / topic settings");

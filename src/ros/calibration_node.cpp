@@ -102,8 +102,8 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   std::lock_guard<std::mutex> lock(mutex_);
   if (sampler_.samples().size() >= 3) samples_changed(last_event_);
   ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples",
-           to_string(config_.setup()), config_.parent_frame().c_str(), config_.frames.camera.c_str(),
-           config_.detection_input.c_str(), config_.detection_input == "tf" ? config_.frames.pattern.c_str() : topic.c_str(),
+           to_string(config_.rig.setup), config_.rig.camera_parent_frame().c_str(), config_.rig.frames.camera.c_str(),
+           config_.detection_input.c_str(), config_.detection_input == "tf" ? config_.rig.frames.pattern.c_str() : topic.c_str(),
            sampler_.samples().size());
 }
 
@@ -128,7 +128,7 @@ void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
   geometry_msgs::TransformStamped latest;
   try {
     // The latest camera -> pattern transform; its own stamp is then used for the robot.
-    latest = tf_buffer_.lookupTransform(config_.frames.camera, config_.frames.pattern, ros::Time(0));
+    latest = tf_buffer_.lookupTransform(config_.rig.frames.camera, config_.rig.frames.pattern, ros::Time(0));
   } catch (const tf2::TransformException&) {
     return;  // pattern not seen (yet)
   }
@@ -153,7 +153,7 @@ void CalibrationNode::record_handled(const ros::Time& stamp) {
 void CalibrationNode::handle(const Detection& detection) {
   // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.
   if (!detection.stamp.isZero()) {
-    tf_buffer_.canTransform(config_.frames.base, config_.frames.effector, detection.stamp,
+    tf_buffer_.canTransform(config_.rig.frames.base, config_.rig.frames.effector, detection.stamp,
                             ros::Duration(config_.tf_timeout));
   }
   const ObservationResult result = make_observation(tf_buffer_, config_, detection);
@@ -180,7 +180,7 @@ void CalibrationNode::refuse(const std::string& reason) {
 // ------------------------------------------------------------------ state
 
 SampleSet CalibrationNode::sample_set() const {
-  return make_sample_set(config_.setup(), config_.frames, noise_, sampler_.samples());
+  return make_sample_set(config_.rig, noise_, sampler_.samples());
 }
 
 void CalibrationNode::samples_changed(const std::string& event) {
@@ -216,8 +216,8 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
   status.samples_needed = 3;
   status.last_event = last_event_;
   status.state = to_string(sampler_.state());
-  status.parent_frame = config_.parent_frame();
-  status.child_frame = config_.frames.camera;
+  status.parent_frame = config_.rig.camera_parent_frame();
+  status.child_frame = config_.rig.frames.camera;
   status.working_distance = config_.working_distance;
   status.target_tolerance_mm = config_.target_tolerance_mm;
   status.detections_received = detections_received_;
@@ -244,7 +244,7 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
   if (next_pose_) {
     status.has_suggestion = true;
     status.next_pose.header.stamp = status.header.stamp;
-    status.next_pose.header.frame_id = config_.frames.base;
+    status.next_pose.header.frame_id = config_.rig.frames.base;
     status.next_pose.pose = conversions::to_pose_msg(next_pose_->T_base_effector);
     status.next_pose_object_error_mm = next_pose_->object_sigma * 1e3;
   }
@@ -254,11 +254,11 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
 void CalibrationNode::publish_estimate(const Calibration& c) {
   geometry_msgs::PoseWithCovarianceStamped estimate;
   estimate.header.stamp = ros::Time::now();
-  estimate.header.frame_id = config_.parent_frame();
+  estimate.header.frame_id = config_.rig.camera_parent_frame();
   estimate.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
   estimate_pub_.publish(estimate);
   try {
-    markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.parent_frame(), ros::Time::now()));
+    markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(), ros::Time::now()));
   } catch (const HandEyeError& e) {
     ROS_WARN("cannot draw the covariance: %s", e.what());
   }
@@ -281,7 +281,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   const Calibration& c = *calibration_;
   res.success = true;
   res.calibration.header.stamp = ros::Time::now();
-  res.calibration.header.frame_id = config_.parent_frame();
+  res.calibration.header.frame_id = config_.rig.camera_parent_frame();
   res.calibration.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
   res.rotation_covariance = conversions::to_msg_array(c.rotation_covariance);
   res.translation_covariance = conversions::to_msg_array(c.translation_covariance);
@@ -298,7 +298,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.rejected_samples.push_back(r.index);
     res.rejected_reasons.push_back(r.reason);
   }
-  res.message = "X = T_" + config_.parent_frame() + "_" + config_.frames.camera + " from " + std::to_string(c.samples_used) +
+  res.message = "X = T_" + config_.rig.camera_parent_frame() + "_" + config_.rig.frames.camera + " from " + std::to_string(c.samples_used) +
                 " samples; worst-axis 1 sigma " + number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
 
@@ -307,7 +307,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   if (config_.publish_tf) {
     geometry_msgs::TransformStamped tf;
     tf.header = res.calibration.header;
-    tf.child_frame_id = config_.frames.camera;
+    tf.child_frame_id = config_.rig.frames.camera;
     tf.transform = conversions::to_transform_msg(c.T_parent_camera);
     static_broadcaster_.sendTransform(tf);
   }
@@ -384,10 +384,10 @@ bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Respo
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     const SampleSet loaded = io::read_samples(expand_home(req.path));
-    if (loaded.setup != config_.setup()) {
+    if (loaded.rig.setup != config_.rig.setup) {
       throw HandEyeError(ErrorCode::MalformedFile,
-                         std::string("the file is ") + to_string(loaded.setup) + " but this node is " +
-                             to_string(config_.setup()),
+                         std::string("the file is ") + to_string(loaded.rig.setup) + " but this node is " +
+                             to_string(config_.rig.setup),
                          req.path, "load a file recorded with the same setup");
     }
     sampler_.set_samples(loaded.samples);
@@ -462,7 +462,7 @@ bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Respo
     const auto stamped = [&](const Eigen::Isometry3d& E) {
       geometry_msgs::PoseStamped pose;
       pose.header.stamp = ros::Time::now();
-      pose.header.frame_id = config_.frames.base;
+      pose.header.frame_id = config_.rig.frames.base;
       pose.pose = conversions::to_pose_msg(E);
       return pose;
     };

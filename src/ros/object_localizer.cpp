@@ -24,10 +24,10 @@ Matrix6d isotropic(double sigma_mm, double sigma_deg) {
 
 ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_node)
     : node_(node), private_node_(private_node), tf_listener_(tf_buffer_) {
-  setup_ = param(private_node_, "eye_on_hand", true) ? Setup::EyeInHand : Setup::EyeToHand;
-  base_frame_ = param<std::string>(private_node_, "robot_base_frame", "base_link");
-  effector_frame_ = param<std::string>(private_node_, "robot_effector_frame", "tool0");
-  camera_frame_ = param<std::string>(private_node_, "tracking_base_frame", "camera_optical_frame");
+  rig_.setup = setup_from_eye_on_hand(param(private_node_, "eye_on_hand", true));
+  rig_.frames.base = param<std::string>(private_node_, "robot_base_frame", "base_link");
+  rig_.frames.effector = param<std::string>(private_node_, "robot_effector_frame", "tool0");
+  rig_.frames.camera = param<std::string>(private_node_, "tracking_base_frame", "camera_optical_frame");
   object_frame_ = param<std::string>(private_node_, "object_frame", "object");
   tag_ids_ = param(private_node_, "object_tag_ids", std::vector<int>{});
   publish_tf_ = param(private_node_, "publish_tf", false);
@@ -38,10 +38,10 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
   const std::string calibration_file = param<std::string>(private_node_, "calibration_file", "");
   if (!calibration_file.empty()) {
     const io::CalibrationFile file = io::read_result(calibration_file);
-    if (file.context.setup && *file.context.setup != setup_) {
+    if (file.context.setup && *file.context.setup != rig_.setup) {
       throw HandEyeError(ErrorCode::MalformedFile,
                          std::string("the calibration is ") + to_string(*file.context.setup) +
-                             " but ~eye_on_hand says " + to_string(setup_),
+                             " but ~eye_on_hand says " + to_string(rig_.setup),
                          calibration_file, "set ~eye_on_hand to match, or give the other calibration");
     }
     X_ = file.T_parent_camera;
@@ -54,7 +54,7 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
     robot_covariance_ = isotropic(param(private_node_, "robot_sigma_mm", 0.0), param(private_node_, "robot_sigma_deg", 0.0));
   } else if (calibration_noise) {
     robot_covariance_ = calibration_noise->robot.as_pose_covariance();
-  } else if (setup_ == Setup::EyeInHand) {
+  } else if (rig_.eye_in_hand()) {
     ROS_WARN("no ~robot_sigma_mm/~robot_sigma_deg and no noise model in the calibration: the robot pose is "
              "taken as exact, which understates the object's covariance");
   }
@@ -82,7 +82,7 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
 }
 
 void ObjectLocalizer::on_calibration(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
-  const std::string& parent = setup_ == Setup::EyeInHand ? effector_frame_ : base_frame_;
+  const std::string& parent = rig_.camera_parent_frame();
   if (msg->header.frame_id != parent) {
     refuse({"calibration_frame", "a calibration in frame `" + msg->header.frame_id + "` was ignored: X must be T_" +
                                      parent + "_camera. Check ~eye_on_hand and the frame parameters"});
@@ -111,9 +111,9 @@ void ObjectLocalizer::locate(const Detection& detection) {
     refuse({"no_calibration", "no calibration yet: call /calibrate on the calibration node, or set ~calibration_file"});
     return;
   }
-  if (!detection.frame.empty() && detection.frame != camera_frame_) {
+  if (!detection.frame.empty() && detection.frame != rig_.frames.camera) {
     refuse({"detection_frame", "a detection in frame `" + detection.frame + "` was ignored; X is calibrated for `" +
-                                   camera_frame_ + "` (set ~tracking_base_frame)"});
+                                   rig_.frames.camera + "` (set ~tracking_base_frame)"});
     return;
   }
   try {  // to_eigen would quietly normalise a wrong quaternion; refuse it, as make_observation does
@@ -124,7 +124,7 @@ void ObjectLocalizer::locate(const Detection& detection) {
     return;
   }
   ObjectPoseInput input;
-  input.setup = setup_;
+  input.rig = rig_;
   input.X = *X;
   input.T_camera_object.pose = conversions::to_eigen(detection.pose);
   if (detection.covariance) {
@@ -136,14 +136,14 @@ void ObjectLocalizer::locate(const Detection& detection) {
                                        "~object_sigma_deg, or use a calibration file with a noise model"});
     return;
   }
-  if (setup_ == Setup::EyeInHand) {
+  if (rig_.eye_in_hand()) {
     try {  // the robot pose when the image was taken, never the latest
       input.T_base_effector = {
-          conversions::to_eigen(tf_buffer_.lookupTransform(base_frame_, effector_frame_, detection.stamp,
+          conversions::to_eigen(tf_buffer_.lookupTransform(rig_.frames.base, rig_.frames.effector, detection.stamp,
                                                            ros::Duration(tf_timeout_)).transform),
           robot_covariance_};
     } catch (const tf2::TransformException& e) {
-      refuse({"no_robot_tf", "no TF " + base_frame_ + " -> " + effector_frame_ + " at the detection stamp " +
+      refuse({"no_robot_tf", "no TF " + rig_.frames.base + " -> " + rig_.frames.effector + " at the detection stamp " +
                                  std::to_string(detection.stamp.toSec()) + ": " + e.what()});
       return;
     }
@@ -157,10 +157,10 @@ void ObjectLocalizer::locate(const Detection& detection) {
   }
   geometry_msgs::PoseWithCovarianceStamped out;
   out.header.stamp = detection.stamp;
-  out.header.frame_id = base_frame_;
+  out.header.frame_id = rig_.frames.base;
   out.pose = conversions::to_msg(object.T_base_object);
   object_pub_.publish(out);
-  markers_pub_.publish(covariance_markers(object.T_base_object, base_frame_, detection.stamp, {3.0, 0.05, object_frame_}));
+  markers_pub_.publish(covariance_markers(object.T_base_object, rig_.frames.base, detection.stamp, {3.0, 0.05, object_frame_}));
   if (publish_tf_) {
     geometry_msgs::TransformStamped tf;
     tf.header = out.header;

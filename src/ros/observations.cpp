@@ -85,22 +85,22 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
   try {
     // The robot pose at the detection's stamp; never the latest (Time(0)).
     o.T_base_effector = conversions::to_eigen(
-        tf.lookupTransform(config.frames.base, config.frames.effector, detection.stamp).transform);
+        tf.lookupTransform(config.rig.frames.base, config.rig.frames.effector, detection.stamp).transform);
   } catch (const tf2::TransformException& e) {
-    result.refusal = Refusal{"no_robot_tf", "no TF " + config.frames.base + " -> " + config.frames.effector +
+    result.refusal = Refusal{"no_robot_tf", "no TF " + config.rig.frames.base + " -> " + config.rig.frames.effector +
                                                 " at the detection stamp " + std::to_string(detection.stamp.toSec()) +
                                                 ": " + e.what() +
                                                 ". Is the robot state publisher running, and are the clocks in sync?"};
     return result;
   }
-  if (!detection.frame.empty() && detection.frame != config.frames.camera) {
+  if (!detection.frame.empty() && detection.frame != config.rig.frames.camera) {
     try {  // a detection in another optical frame of the same camera
       o.T_camera_pattern = conversions::to_eigen(
-                               tf.lookupTransform(config.frames.camera, detection.frame, detection.stamp).transform) *
+                               tf.lookupTransform(config.rig.frames.camera, detection.frame, detection.stamp).transform) *
                            o.T_camera_pattern;
     } catch (const tf2::TransformException& e) {
       result.refusal = Refusal{"detection_frame", "the detection is in frame `" + detection.frame + "`, not `" +
-                                                      config.frames.camera + "`, and TF cannot relate them: " +
+                                                      config.rig.frames.camera + "`, and TF cannot relate them: " +
                                                       e.what() + ". Set tracking_base_frame to the detector's frame"};
       return result;
     }

@@ -113,14 +113,10 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
       "detection-type", po::value(&bag_options.detection_type), "bag: tags (default), pose_with_covariance, pose or tf");
   po::variables_map vm;
   if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
-  if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
-    throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + setup_name + "`", "--setup",
-                       "use eye_in_hand or eye_to_hand");
-  }
+  const Setup setup = setup_from_string(setup_name, "--setup");
   if (samples < 3) {
     throw HandEyeError(ErrorCode::TooFewMotions, "--samples must be at least 3", "--samples", "ask for more samples");
   }
-  const Setup setup = setup_name == "eye_in_hand" ? Setup::EyeInHand : Setup::EyeToHand;
   if (std::filesystem::path(output).extension() == ".bag") {
     bag_options.setup = setup;
     bag_options.poses = samples;
@@ -135,8 +131,9 @@ int sim_command(const std::vector<std::string>& args, std::ostream& out, std::os
     {  // the truth always goes beside the bag
       io::ResultContext context;
       context.setup = setup;
-      context.parent = setup == Setup::EyeInHand ? bag.frames.effector : bag.frames.base;
-      context.child = bag.frames.camera;
+      const Rig rig{setup, bag.frames};
+      context.parent = rig.camera_parent_frame();
+      context.child = rig.frames.camera;
       io::write_file_atomically(truth, io::format_pose_file({bag.X, Matrix6d::Zero()}, context));
       out << "wrote the true X to " << truth << "\n";
     }
@@ -388,14 +385,14 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
     return robot ? calibration.noise->robot : calibration.noise->camera;
   };
   ObjectPoseInput input;
-  input.setup = setup;
+  input.rig.setup = setup;
   input.X = calibration.T_parent_camera;
   std::ostringstream notes;
   const io::PoseFile object = pose_argument(object_arg, "--object");
   input.T_camera_object = {object.value.pose, covariance_of(object, vm, "object", noise_part(false),
                                                             "the calibration pattern's noise from " + calibration_path,
                                                             notes)};
-  if (setup == Setup::EyeInHand) {
+  if (input.rig.eye_in_hand()) {
     if (effector_arg.empty()) {
       throw HandEyeError(ErrorCode::MissingKey, "eye_in_hand needs the robot pose when the image was taken",
                          "--effector", "give T_base_effector as a pose file or x,y,z,qx,qy,qz,qw");
@@ -409,7 +406,7 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
     notes << "  (--effector ignored: eye_to_hand, X is T_base_camera)\n";
   }
   if (base_frame.empty()) {
-    base_frame = setup == Setup::EyeToHand && !calibration.context.parent.empty() ? calibration.context.parent : "base_link";
+    base_frame = !input.rig.eye_in_hand() && !calibration.context.parent.empty() ? calibration.context.parent : "base_link";
   }
   std::vector<Eigen::Vector3d> points;
   for (const std::string& p : point_args) {
@@ -482,9 +479,9 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
     }
     if (!calibration_path.empty()) {
       const io::CalibrationFile calibration = io::read_result(calibration_path);
-      if (calibration.context.setup && *calibration.context.setup != samples.setup) {
+      if (calibration.context.setup && *calibration.context.setup != samples.rig.setup) {
         throw HandEyeError(ErrorCode::MalformedFile, "the calibration is for another setup", calibration_path + ": setup",
-                           "give the result file of this setup (" + std::string(to_string(samples.setup)) + ")");
+                           "give the result file of this setup (" + std::string(to_string(samples.rig.setup)) + ")");
       }
       estimate = noise_from_residuals(samples, calibration.T_parent_camera.pose, false, robot);
     } else {

@@ -131,7 +131,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (sampler.samples()[i].noise) check_covariance(sampler.samples()[i].noise->camera, "accepted sample's covariance");
   }
   try {
-    solve_robust(make_sample_set(config.setup(), config.frames, std::nullopt, sampler.samples()));
+    solve_robust(make_sample_set(config.rig, std::nullopt, sampler.samples()));
   } catch (const HandEyeError&) {
   }
   return 0;

@@ -1,9 +1,7 @@
 // Inputs to the estimator: absolute pose samples (what a robot and a camera
 // produce) or independent motion pairs (A_i, B_i) (the paper's experiments).
 //
-// Frames: T_a_b maps points in frame b to frame a (p_a = T_a_b * p_b).
-//   eye_in_hand: X = T_effector_camera, camera on the flange, pattern fixed in the world.
-//   eye_to_hand: X = T_base_camera, camera fixed, pattern on the flange.
+// Frames and setups: rig.h.
 #pragma once
 
 #include <optional>
@@ -11,16 +9,9 @@
 #include <vector>
 
 #include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/core/rig.h"
 
 namespace handeye {
-
-enum class Setup { EyeInHand, EyeToHand };
-
-const char* to_string(Setup setup);  // "eye_in_hand" / "eye_to_hand"
-
-struct FrameNames {
-  std::string base, effector, camera, pattern;  // empty when unknown
-};
 
 /// Noise of the two measured poses, each as decoupled rotation/translation
 /// covariances (rad^2, m^2; rotation as a left perturbation in the parent frame).
@@ -39,8 +30,7 @@ struct PoseSample {
 };
 
 struct SampleSet {
-  Setup setup = Setup::EyeInHand;
-  FrameNames frames;
+  Rig rig;  // the setup and the frame names
   std::optional<MeasurementNoise> noise;  // absent: estimated from the residuals
   std::vector<PoseSample> samples;
 };
@@ -57,8 +47,7 @@ struct MotionSet {
 };
 
 /// The motion pair between two samples i -> j, per the paper's eq. (2):
-///   eye_in_hand: A = T_base_effector_j^-1 T_base_effector_i, B = T_camera_pattern_j T_camera_pattern_i^-1
-///   eye_to_hand: A = T_base_effector_j T_base_effector_i^-1,  B = T_camera_pattern_j T_camera_pattern_i^-1
-MotionPair motion_between(Setup setup, const PoseSample& from, const PoseSample& to);
+/// A = rig.robot_motion(E_i, E_j), B = T_camera_pattern_j T_camera_pattern_i^-1.
+MotionPair motion_between(const Rig& rig, const PoseSample& from, const PoseSample& to);
 
 }  // namespace handeye

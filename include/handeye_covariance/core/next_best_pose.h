@@ -65,10 +65,6 @@ double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, 
 /// optical axis, in X's parent frame (the node's ~status object_error_mm).
 double object_sigma(const PoseWithCovariance& X, double working_distance);
 
-/// The effector pose that shows the camera `T_camera_pattern`.
-Eigen::Isometry3d effector_for_view(Setup setup, const Eigen::Isometry3d& X, const Eigen::Isometry3d& pattern,
-                                    const Eigen::Isometry3d& T_camera_pattern);
-
 /// Candidate effector poses: random views of the pattern (options.views) that
 /// are within one move of the last sample's effector pose and distinct from
 /// every sample. Deterministic for a given options.seed.

@@ -67,12 +67,11 @@ struct SampleResidual {
   Vector6d error = Vector6d::Zero();                 // ROS order, camera frame
   Matrix6d d_effector = Matrix6d::Zero();            // d error / d effector perturbation
 };
-SampleResidual sample_residual(Setup setup, const PoseSample& sample, const Eigen::Isometry3d& X,
+SampleResidual sample_residual(const Rig& rig, const PoseSample& sample, const Eigen::Isometry3d& X,
                                const Eigen::Isometry3d& pattern);
 
-/// The pattern's fixed pose as the samples and X see it (eq. 68's chain,
-/// averaged by mean_pose): T_base_pattern = E X P (eye_in_hand) or
-/// T_effector_pattern = E^-1 X P (eye_to_hand).
+/// The pattern's fixed pose Y as the samples and X see it (eq. 68's chain,
+/// rig.pattern_pose of each sample, averaged by mean_pose).
 Eigen::Isometry3d pattern_pose(const SampleSet& samples, const Eigen::Isometry3d& X);
 
 }  // namespace handeye

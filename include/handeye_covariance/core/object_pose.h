@@ -18,7 +18,7 @@
 namespace handeye {
 
 struct ObjectPoseInput {
-  Setup setup = Setup::EyeInHand;
+  Rig rig;  // only its setup matters here
   PoseWithCovariance T_base_effector;  // at the detection's stamp; ignored for eye_to_hand
   PoseWithCovariance X;                // T_effector_camera or T_base_camera, with its covariance
   PoseWithCovariance T_camera_object;  // the detection

@@ -85,8 +85,7 @@ class Sampler {
 /// per-sample pattern noise keeps the configured robot noise (zero when none is
 /// configured: the robot taken as exact, as in the paper's real-data study).
 /// With no configured noise and no detector noise, the noise is estimated.
-SampleSet make_sample_set(Setup setup, const FrameNames& frames,
-                          const std::optional<MeasurementNoise>& configured,
+SampleSet make_sample_set(const Rig& rig, const std::optional<MeasurementNoise>& configured,
                           const std::vector<PoseSample>& samples);
 
 }  // namespace handeye

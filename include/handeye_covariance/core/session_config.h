@@ -11,8 +11,7 @@
 namespace handeye {
 
 struct SessionConfig {
-  bool eye_on_hand = true;
-  FrameNames frames{"base_link", "tool0", "camera_optical_frame", "tag_0"};
+  Rig rig{Setup::EyeInHand, {"base_link", "tool0", "camera_optical_frame", "tag_0"}};  // eye_on_hand and the frames
   std::string detection_input = "tags";  // tags | pose_with_covariance | pose | tf
   std::string detections_topic = "/tag_detections";
   std::vector<int> tag_ids;              // empty: a lone detection is taken
@@ -35,24 +34,22 @@ struct SessionConfig {
   std::string candidate_poses_file;                // empty: sampled
   SamplerOptions sampler;
 
-  Setup setup() const { return eye_on_hand ? Setup::EyeInHand : Setup::EyeToHand; }
   /// <namespace_prefix>_eye_on_hand or _eye_on_base, as easy_handeye names it.
-  std::string name() const { return namespace_prefix + (eye_on_hand ? "_eye_on_hand" : "_eye_on_base"); }
-  /// X = T_parent_camera: the effector (eye-in-hand) or the base (eye-to-hand).
-  const std::string& parent_frame() const { return eye_on_hand ? frames.effector : frames.base; }
+  std::string name() const { return namespace_prefix + (rig.eye_in_hand() ? "_eye_on_hand" : "_eye_on_base"); }
 };
 
 /// Calls `visit(key, member, scale)` for every setting: the value under `key`
 /// (in the units its name says: _mm, _deg, s, m) times `scale` is the member's
-/// SI value. Member types: bool, int, double, std::string, std::vector<int>.
+/// SI value. Member types: bool, int, double, std::string, std::vector<int>, and
+/// Setup, which is read as easy_handeye's bool `eye_on_hand` (setup_from_eye_on_hand).
 template <typename Visitor>
 void for_each_setting(SessionConfig& c, Visitor&& visit) {
   constexpr double mm = 1e-3, deg = M_PI / 180.0;
-  visit("eye_on_hand", c.eye_on_hand, 1.0);
-  visit("robot_base_frame", c.frames.base, 1.0);
-  visit("robot_effector_frame", c.frames.effector, 1.0);
-  visit("tracking_base_frame", c.frames.camera, 1.0);
-  visit("tracking_marker_frame", c.frames.pattern, 1.0);
+  visit("eye_on_hand", c.rig.setup, 1.0);
+  visit("robot_base_frame", c.rig.frames.base, 1.0);
+  visit("robot_effector_frame", c.rig.frames.effector, 1.0);
+  visit("tracking_base_frame", c.rig.frames.camera, 1.0);
+  visit("tracking_marker_frame", c.rig.frames.pattern, 1.0);
   visit("detection_input", c.detection_input, 1.0);
   visit("detections_topic", c.detections_topic, 1.0);
   visit("tag_ids", c.tag_ids, 1.0);

@@ -56,7 +56,7 @@ SimulatedSession simulate_session(Rng& rng, Setup setup, const Eigen::Isometry3d
 /// next in `move` seconds (slerp + lerp with a smoothstep), and stays at the
 /// last pose. Shared by the simulated rig node and the simulated bags.
 struct RigTrajectory {
-  Setup setup = Setup::EyeInHand;
+  Rig rig;                            // setup and frame names
   Eigen::Isometry3d X;                // truth
   Eigen::Isometry3d T_world_pattern;  // see SimulatedSession
   std::vector<Eigen::Isometry3d> poses;  // T_base_effector at each pause

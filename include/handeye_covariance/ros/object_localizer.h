@@ -33,8 +33,8 @@ class ObjectLocalizer {
   /// Logs the reason (throttled per kind) and counts it on ~refusals.
   void refuse(const Refusal& refusal);
 
-  Setup setup_ = Setup::EyeInHand;
-  std::string base_frame_, effector_frame_, camera_frame_, object_frame_;
+  Rig rig_;  // setup and frames (the pattern frame is unused here)
+  std::string object_frame_;
   std::vector<int> tag_ids_;
   bool publish_tf_ = false;
   double tf_timeout_ = 0.5;

@@ -21,12 +21,17 @@ T param(const ros::NodeHandle& nh, const std::string& name, const T& fallback) {
 inline void load_session_config(const ros::NodeHandle& nh, SessionConfig& config) {
   for_each_setting(config, [&](const char* key, auto& member, double scale) {
     using T = std::decay_t<decltype(member)>;
-    T value;
-    if (nh.getParam(key, value)) {
-      if constexpr (std::is_same_v<T, double>) {
-        member = value * scale;
-      } else {
-        member = value;
+    if constexpr (std::is_same_v<T, Setup>) {
+      bool eye_on_hand = true;
+      if (nh.getParam(key, eye_on_hand)) member = setup_from_eye_on_hand(eye_on_hand);
+    } else {
+      T value;
+      if (nh.getParam(key, value)) {
+        if constexpr (std::is_same_v<T, double>) {
+          member = value * scale;
+        } else {
+          member = value;
+        }
       }
     }
   });
