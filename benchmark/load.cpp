@@ -109,7 +109,7 @@ LoadReport run_load(const LoadOptions& o) {
   Rng rng(static_cast<std::uint64_t>(o.seed));
   const RigTrajectory trajectory = make_rig_trajectory(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), o.poses, o.pause, o.move);
   const double session_period = o.poses * (o.pause + o.move);
-  DecoupledCovariance noise;
+  PoseNoise noise;
   noise.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
   noise.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
 

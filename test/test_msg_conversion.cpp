@@ -32,18 +32,20 @@ TEST(MsgConversion, CovarianceIsRowMajorInRosOrder) {
   EXPECT_EQ(conversions::to_core(msg).covariance, p.covariance);
 }
 
-TEST(MsgConversion, DecoupledBlocksOnlyWhenNonZero) {
+TEST(MsgConversion, FullCovarianceOnlyWhenNonZero) {
   boost::array<double, 36> zeros{};
-  EXPECT_FALSE(conversions::decoupled_if_nonzero(zeros).has_value());
+  EXPECT_FALSE(conversions::covariance_if_nonzero(zeros).has_value());
   boost::array<double, 36> c{};
   c[0] = 1e-6;   // x x
   c[35] = 4e-6;  // rz rz
-  c[5] = 9.0;    // x-rz cross term: not part of either block
-  const auto blocks = conversions::decoupled_if_nonzero(c);
-  ASSERT_TRUE(blocks.has_value());
-  EXPECT_EQ(blocks->translation(0, 0), 1e-6);
-  EXPECT_EQ(blocks->rotation(2, 2), 4e-6);
-  EXPECT_EQ(blocks->translation(0, 2), 0.0);
+  c[5] = 9e-7;   // x-rz: the cross block is kept, not cut at the ROS boundary
+  c[30] = 9e-7;
+  const auto full = conversions::covariance_if_nonzero(c);
+  ASSERT_TRUE(full.has_value());
+  EXPECT_EQ((*full)(0, 0), 1e-6);
+  EXPECT_EQ((*full)(5, 5), 4e-6);
+  EXPECT_EQ((*full)(0, 5), 9e-7);
+  EXPECT_EQ(PoseNoise::from_pose_covariance(*full).translation_rotation(0, 2), 9e-7);
 }
 
 TEST(MsgConversion, QuaternionNorm) {
@@ -114,7 +116,13 @@ TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
       {"bad_quaternion", "unit quaternion", [](Detection& d) { d.pose.orientation.w = 1.5; }},
       {"bad_quaternion", "norm nan", [](Detection& d) { d.pose.orientation.x = std::nan(""); }},
       {"bad_covariance", "all-zero covariance",
-       [](Detection& d) { d.covariance = DecoupledCovariance{-Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity()}; }},
+       [](Detection& d) { d.covariance = DecoupledCovariance{-Eigen::Matrix3d::Identity(), Eigen::Matrix3d::Identity()}.as_pose_covariance(); }},
+      {"bad_covariance", "cross block",  // each block fine, but a correlation of 2 between x and rx
+       [](Detection& d) {
+         Matrix6d c = 1e-6 * Matrix6d::Identity();
+         c(0, 3) = c(3, 0) = 2e-6;
+         d.covariance = c;
+       }},
       {"bad_position", "NaN or Inf", [](Detection& d) { d.pose.position.y = INFINITY; }},
       {"no_robot_tf", "robot state publisher", [](Detection& d) { d.stamp = ros::Time(12.0); }},
       {"detection_frame", "tracking_base_frame", [](Detection& d) { d.frame = "other_camera"; }},
@@ -150,6 +158,58 @@ TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
   EXPECT_FALSE(refusal);
   ASSERT_TRUE(chosen);
   EXPECT_EQ(chosen->stamp, ros::Time(10.5));
+}
+
+// A detection stamped in camera_link while X is for camera_optical_frame: the
+// pose is moved into the optical frame and so is its covariance. A depth-heavy
+// covariance (camera_link's x is the viewing direction) must land on the
+// optical z axis, the cross block with it; before this, the depth variance
+// stayed on x, where it says the lateral position is poorly known.
+TEST(Observations, ADetectionInAnotherCameraFrameMovesItsCovarianceWithItsPose) {
+  tf2::BufferCore tf;
+  geometry_msgs::TransformStamped robot;
+  robot.header.frame_id = "base_link";
+  robot.child_frame_id = "tool0";
+  robot.header.stamp = ros::Time(10.0);
+  robot.transform.rotation.w = 1.0;
+  tf.setTransform(robot, "test", true);
+  // The usual driver TF: camera_link (x forward, y left, z up) -> optical (z forward, x right, y down).
+  const Eigen::Matrix3d R_link_optical = (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished();
+  const Eigen::Isometry3d T_link_optical = se3::make_pose(R_link_optical, Eigen::Vector3d(0.01, 0.015, 0.0));
+  geometry_msgs::TransformStamped optical;
+  optical.header.frame_id = "camera_link";
+  optical.child_frame_id = "camera_optical_frame";
+  optical.transform = conversions::to_transform_msg(T_link_optical);
+  tf.setTransform(optical, "test", true);
+
+  // In camera_link: depth (x) 25x the lateral variance, tilt about y and z 9x the roll about x.
+  const double lateral = std::pow(0.3e-3, 2), tilt = std::pow(0.15 * M_PI / 180, 2);
+  Matrix6d link_covariance = Matrix6d::Zero();
+  link_covariance.diagonal() << 25 * lateral, lateral, lateral, tilt / 9, tilt, tilt;
+  link_covariance(0, 4) = link_covariance(4, 0) = 0.5 * std::sqrt(25 * lateral * tilt);  // depth with tilt
+  const Eigen::Isometry3d T_link_pattern = se3::make_pose(so3::exp(Eigen::Vector3d(0.1, -0.2, 0.3)), Eigen::Vector3d(0.6, 0.05, -0.02));
+  Detection d;
+  d.stamp = ros::Time(10.0);
+  d.frame = "camera_link";
+  d.pose = conversions::to_pose_msg(T_link_pattern);
+  d.covariance = link_covariance;
+  const ObservationResult r = make_observation(tf, SessionConfig{}, d);
+  ASSERT_TRUE(r.observation) << r.refusal->message;
+  const Eigen::Isometry3d expected_pose = T_link_optical.inverse() * T_link_pattern;
+  EXPECT_LE((r.observation->T_camera_pattern.matrix() - expected_pose.matrix()).norm(), 1e-12);
+  ASSERT_TRUE(r.observation->pattern_noise);
+  const Matrix6d C = r.observation->pattern_noise->as_pose_covariance();
+  // The adjoint of a fixed frame change: blkdiag(R, R) with R = R_optical_link.
+  Matrix6d Ad = Matrix6d::Zero();
+  Ad.topLeftCorner<3, 3>() = Ad.bottomRightCorner<3, 3>() = R_link_optical.transpose();
+  EXPECT_LE((C - Ad * link_covariance * Ad.transpose()).norm(), 1e-18);
+  EXPECT_NEAR(C(2, 2), 25 * lateral, 1e-15) << "the depth variance is on the optical axis";
+  EXPECT_NEAR(C(0, 0), lateral, 1e-15);
+  EXPECT_NEAR(C(1, 1), lateral, 1e-15);
+  EXPECT_NEAR(C(5, 5), tilt / 9, 1e-15) << "the roll about the optical axis";
+  // The cross block moved too: link (x, ry) is optical (z, -rx).
+  EXPECT_NEAR(C(2, 3), -0.5 * std::sqrt(25 * lateral * tilt), 1e-15);
+  EXPECT_EQ(C(0, 4), 0.0);
 }
 
 }  // namespace

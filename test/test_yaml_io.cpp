@@ -37,6 +37,10 @@ TEST(YamlIo, SamplesRoundTripExactly) {
   Rng rng(1);
   SimulatedSession s = simulate_session(rng, Setup::EyeToHand, typical_X(Setup::EyeToHand), 7, paper_noise(1e-5));
   s.samples.samples[2].noise = paper_noise(1e-3);
+  // A detector's full 6x6: the cross block is written (as `pose`) and read back.
+  MeasurementNoise with_cross = paper_noise(1e-4);
+  with_cross.camera.translation_rotation << 1e-5, 0, -2e-5, 0, 3e-6, 0, 0, 0, 1e-6;
+  s.samples.samples[4].noise = with_cross;
   const SampleSet back = io::parse_samples(io::format_samples(s.samples), "memory");
   EXPECT_EQ(back.rig.setup, Setup::EyeToHand);
   EXPECT_EQ(back.rig.frames.camera, "camera_optical_frame");
@@ -51,6 +55,26 @@ TEST(YamlIo, SamplesRoundTripExactly) {
   ASSERT_TRUE(back.samples[2].noise.has_value());
   EXPECT_EQ(back.samples[2].noise->robot.translation, paper_noise(1e-3).robot.translation);
   EXPECT_FALSE(back.samples[3].noise.has_value());
+  ASSERT_TRUE(back.samples[4].noise.has_value());
+  EXPECT_EQ(back.samples[4].noise->camera.as_pose_covariance(), with_cross.camera.as_pose_covariance());
+  EXPECT_FALSE(back.samples[4].noise->robot.has_cross_block());
+}
+
+TEST(YamlIo, ANoiseEntryIsEitherTheBlocksOrTheFullPoseCovariance) {
+  std::string identity36 = "[";
+  for (int i = 0; i < 36; ++i) identity36 += std::string(i ? ", " : "") + (i % 7 == 0 ? "1e-6" : "0");
+  identity36 += "]";
+  const std::string both = std::string(kValid) + "noise:\n  effector: {rotation: [1e-6, 0, 0, 0, 1e-6, 0, 0, 0, 1e-6], "
+                           "translation: [1e-6, 0, 0, 0, 1e-6, 0, 0, 0, 1e-6]}\n  pattern: {pose: " + identity36 +
+                           ", rotation: [1e-6, 0, 0, 0, 1e-6, 0, 0, 0, 1e-6]}\n";
+  expect_parse_error(both, ErrorCode::MalformedFile, "noise.pattern");
+  std::string full = both;
+  full.replace(full.find(", rotation: [1e-6, 0, 0, 0, 1e-6, 0, 0, 0, 1e-6]}\n", full.find("pattern: {pose")),
+               std::string(", rotation: [1e-6, 0, 0, 0, 1e-6, 0, 0, 0, 1e-6]}\n").size(), "}\n");
+  const SampleSet set = io::parse_samples(full, "memory");
+  ASSERT_TRUE(set.noise);
+  EXPECT_EQ(set.noise->camera.translation, 1e-6 * Eigen::Matrix3d::Identity());
+  EXPECT_EQ(set.noise->camera.rotation, 1e-6 * Eigen::Matrix3d::Identity());
 }
 
 TEST(YamlIo, MotionsRoundTripExactly) {

@@ -43,7 +43,7 @@ struct Influence {
 /// one sample's effector or pattern pose noise (pose input: it touches every
 /// motion that uses the sample, up to 2 x pair_window of them).
 struct NoiseInput {
-  DecoupledCovariance covariance;
+  Matrix6d covariance = Matrix6d::Zero();  // ROS order, with the cross block when the source gives one
   bool robot = true;  // robot/effector noise or camera/pattern noise
   std::vector<Influence> influences;
   int count = 0;
@@ -77,6 +77,13 @@ struct Problem {
 struct NoiseScale {
   double rotation = 1.0;
   double translation = 1.0;
+  /// The scaled 6x6: blocks times their multiplier, the cross block times both roots.
+  Matrix6d apply(const Matrix6d& covariance) const {
+    if (rotation == 1.0 && translation == 1.0) return covariance;
+    Vector6d root;
+    root << Vector3d::Constant(std::sqrt(translation)), Vector3d::Constant(std::sqrt(rotation));
+    return root.asDiagonal() * covariance * root.asDiagonal();
+  }
 };
 
 /// The marginal blocks of each motion's A and B covariance that the solver
@@ -90,22 +97,19 @@ Marginals marginals(const Problem& problem, const NoiseScale& scale) {
   Marginals m;
   for (auto* v : {&m.A_translation, &m.A_rotation, &m.B_translation, &m.B_rotation}) v->assign(k, Matrix3d::Zero());
   for (const NoiseInput& input : problem.inputs) {
-    const Matrix3d sigma_t = scale.translation * input.covariance.translation;
-    const Matrix3d sigma_R = scale.rotation * input.covariance.rotation;
+    const Matrix6d sigma = scale.apply(input.covariance);
     for (int j = 0; j < input.count; ++j) {
       const Influence& inf = input.influences[j];
       Matrix3d& translation = (inf.on_robot ? m.A_translation : m.B_translation)[inf.motion];
       Matrix3d& rotation = (inf.on_robot ? m.A_rotation : m.B_rotation)[inf.motion];
       if (inf.jacobian < 0) {
-        translation += sigma_t;
-        rotation += sigma_R;
+        translation += sigma.topLeftCorner<3, 3>();
+        rotation += sigma.bottomRightCorner<3, 3>();
         continue;
       }
       const Matrix6d& J = problem.jacobians[inf.jacobian];
-      translation += J.topLeftCorner<3, 3>() * sigma_t * J.topLeftCorner<3, 3>().transpose() +
-                     J.topRightCorner<3, 3>() * sigma_R * J.topRightCorner<3, 3>().transpose();
-      rotation += J.bottomLeftCorner<3, 3>() * sigma_t * J.bottomLeftCorner<3, 3>().transpose() +
-                  J.bottomRightCorner<3, 3>() * sigma_R * J.bottomRightCorner<3, 3>().transpose();
+      translation += J.topRows<3>() * sigma * J.topRows<3>().transpose();
+      rotation += J.bottomRows<3>() * sigma * J.bottomRows<3>().transpose();
     }
   }
   return m;
@@ -138,11 +142,7 @@ Eigen::Matrix<double, Rows, Rows> propagate(const Problem& problem, const NoiseS
         }
       }
     }
-    // The input covariance is block-diagonal (translation, rotation).
-    covariance.noalias() += scale.translation * G.template leftCols<3>() * input.covariance.translation *
-                                G.template leftCols<3>().transpose();
-    covariance.noalias() += scale.rotation * G.template rightCols<3>() * input.covariance.rotation *
-                                G.template rightCols<3>().transpose();
+    covariance.noalias() += G * scale.apply(input.covariance) * G.transpose();
   }
   return 0.5 * (covariance + covariance.transpose());
 }
@@ -649,10 +649,10 @@ Problem build(const MotionSet& set) {
     p.A.push_back(motion.A);
     p.B.push_back(motion.B);
     NoiseInput robot, camera;
-    robot.covariance = noise.robot;
+    robot.covariance = noise.robot.as_pose_covariance();
     robot.robot = true;
     robot.add({static_cast<int>(i), true, -1});
-    camera.covariance = noise.camera;
+    camera.covariance = noise.camera.as_pose_covariance();
     camera.robot = false;
     camera.add({static_cast<int>(i), false, -1});
     p.inputs.push_back(robot);
@@ -684,9 +684,9 @@ Problem build(const SampleSet& set, int pair_window) {
   std::vector<NoiseInput> effector(n), pattern(n);
   for (int s = 0; s < n; ++s) {
     const MeasurementNoise noise = noise_for(set.samples[s].noise, set.noise, "samples[" + std::to_string(s) + "]");
-    effector[s].covariance = noise.robot;
+    effector[s].covariance = noise.robot.as_pose_covariance();
     effector[s].robot = true;
-    pattern[s].covariance = noise.camera;
+    pattern[s].covariance = noise.camera.as_pose_covariance();
     pattern[s].robot = false;
   }
   for (std::size_t m = 0; m < p.pairs.size(); ++m) {
@@ -825,7 +825,7 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   if (problem.noise_given) {
     // The global block is representative; per-item overrides are not summarised.
     for (const NoiseInput& input : problem.inputs) {
-      (input.robot ? result.noise.robot : result.noise.camera) = input.covariance;
+      (input.robot ? result.noise.robot : result.noise.camera) = PoseNoise::from_pose_covariance(input.covariance);
     }
   }
 

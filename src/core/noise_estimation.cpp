@@ -57,8 +57,6 @@ Matrix3d clip_to_psd(const Matrix3d& C, const std::string& what, std::vector<std
   return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
 }
 
-DecoupledCovariance blocks(const Matrix6d& C) { return {C.bottomRightCorner<3, 3>(), C.topLeftCorner<3, 3>()}; }
-
 void check_samples(const SampleSet& samples) {
   for (std::size_t i = 0; i < samples.samples.size(); ++i) {
     const std::string where = "samples[" + std::to_string(i) + "]";
@@ -127,8 +125,8 @@ NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const R
                                   "(effector poses within 1 mm and 0.1 deg count as one), or use the residuals "
                                   "against a calibration (--source residuals)");
   }
-  estimate.noise.robot = blocks(robot / estimate.dof);
-  estimate.noise.camera = blocks(camera / estimate.dof);
+  estimate.noise.robot = PoseNoise::from_pose_covariance(robot / estimate.dof);  // a sample covariance: PSD, cross block kept
+  estimate.noise.camera = PoseNoise::from_pose_covariance(camera / estimate.dof);
   estimate.robot_identified = true;
   estimate.notes.push_back("robot noise = the scatter of the reported effector pose while it is held still "
                            "(not its repeatability between approaches)");
@@ -136,7 +134,7 @@ NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const R
 }
 
 NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X, bool X_fitted_to_these_samples,
-                                   const std::optional<DecoupledCovariance>& robot_noise) {
+                                   const std::optional<PoseNoise>& robot_noise) {
   check_samples(samples);
   check_pose(X, "calibration");
   if (robot_noise) check_covariance(*robot_noise, "robot noise");
@@ -166,6 +164,8 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Isometry3d& X
   } else {
     estimate.notes.push_back("robot taken as exact: the pattern noise includes the robot's (conservative)");
   }
+  // Per block: clipping a 6x6 of m^2 and rad^2 to PSD would depend on the units;
+  // the cross block is left out of this estimate.
   estimate.noise.camera.rotation = clip_to_psd(camera.bottomRightCorner<3, 3>(), "pattern rotation", estimate.notes);
   estimate.noise.camera.translation = clip_to_psd(camera.topLeftCorner<3, 3>(), "pattern translation", estimate.notes);
   return estimate;

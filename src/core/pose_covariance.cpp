@@ -14,6 +14,17 @@ Matrix6d DecoupledCovariance::as_pose_covariance() const {
   return covariance;
 }
 
+Matrix6d PoseNoise::as_pose_covariance() const {
+  Matrix6d covariance;
+  covariance << translation, translation_rotation, translation_rotation.transpose(), rotation;
+  return covariance;
+}
+
+PoseNoise PoseNoise::from_pose_covariance(const Matrix6d& covariance) {
+  const Matrix6d symmetric = 0.5 * (covariance + covariance.transpose());
+  return {symmetric.bottomRightCorner<3, 3>(), symmetric.topLeftCorner<3, 3>(), symmetric.topRightCorner<3, 3>()};
+}
+
 Matrix6d inverse_jacobian(const Eigen::Isometry3d& T) {
   // R' = R^T exp(-[xi_R]) = exp(-[R^T xi_R]) R^T  and
   // t' = -R^T t  ->  d t' = -R^T xi_t - R^T [t] xi_R.

@@ -135,21 +135,19 @@ SampleSet make_sample_set(const Rig& rig, const std::optional<MeasurementNoise>&
   set.rig = rig;
   set.noise = configured;
   set.samples = samples;
-  const DecoupledCovariance robot = configured ? configured->robot : DecoupledCovariance{};
-  DecoupledCovariance mean_camera;
+  const PoseNoise robot = configured ? configured->robot : PoseNoise{};
+  Matrix6d mean_camera = Matrix6d::Zero();
   int with_noise = 0;
   for (PoseSample& sample : set.samples) {
     if (!sample.noise) continue;
     sample.noise->robot = robot;
-    mean_camera.rotation += sample.noise->camera.rotation;
-    mean_camera.translation += sample.noise->camera.translation;
+    mean_camera += sample.noise->camera.as_pose_covariance();
     ++with_noise;
   }
   if (!configured && with_noise > 0) {
     // Samples without a detector covariance get the detector's average.
     MeasurementNoise fallback;
-    fallback.camera.rotation = mean_camera.rotation / with_noise;
-    fallback.camera.translation = mean_camera.translation / with_noise;
+    fallback.camera = PoseNoise::from_pose_covariance(mean_camera / with_noise);
     set.noise = fallback;
   }
   return set;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <algorithm>
 
 namespace handeye {
@@ -33,9 +34,17 @@ Isometry3d random_pose(Rng& rng, double translation_extent) {
   return se3::make_pose(q.toRotationMatrix(), Vector3d(x, y, z));
 }
 
-Isometry3d perturb(Rng& rng, const Isometry3d& pose, const DecoupledCovariance& noise) {
+Isometry3d perturb(Rng& rng, const Isometry3d& pose, const PoseNoise& noise) {
   const Vector3d xi_R = sample_gaussian(rng, noise.rotation);
-  const Vector3d xi_t = sample_gaussian(rng, noise.translation);
+  Vector3d xi_t;
+  if (!noise.has_cross_block()) {
+    xi_t = sample_gaussian(rng, noise.translation);
+  } else {
+    // xi_t given xi_R (Gaussian conditioning): the same three draws, and the pair
+    // has the full 6x6, cross block included.
+    const Matrix3d gain = noise.translation_rotation * Eigen::CompleteOrthogonalDecomposition<Matrix3d>(noise.rotation).pseudoInverse();
+    xi_t = gain * xi_R + sample_gaussian(rng, noise.translation - gain * noise.translation_rotation.transpose());
+  }
   return se3::make_pose(so3::exp(xi_R) * pose.linear(), pose.translation() + xi_t);
 }
 

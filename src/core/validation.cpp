@@ -56,6 +56,33 @@ void check_covariance(const DecoupledCovariance& covariance, const std::string& 
   check_covariance(covariance.translation, where + ".translation");
 }
 
+void check_covariance(const PoseNoise& covariance, const std::string& where) {
+  check_covariance(covariance.rotation, where + ".rotation");
+  check_covariance(covariance.translation, where + ".translation");
+  if (!covariance.has_cross_block()) return;
+  if (!covariance.translation_rotation.allFinite()) {
+    throw HandEyeError(ErrorCode::NonFinite, "covariance contains NaN or Inf", where + ".translation_rotation",
+                       "drop this sample or fix the source that produced it");
+  }
+  // The 6x6 as correlations (unit diagonal), so that m^2 and rad^2 do not set the
+  // tolerance: PSD there is PSD of the covariance.
+  const Matrix6d C = covariance.as_pose_covariance();
+  const Vector6d d = C.diagonal();
+  if (!(d.array() > 0.0).all()) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "a cross term pairs with a zero variance", where,
+                       "a pose axis without variance cannot correlate with another; zero its cross terms");
+  }
+  const Vector6d s = d.cwiseSqrt().cwiseInverse();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(s.asDiagonal() * C * s.asDiagonal(), Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues().minCoeff() < -1e-9) {
+    throw HandEyeError(ErrorCode::InvalidNoise,
+                       "the rotation-translation cross block is larger than the variances allow (the 6x6 is not "
+                       "positive semi-definite; smallest correlation eigenvalue " +
+                           number_text(eig.eigenvalues().minCoeff(), 4) + ")",
+                       where, "check the cross block's units (m rad) and that it is E[xi_t xi_R^T] of the same pose");
+  }
+}
+
 Eigen::Quaterniond checked_unit_quaternion(const Eigen::Quaterniond& q, const std::string& where) {
   if (!q.coeffs().allFinite()) {
     throw HandEyeError(ErrorCode::NonFinite, "quaternion contains NaN or Inf", where,

@@ -127,11 +127,24 @@ Isometry3d read_pose(const YAML::Node& node, const Location& at) {
   return se3::make_pose(unit.toRotationMatrix(), Vector3d(t[0], t[1], t[2]));
 }
 
-DecoupledCovariance read_covariance(const YAML::Node& node, const Location& at) {
-  const std::string hint = "a noise entry is {rotation: [9 numbers, rad^2], translation: [9 numbers, m^2]}, row-major";
-  DecoupledCovariance c;
-  c.rotation = from_row_major_3x3(as_numbers<9>(require(node, "rotation", at, hint), at / "rotation", "3x3 covariance, rad^2"));
-  c.translation = from_row_major_3x3(as_numbers<9>(require(node, "translation", at, hint), at / "translation", "3x3 covariance, m^2"));
+/// A noise entry: {rotation: [9], translation: [9]} (no cross block) or the full
+/// {pose: [36]} in ROS order (with the rotation-translation cross block).
+PoseNoise read_covariance(const YAML::Node& node, const Location& at) {
+  const std::string hint = "a noise entry is {rotation: [9 numbers, rad^2], translation: [9 numbers, m^2]}, row-major, "
+                           "or {pose: [36 numbers, ROS order x y z rx ry rz]} with the cross block";
+  PoseNoise c;
+  if (node.IsMap() && node["pose"]) {
+    if (node["rotation"] || node["translation"]) {
+      throw HandEyeError(ErrorCode::MalformedFile, "both `pose` and `rotation`/`translation` are given", at.str(),
+                         "give either the full `pose` 6x6 or the two 3x3 blocks, not both");
+    }
+    const Matrix6d full = from_row_major_6x6(as_numbers<36>(node["pose"], at / "pose", "6x6 covariance, ROS order"));
+    check_covariance(full, (at / "pose").str());
+    c = PoseNoise::from_pose_covariance(full);
+  } else {
+    c.rotation = from_row_major_3x3(as_numbers<9>(require(node, "rotation", at, hint), at / "rotation", "3x3 covariance, rad^2"));
+    c.translation = from_row_major_3x3(as_numbers<9>(require(node, "translation", at, hint), at / "translation", "3x3 covariance, m^2"));
+  }
   check_covariance(c, at.str());
   return c;
 }
@@ -213,12 +226,19 @@ void emit_covariance3(YAML::Emitter& out, const Matrix3d& covariance) {
   emit_numbers(out, values.data(), values.size());
 }
 
-void emit_decoupled(YAML::Emitter& out, const DecoupledCovariance& c) {
+/// The two blocks when there is no cross block (readable), else the full 6x6.
+void emit_pose_noise(YAML::Emitter& out, const PoseNoise& c) {
   out << YAML::BeginMap;
-  out << YAML::Key << "rotation" << YAML::Value;
-  emit_covariance3(out, c.rotation);
-  out << YAML::Key << "translation" << YAML::Value;
-  emit_covariance3(out, c.translation);
+  if (c.has_cross_block()) {
+    out << YAML::Key << "pose" << YAML::Value;
+    const auto values = to_row_major_6x6(c.as_pose_covariance());
+    emit_numbers(out, values.data(), values.size());
+  } else {
+    out << YAML::Key << "rotation" << YAML::Value;
+    emit_covariance3(out, c.rotation);
+    out << YAML::Key << "translation" << YAML::Value;
+    emit_covariance3(out, c.translation);
+  }
   out << YAML::EndMap;
 }
 
@@ -226,9 +246,9 @@ void emit_noise(YAML::Emitter& out, const MeasurementNoise& noise, const char* r
                 const char* camera_key) {
   out << YAML::BeginMap;
   out << YAML::Key << robot_key << YAML::Value;
-  emit_decoupled(out, noise.robot);
+  emit_pose_noise(out, noise.robot);
   out << YAML::Key << camera_key << YAML::Value;
-  emit_decoupled(out, noise.camera);
+  emit_pose_noise(out, noise.camera);
   out << YAML::EndMap;
 }
 

@@ -40,7 +40,7 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   const RigTrajectory trajectory = make_rig_trajectory(rng, o.setup, result.X, o.poses, o.pause, o.move);
   result.duration = trajectory.duration();
 
-  DecoupledCovariance noise;  // in the camera frame (the parent of T_camera_pattern)
+  PoseNoise noise;  // in the camera frame (the parent of T_camera_pattern)
   const double lateral = o.lateral_noise_mm * 1e-3, depth = o.depth_noise_mm * 1e-3;
   const double tilt = o.tilt_noise_deg * M_PI / 180, roll = o.roll_noise_deg * M_PI / 180;
   noise.translation = Eigen::Vector3d(lateral * lateral, lateral * lateral, depth * depth).asDiagonal();

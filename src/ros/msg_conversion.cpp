@@ -63,15 +63,11 @@ geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose) {
   return msg;
 }
 
-std::optional<DecoupledCovariance> decoupled_if_nonzero(const boost::array<double, 36>& covariance) {
+std::optional<Matrix6d> covariance_if_nonzero(const boost::array<double, 36>& covariance) {
   if (std::all_of(covariance.begin(), covariance.end(), [](double v) { return v == 0.0; })) return std::nullopt;
   std::array<double, 36> values;
   std::copy(covariance.begin(), covariance.end(), values.begin());
-  const Matrix6d full = from_row_major_6x6(values);
-  DecoupledCovariance c;
-  c.translation = full.topLeftCorner<3, 3>();
-  c.rotation = full.bottomRightCorner<3, 3>();
-  return c;
+  return from_row_major_6x6(values);
 }
 
 boost::array<double, 9> to_msg_array(const Eigen::Matrix3d& covariance) {

@@ -128,7 +128,7 @@ void ObjectLocalizer::locate(const Detection& detection) {
   input.X = *X;
   input.T_camera_object.pose = conversions::to_eigen(detection.pose);
   if (detection.covariance) {
-    input.T_camera_object.covariance = detection.covariance->as_pose_covariance();
+    input.T_camera_object.covariance = *detection.covariance;  // the full 6x6, cross block included
   } else if (detection_fallback_) {
     input.T_camera_object.covariance = *detection_fallback_;
   } else {

@@ -22,7 +22,7 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
       detection.stamp = d.pose.header.stamp.isZero() ? msg.header.stamp : d.pose.header.stamp;
       detection.frame = d.pose.header.frame_id.empty() ? msg.header.frame_id : d.pose.header.frame_id;
       detection.pose = d.pose.pose.pose;
-      detection.covariance = conversions::decoupled_if_nonzero(d.pose.pose.covariance);
+      detection.covariance = conversions::covariance_if_nonzero(d.pose.pose.covariance);
       return detection;
     }
   }
@@ -33,7 +33,7 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
 }
 
 Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg) {
-  return {msg.header.stamp, msg.header.frame_id, msg.pose.pose, conversions::decoupled_if_nonzero(msg.pose.covariance)};
+  return {msg.header.stamp, msg.header.frame_id, msg.pose.pose, conversions::covariance_if_nonzero(msg.pose.covariance)};
 }
 
 Detection detection_of(const geometry_msgs::PoseStamped& msg) {
@@ -65,7 +65,8 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
   }
   if (detection.covariance) {
     try {  // a sample with a NaN or negative variance would poison every later solve
-      check_covariance(*detection.covariance, "detection covariance");
+      check_covariance(PoseNoise::from_pose_covariance(*detection.covariance), "detection covariance");  // names the block
+      check_covariance(*detection.covariance, "detection covariance");  // and the 6x6's symmetry
     } catch (const HandEyeError& e) {
       result.refusal = Refusal{"bad_covariance", std::string("a detection's covariance is unusable: ") + e.what() +
                                                      ". Fix the detector, or send an all-zero covariance to use the "
@@ -80,8 +81,6 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
   }
   Observation o;
   o.stamp = detection.stamp.toSec();
-  o.T_camera_pattern = conversions::to_eigen(detection.pose);
-  o.pattern_noise = detection.covariance;
   try {
     // The robot pose at the detection's stamp; never the latest (Time(0)).
     o.T_base_effector = conversions::to_eigen(
@@ -93,11 +92,12 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
                                                 ". Is the robot state publisher running, and are the clocks in sync?"};
     return result;
   }
+  PoseWithCovariance pattern{conversions::to_eigen(detection.pose), detection.covariance.value_or(Matrix6d::Zero())};
   if (!detection.frame.empty() && detection.frame != config.rig.frames.camera) {
-    try {  // a detection in another optical frame of the same camera
-      o.T_camera_pattern = conversions::to_eigen(
-                               tf.lookupTransform(config.rig.frames.camera, detection.frame, detection.stamp).transform) *
-                           o.T_camera_pattern;
+    try {  // a detection in another frame of the same camera: pose and covariance move together
+      const Eigen::Isometry3d T_camera_frame = conversions::to_eigen(
+          tf.lookupTransform(config.rig.frames.camera, detection.frame, detection.stamp).transform);
+      pattern = compose(PoseWithCovariance{T_camera_frame, Matrix6d::Zero()}, pattern);  // the frame change is exact
     } catch (const tf2::TransformException& e) {
       result.refusal = Refusal{"detection_frame", "the detection is in frame `" + detection.frame + "`, not `" +
                                                       config.rig.frames.camera + "`, and TF cannot relate them: " +
@@ -105,6 +105,8 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
       return result;
     }
   }
+  o.T_camera_pattern = pattern.pose;
+  if (detection.covariance) o.pattern_noise = PoseNoise::from_pose_covariance(pattern.covariance);
   result.observation = o;
   return result;
 }

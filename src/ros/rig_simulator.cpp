@@ -160,7 +160,7 @@ class RigSimulator {
   bool publish_robot_tf_, detection_covariance_;
   double latency_;
   std::vector<int> tag_ids_;
-  DecoupledCovariance noise_;
+  PoseNoise noise_;  // in the optical frame
   RigTrajectory trajectory_;
   Eigen::Isometry3d flange_T_tool_;
   ros::Time start_;

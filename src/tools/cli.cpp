@@ -326,7 +326,7 @@ io::PoseFile pose_argument(const std::string& value, const std::string& option) 
 /// The covariance of a pose argument: isotropic sigmas when given, else the
 /// file's own covariance, else `fallback` (the calibration's noise model), said aloud.
 Matrix6d covariance_of(const io::PoseFile& pose, const po::variables_map& vm, const std::string& prefix,
-                       const std::optional<DecoupledCovariance>& fallback, const std::string& fallback_name,
+                       const std::optional<PoseNoise>& fallback, const std::string& fallback_name,
                        std::ostream& out) {
   const std::string mm = prefix + "-sigma-mm", deg = prefix + "-sigma-deg";
   if (vm.count(mm) || vm.count(deg)) {
@@ -380,7 +380,7 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
                        calibration_path + ": setup", "add `setup: eye_in_hand` or `setup: eye_to_hand` to it");
   }
   const Setup setup = *calibration.context.setup;
-  const auto noise_part = [&](bool robot) -> std::optional<DecoupledCovariance> {
+  const auto noise_part = [&](bool robot) -> std::optional<PoseNoise> {
     if (!calibration.noise) return std::nullopt;
     return robot ? calibration.noise->robot : calibration.noise->camera;
   };
@@ -469,13 +469,9 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
     }
   }
   if (!estimate) {
-    std::optional<DecoupledCovariance> robot;
+    std::optional<PoseNoise> robot;
     if (vm.count("robot-sigma-mm") || vm.count("robot-sigma-deg")) {
-      io::PoseFile none;
-      robot = DecoupledCovariance{};
-      const Matrix6d c = covariance_of(none, vm, "robot", std::nullopt, "", out);
-      robot->rotation = c.bottomRightCorner<3, 3>();
-      robot->translation = c.topLeftCorner<3, 3>();
+      robot = PoseNoise::from_pose_covariance(covariance_of(io::PoseFile{}, vm, "robot", std::nullopt, "", out));
     }
     if (!calibration_path.empty()) {
       const io::CalibrationFile calibration = io::read_result(calibration_path);

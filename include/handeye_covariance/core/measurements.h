@@ -13,13 +13,13 @@
 
 namespace handeye {
 
-/// Noise of the two measured poses, each as decoupled rotation/translation
-/// covariances (rad^2, m^2; rotation as a left perturbation in the parent frame).
+/// Noise of the two measured poses, each a full 6x6 covariance (PoseNoise: rad^2,
+/// m^2, and the cross block; rotation as a left perturbation in the parent frame).
 ///   samples: robot = T_base_effector, camera = T_camera_pattern
 ///   motions: robot = A,               camera = B
 struct MeasurementNoise {
-  DecoupledCovariance robot;
-  DecoupledCovariance camera;
+  PoseNoise robot;
+  PoseNoise camera;
 };
 
 struct PoseSample {

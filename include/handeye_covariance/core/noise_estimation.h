@@ -54,7 +54,7 @@ NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const R
 /// to the dof correction. `robot_noise`, when given, is subtracted through
 /// each sample's Jacobian. Throws NoiseUnidentifiable with fewer than 4 samples.
 NoiseEstimate noise_from_residuals(const SampleSet& samples, const Eigen::Isometry3d& X, bool X_fitted_to_these_samples,
-                                   const std::optional<DecoupledCovariance>& robot_noise = std::nullopt);
+                                   const std::optional<PoseNoise>& robot_noise = std::nullopt);
 
 /// The mean pose of eq. (66-67): the rotation mean on SO(3) (iterated about
 /// the current mean so it holds near pi too) and the arithmetic mean of t.

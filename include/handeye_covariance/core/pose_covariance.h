@@ -28,6 +28,20 @@ struct DecoupledCovariance {
   Matrix6d as_pose_covariance() const;
 };
 
+/// A measured pose's noise: the full 6x6 covariance in ROS order, kept as its
+/// blocks. Detectors give a cross block (a pattern seen off-centre couples its
+/// rotation and translation errors); it travels with the pose to the estimator.
+struct PoseNoise {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();     // rad^2, left perturbation
+  Eigen::Matrix3d translation = Eigen::Matrix3d::Zero();  // m^2
+  /// E[xi_t xi_R^T] (m rad): the top-right block of the ROS-order 6x6.
+  Eigen::Matrix3d translation_rotation = Eigen::Matrix3d::Zero();
+
+  Matrix6d as_pose_covariance() const;
+  static PoseNoise from_pose_covariance(const Matrix6d& covariance);  // symmetrised
+  bool has_cross_block() const { return !translation_rotation.isZero(0.0); }
+};
+
 /// d(perturbation of T^-1) / d(perturbation of T), ROS order.
 Matrix6d inverse_jacobian(const Eigen::Isometry3d& T);
 

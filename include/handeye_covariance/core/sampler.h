@@ -36,7 +36,7 @@ struct Observation {
   double stamp = 0.0;                               // s, the detection's stamp
   Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();  // looked up at `stamp`
   Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
-  std::optional<DecoupledCovariance> pattern_noise;  // from the detector, when it gives one
+  std::optional<PoseNoise> pattern_noise;  // the detector's full 6x6 in the camera frame, when it gives one
 };
 
 enum class SamplerState { WaitingForData, WaitingForStillness, WaitingForMotion };

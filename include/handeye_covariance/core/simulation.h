@@ -16,8 +16,13 @@ Eigen::Vector3d sample_gaussian(Rng& rng, const Eigen::Matrix3d& covariance);
 /// Rotation uniform on SO(3) (Shoemake), translation uniform in [-extent, extent]^3.
 Eigen::Isometry3d random_pose(Rng& rng, double translation_extent);
 
-/// The noise model of the paper (eq. 3-6): R = exp([xi_R]) R_bar, t = t_bar + xi_t.
-Eigen::Isometry3d perturb(Rng& rng, const Eigen::Isometry3d& pose, const DecoupledCovariance& noise);
+/// The noise model of the paper (eq. 3-6): R = exp([xi_R]) R_bar, t = t_bar + xi_t, with
+/// (xi_t, xi_R) drawn from the full 6x6 (cross block included).
+Eigen::Isometry3d perturb(Rng& rng, const Eigen::Isometry3d& pose, const PoseNoise& noise);
+/// The same with the paper's decoupled blocks (no cross block).
+inline Eigen::Isometry3d perturb(Rng& rng, const Eigen::Isometry3d& pose, const DecoupledCovariance& noise) {
+  return perturb(rng, pose, PoseNoise{noise.rotation, noise.translation});
+}
 
 /// The paper's synthetic study (section IV-A), eq. (57-60), scaled by lambda.
 MeasurementNoise paper_noise(double lambda);

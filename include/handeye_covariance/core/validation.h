@@ -15,6 +15,8 @@ void check_pose(const Eigen::Isometry3d& pose, const std::string& where);
 /// Finite, symmetric and positive semi-definite.
 void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where);
 void check_covariance(const DecoupledCovariance& covariance, const std::string& where);
+/// Each block, then the cross block against them (a correlation beyond 1 is refused).
+void check_covariance(const PoseNoise& covariance, const std::string& where);
 void check_covariance(const Matrix6d& covariance, const std::string& where);  // ROS order, may have cross blocks
 
 /// |q| within 1e-3 of 1 and finite; returns the normalised quaternion.

@@ -25,9 +25,9 @@ geometry_msgs::Transform to_transform_msg(const Eigen::Isometry3d& pose);
 PoseWithCovariance to_core(const geometry_msgs::PoseWithCovariance& msg);
 geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose);
 
-/// The decoupled rotation and translation blocks of a ROS 6x6 covariance, or
-/// nothing when it is all zeros (apriltag_ros and most detectors send zeros).
-std::optional<DecoupledCovariance> decoupled_if_nonzero(const boost::array<double, 36>& covariance);
+/// The full ROS 6x6 covariance (cross block included), or nothing when it is all
+/// zeros (apriltag_ros and most detectors send zeros).
+std::optional<Matrix6d> covariance_if_nonzero(const boost::array<double, 36>& covariance);
 
 boost::array<double, 9> to_msg_array(const Eigen::Matrix3d& covariance);
 

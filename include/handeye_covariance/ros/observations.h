@@ -16,12 +16,13 @@
 
 namespace handeye {
 
-/// The pattern pose as a detector reported it.
+/// The pattern pose as a detector reported it, with its covariance: both in
+/// `frame`, and they move together (make_observation).
 struct Detection {
   ros::Time stamp;
   std::string frame;  // empty: the camera frame
   geometry_msgs::Pose pose;
-  std::optional<DecoupledCovariance> covariance;  // when the detector sent a non-zero one
+  std::optional<Matrix6d> covariance;  // the full 6x6, ROS order, when the detector sent a non-zero one
 };
 
 /// Why a detection gave no observation: `kind` is short and stable (for counts),
@@ -40,7 +41,10 @@ Detection detection_of(const geometry_msgs::PoseStamped& msg);
 Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern);
 
 /// Pairs the detection with T_base_effector looked up in `tf` AT THE DETECTION'S
-/// STAMP (the caller waits for TF first if it is filled live).
+/// STAMP (the caller waits for TF first if it is filled live). A detection in
+/// another frame of the same camera (camera_link for camera_optical_frame) is
+/// moved into the camera frame, its covariance with it (the adjoint of the
+/// frame change, through compose()).
 struct ObservationResult {
   std::optional<Observation> observation;
   std::optional<Refusal> refusal;
