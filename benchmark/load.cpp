@@ -128,7 +128,6 @@ LoadReport run_load(const LoadOptions& o) {
   ros::AsyncSpinner spinner(1);
   spinner.start();
 
-  const int pid = node_pid(o.node);
   const ros::WallTime connect_deadline = ros::WallTime::now() + ros::WallDuration(20.0);
   while (tf_pub.getNumSubscribers() == 0 || detection_pub.getNumSubscribers() == 0 || !have_status) {
     if (ros::WallTime::now() > connect_deadline) {
@@ -138,6 +137,7 @@ LoadReport run_load(const LoadOptions& o) {
     ros::WallDuration(0.05).sleep();
   }
   if (!reset.waitForExistence(ros::Duration(10.0))) throw std::runtime_error("load driver: no service " + o.reset_service);
+  const int pid = node_pid(o.node);  // registered by now: it publishes ~status
   std::uint32_t handled_before = 0;
   {
     std::lock_guard<std::mutex> lock(status_mutex);

@@ -18,7 +18,7 @@ std::string temp(const std::string& name) { return ::testing::TempDir() + "/bag_
 void expect_error(const std::string& bag, ErrorCode code, const std::string& mentions,
                   const SessionConfig& config = {}) {
   try {
-    replay_bag(bag, config, std::nullopt);
+    replay_bag(bag, config);
     ADD_FAILURE() << "expected " << to_string(code);
   } catch (const HandEyeError& e) {
     EXPECT_EQ(e.code(), code) << e.what();
@@ -36,7 +36,7 @@ void expect_recovers_truth(Setup setup, unsigned seed) {
   EXPECT_LT(std::filesystem::file_size(path), 2u * 1024 * 1024);
   SessionConfig config;
   config.rig.setup = setup;
-  const BagReplay replay = replay_bag(path, config, std::nullopt);
+  const BagReplay replay = replay_bag(path, config);
   EXPECT_EQ(replay.messages.at("/tf"), bag.tf_messages);
   EXPECT_EQ(replay.detections, bag.detections);
   EXPECT_GE(static_cast<int>(replay.samples.samples.size()), options.poses - 1);
@@ -61,7 +61,7 @@ TEST(Bag, EveryDetectionInputOfTheNode) {
     const SimulatedBag bag = write_simulated_bag(path, options);
     SessionConfig config;
     config.detection_input = type;
-    const BagReplay replay = replay_bag(path, config, std::nullopt);
+    const BagReplay replay = replay_bag(path, config);
     EXPECT_GE(replay.samples.samples.size(), 7u) << type;
     // Only the covariance-carrying kinds give a noise model; the others estimate it.
     EXPECT_EQ(replay.samples.noise.has_value(), type == "tags" || type == "pose_with_covariance") << type;
@@ -74,7 +74,7 @@ TEST(Bag, EveryDetectionInputOfTheNode) {
 TEST(Bag, ReplayIsDeterministic) {
   const std::string path = temp("twice.bag");
   write_simulated_bag(path, {});
-  const BagReplay a = replay_bag(path, {}, std::nullopt), b = replay_bag(path, {}, std::nullopt);
+  const BagReplay a = replay_bag(path, {}), b = replay_bag(path, {});
   ASSERT_EQ(a.samples.samples.size(), b.samples.samples.size());
   for (std::size_t i = 0; i < a.samples.samples.size(); ++i) EXPECT_EQ(*a.samples.samples[i].stamp, *b.samples.samples[i].stamp);
 }

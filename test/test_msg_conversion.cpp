@@ -105,7 +105,7 @@ TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
   good.stamp = ros::Time(10.5);
   good.pose.orientation.w = 1.0;
   good.pose.position.z = 0.5;
-  ASSERT_TRUE(make_observation(tf, config, good).observation);
+  ASSERT_TRUE(make_observation(tf, config.rig, good).observation);
 
   struct Row {
     std::string kind, mentions;
@@ -130,7 +130,7 @@ TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
   for (const Row& row : rows) {
     Detection d = good;
     row.edit(d);
-    const ObservationResult r = make_observation(tf, config, d);
+    const ObservationResult r = make_observation(tf, config.rig, d);
     ASSERT_TRUE(r.refusal) << row.kind;
     EXPECT_FALSE(r.observation) << row.kind;
     EXPECT_EQ(r.refusal->kind, row.kind);
@@ -193,7 +193,7 @@ TEST(Observations, ADetectionInAnotherCameraFrameMovesItsCovarianceWithItsPose) 
   d.frame = "camera_link";
   d.pose = conversions::to_pose_msg(T_link_pattern);
   d.covariance = link_covariance;
-  const ObservationResult r = make_observation(tf, SessionConfig{}, d);
+  const ObservationResult r = make_observation(tf, SessionConfig{}.rig, d);
   ASSERT_TRUE(r.observation) << r.refusal->message;
   const Eigen::Isometry3d expected_pose = T_link_optical.inverse() * T_link_pattern;
   EXPECT_LE((r.observation->T_camera_pattern.matrix() - expected_pose.matrix()).norm(), 1e-12);

@@ -15,7 +15,7 @@ std::string bag_path;
 TEST(CalibrationNode, RosbagPlayGivesTheSameSamplesAsTheOfflineReplay) {
   SessionConfig config;
   config.tag_ids = {0};
-  const BagReplay offline = replay_bag(bag_path, config, std::nullopt);
+  const BagReplay offline = replay_bag(bag_path, config);
   const Calibration expected = solve(offline.samples);
 
   test::StatusWatcher status("/play_eye_on_hand/handeye_calibration/status");

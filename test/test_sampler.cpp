@@ -109,24 +109,24 @@ TEST(Sampler, ManualSamplingNeedsRecentStillData) {
   EXPECT_TRUE(s.samples().empty());
 }
 
-TEST(Sampler, DetectorNoiseBecomesPerSampleNoise) {
-  MeasurementNoise configured = paper_noise(1e-5);
-  std::vector<PoseSample> samples(3);
-  MeasurementNoise detector;
-  detector.camera.rotation = 4e-6 * Eigen::Matrix3d::Identity();
-  samples[1].noise = detector;
-  // With configured noise: the detector's pattern noise and the configured robot noise.
-  SampleSet set = make_sample_set(Rig{}, configured, samples);
-  EXPECT_EQ(set.noise->camera.rotation, configured.camera.rotation);
-  EXPECT_EQ(set.samples[1].noise->camera.rotation, detector.camera.rotation);
-  EXPECT_EQ(set.samples[1].noise->robot.rotation, configured.robot.rotation);
-  // Without: robot exact, and the detector's mean for the samples it did not cover.
-  set = make_sample_set(Rig{}, std::nullopt, samples);
-  ASSERT_TRUE(set.noise.has_value());
-  EXPECT_EQ(set.noise->camera.rotation, detector.camera.rotation);
-  EXPECT_TRUE(set.noise->robot.rotation.isZero());
-  // Neither: estimated.
-  EXPECT_FALSE(make_sample_set(Rig{}, std::nullopt, std::vector<PoseSample>(3)).noise.has_value());
+TEST(Sampler, ASampleWithTheDetectorsCovarianceGetsTheRobotNoise) {
+  PoseNoise robot;
+  robot.translation = 2.5e-9 * Eigen::Matrix3d::Identity();
+  Sampler s(options(), robot);
+  PoseNoise detector;
+  detector.translation = 1e-7 * Eigen::Matrix3d::Identity();
+  detector.translation_rotation(2, 0) = 1e-9;
+  for (double t = 0; t < 1.5; t += 0.05) {
+    Observation o = at(t, pose(0.0));
+    o.pattern_noise = detector;
+    s.observe(o);
+  }
+  hold(s, pose(0.1), 1.5, 3.0);  // no detector covariance: no per-sample noise
+  ASSERT_EQ(s.samples().size(), 2u);
+  ASSERT_TRUE(s.samples()[0].noise);
+  EXPECT_EQ(s.samples()[0].noise->camera.as_pose_covariance(), detector.as_pose_covariance());
+  EXPECT_EQ(s.samples()[0].noise->robot.translation, robot.translation);
+  EXPECT_FALSE(s.samples()[1].noise);
 }
 
 }  // namespace

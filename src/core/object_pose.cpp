@@ -15,6 +15,31 @@ Matrix6d sandwich(const Matrix6d& J, const Matrix6d& covariance) { return J * co
 
 }  // namespace
 
+const char* to_string(CovarianceOrigin origin) {
+  switch (origin) {
+    case CovarianceOrigin::Input: return "its own";
+    case CovarianceOrigin::Stated: return "stated";
+    case CovarianceOrigin::CalibrationModel: return "the calibration's noise model";
+    case CovarianceOrigin::None: return "none";
+  }
+  return "none";
+}
+
+ChosenCovariance choose_covariance(const std::optional<Matrix6d>& input, const std::optional<Matrix6d>& stated,
+                                   const std::optional<PoseNoise>& calibration_model) {
+  if (input) return {*input, CovarianceOrigin::Input};
+  if (stated) return {*stated, CovarianceOrigin::Stated};
+  if (calibration_model) return {calibration_model->as_pose_covariance(), CovarianceOrigin::CalibrationModel};
+  return {};
+}
+
+Matrix6d isotropic_covariance(double sigma_translation, double sigma_rotation) {
+  Matrix6d c = Matrix6d::Zero();
+  c.diagonal() << Eigen::Vector3d::Constant(sigma_translation * sigma_translation),
+      Eigen::Vector3d::Constant(sigma_rotation * sigma_rotation);
+  return c;
+}
+
 ObjectPose object_in_base(const ObjectPoseInput& input) {
   // Eq. (68): T = T_base_parent X P, T_base_parent = E (eye_in_hand) or the identity (eye_to_hand).
   const bool in_hand = input.rig.eye_in_hand();

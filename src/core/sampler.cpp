@@ -39,7 +39,7 @@ bool close(const Observation& a, const Observation& reference, const SamplerOpti
 
 }  // namespace
 
-Sampler::Sampler(SamplerOptions options) : options_(options) {}
+Sampler::Sampler(SamplerOptions options, PoseNoise robot_noise) : options_(options), robot_noise_(robot_noise) {}
 
 std::optional<SampleOutcome> Sampler::observe(const Observation& observation) {
   if (!history_.empty() && observation.stamp < history_.back().stamp) {
@@ -90,11 +90,7 @@ SampleOutcome Sampler::try_add(const Observation& observation) {
   sample.T_base_effector = observation.T_base_effector;
   sample.T_camera_pattern = observation.T_camera_pattern;
   sample.stamp = observation.stamp;
-  if (observation.pattern_noise) {
-    MeasurementNoise noise;
-    noise.camera = *observation.pattern_noise;  // robot part filled in by the caller's noise model
-    sample.noise = noise;
-  }
+  if (observation.pattern_noise) sample.noise = MeasurementNoise{robot_noise_, *observation.pattern_noise};
   samples_.push_back(sample);
   return {true, "accepted sample " + std::to_string(samples_.size() - 1)};
 }
@@ -127,30 +123,6 @@ void Sampler::reset() {
   history_.clear();
   waiting_for_motion_ = false;
   anchor_.reset();
-}
-
-SampleSet make_sample_set(const Rig& rig, const std::optional<MeasurementNoise>& configured,
-                          const std::vector<PoseSample>& samples) {
-  SampleSet set;
-  set.rig = rig;
-  set.noise = configured;
-  set.samples = samples;
-  const PoseNoise robot = configured ? configured->robot : PoseNoise{};
-  Matrix6d mean_camera = Matrix6d::Zero();
-  int with_noise = 0;
-  for (PoseSample& sample : set.samples) {
-    if (!sample.noise) continue;
-    sample.noise->robot = robot;
-    mean_camera += sample.noise->camera.as_pose_covariance();
-    ++with_noise;
-  }
-  if (!configured && with_noise > 0) {
-    // Samples without a detector covariance get the detector's average.
-    MeasurementNoise fallback;
-    fallback.camera = PoseNoise::from_pose_covariance(mean_camera / with_noise);
-    set.noise = fallback;
-  }
-  return set;
 }
 
 SamplerState Sampler::state() const {

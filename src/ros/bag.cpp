@@ -128,7 +128,14 @@ HandEyeError no_data(const std::string& what, const std::string& path, const std
 
 }  // namespace
 
-BagReplay replay_bag(const std::string& path, const SessionConfig& config, const std::optional<MeasurementNoise>& noise,
+BagReplay replay_bag(const std::string& path, const SessionConfig& config, std::function<void(double)> progress) {
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();  // a replay persists nothing
+  CalibrationSession session(settings);
+  return replay_bag(path, config, session, std::move(progress));
+}
+
+BagReplay replay_bag(const std::string& path, const SessionConfig& config, CalibrationSession& session,
                      std::function<void(double)> progress) {
   rosbag::Bag bag;
   try {
@@ -163,18 +170,17 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
       }
     }
 
-    // Pass 2: the detections, in stamp order, through the node's sampling logic.
-    Sampler sampler(config.sampler);
+    // Pass 2: the detections, in stamp order, through the node's session.
     const auto feed = [&](const Detection& detection) {
-      const ObservationResult r = make_observation(tf, config, detection);
+      const ObservationResult r = make_observation(tf, config.rig, detection);
       if (r.refusal) {
         ++replay.refusals[r.refusal->kind];
         replay.refusal_examples.emplace(r.refusal->kind, r.refusal->message);
         return;
       }
       ++replay.observations;
-      const std::optional<SampleOutcome> outcome = sampler.observe(*r.observation);
-      if (outcome && !outcome->accepted) {
+      const std::optional<SessionEvent> outcome = session.observe(*r.observation);
+      if (outcome && !outcome->success) {
         ++replay.refusals["too_close"];
         replay.refusal_examples.emplace("too_close", outcome->message);
       }
@@ -231,7 +237,7 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, const
         if (progress && (i % 50 == 0 || i + 1 == detections.size())) progress(0.5 + 0.5 * (i + 1) / detections.size());
       }
     }
-    replay.samples = make_sample_set(config.rig, noise, sampler.samples());
+    replay.samples = session.sample_set();
   } catch (const rosbag::BagException& e) {
     throw HandEyeError(ErrorCode::IoError, std::string("the bag is corrupt or truncated: ") + e.what(), path,
                        "try `rosbag reindex` on a copy of it, or record again");

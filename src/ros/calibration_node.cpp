@@ -1,18 +1,16 @@
 #include "handeye_covariance/ros/calibration_node.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <tf2/exceptions.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <filesystem>
-#include <set>
 
-#include "handeye_covariance/core/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
-#include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/ros/params.h"
 
 namespace handeye {
@@ -30,32 +28,37 @@ double quantile(std::vector<double> values, double q) {
   return values[k];
 }
 
-std::string expand_home(const std::string& path) {
-  if (path.rfind("~/", 0) != 0) return path;
-  const char* home = std::getenv("HOME");
-  return std::string(home ? home : ".") + path.substr(1);
+/// The node's settings: ~parameters over the defaults, default file names as easy_handeye's.
+SessionConfig read_config(const ros::NodeHandle& private_node) {
+  SessionConfig config;
+  load_session_config(private_node, config);
+  const std::string dir = "~/.ros/handeye_covariance/";
+  if (config.calibration_file.empty()) config.calibration_file = dir + config.name() + ".yaml";
+  if (config.session_file.empty()) config.session_file = dir + config.name() + "_samples.yaml";
+  return config;
+}
+
+geometry_msgs::PoseStamped stamped(const Eigen::Isometry3d& E, const std::string& frame) {
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = ros::Time::now();
+  pose.header.frame_id = frame;
+  pose.pose = conversions::to_pose_msg(E);
+  return pose;
 }
 
 }  // namespace
 
 CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node)
-    : node_(node), private_node_(private_node), detection_node_(node), tf_listener_(tf_buffer_) {
-  load_session_config(private_node_, config_);
-  sampler_ = Sampler(config_.sampler);
-  if (config_.calibration_file.empty()) config_.calibration_file = "~/.ros/handeye_covariance/" + config_.name() + ".yaml";
-  if (config_.session_file.empty()) config_.session_file = "~/.ros/handeye_covariance/" + config_.name() + "_samples.yaml";
-  config_.calibration_file = expand_home(config_.calibration_file);
-  config_.session_file = expand_home(config_.session_file);
-  if (!config_.noise_config.empty()) noise_ = io::read_noise_file(expand_home(config_.noise_config));
-  criterion_from_string(config_.suggest_criterion);  // refuse a typo at start, not at the first sample
-  if (!config_.candidate_poses_file.empty()) {
-    candidate_poses_ = io::read_candidate_poses(expand_home(config_.candidate_poses_file));
-  }
-
-  if (config_.resume && std::filesystem::exists(config_.session_file)) {
-    sampler_.set_samples(io::read_samples(config_.session_file).samples);
-    ROS_INFO("resumed %zu samples from %s", sampler_.samples().size(), config_.session_file.c_str());
-    last_event_ = "resumed " + std::to_string(sampler_.samples().size()) + " samples";
+    : config_(read_config(private_node)),
+      node_(node),
+      private_node_(private_node),
+      detection_node_(node),
+      tf_listener_(tf_buffer_),
+      session_(session_settings(config_)) {
+  if (config_.resume) {
+    const SessionEvent resumed = session_.resume();
+    ROS_INFO("%s (%s)", resumed.message.c_str(), session_.settings().session_file.c_str());
+    if (resumed.success) last_event_ = resumed.message;
   }
 
   calibration_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("calibration", 1, true);
@@ -92,31 +95,39 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
     throw std::invalid_argument("~detection_input must be tags, pose_with_covariance, pose or tf, not `" +
                                 config_.detection_input + "`");
   }
+  worker_ = std::thread(&CalibrationNode::work, this);
   detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
   detection_spinner_->start();
   status_timer_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     publish_status();
   });
-
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (sampler_.samples().size() >= 3) samples_changed(last_event_);
-  ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples",
-           to_string(config_.rig.setup), config_.rig.camera_parent_frame().c_str(), config_.rig.frames.camera.c_str(),
-           config_.detection_input.c_str(), config_.detection_input == "tf" ? config_.rig.frames.pattern.c_str() : topic.c_str(),
-           sampler_.samples().size());
+  const Rig& rig = config_.rig;
+  ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples", to_string(rig.setup),
+           rig.camera_parent_frame().c_str(), rig.frames.camera.c_str(), config_.detection_input.c_str(),
+           config_.detection_input == "tf" ? rig.frames.pattern.c_str() : topic.c_str(), session_.samples().size());
 }
 
 CalibrationNode::~CalibrationNode() {
   if (detection_spinner_) detection_spinner_->stop();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  work_.notify_all();
+  if (worker_.joinable()) worker_.join();
 }
 
-// ------------------------------------------------------------------ inputs
+// ------------------------------------------------------------------ inputs (detection thread)
 
 void CalibrationNode::on_tags(const TagDetectionArray::ConstPtr& msg) {
   std::optional<Refusal> refusal;
   const std::optional<Detection> detection = select_detection(*msg, config_.tag_ids, refusal);
-  if (refusal) refuse(refusal->message);
+  if (refusal) {
+    ROS_WARN_THROTTLE(2.0, "sample refused: %s", refusal->message.c_str());
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_event_ = "refused: " + refusal->message;
+  }
   if (detection) {
     observe(*detection);
   } else {
@@ -138,7 +149,22 @@ void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
 }
 
 void CalibrationNode::observe(const Detection& detection) {
-  handle(detection);
+  // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.
+  if (!detection.stamp.isZero()) {
+    tf_buffer_.canTransform(config_.rig.frames.base, config_.rig.frames.effector, detection.stamp,
+                            ros::Duration(config_.tf_timeout));
+  }
+  const ObservationResult result = make_observation(tf_buffer_, config_.rig, detection);
+  if (result.refusal) ROS_WARN_THROTTLE(2.0, "sample refused: %s", result.refusal->message.c_str());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);  // the short lock: the sampler, and a file write when a sample is taken
+    if (result.refusal) {
+      last_event_ = "refused: " + result.refusal->message;
+    } else if (const std::optional<SessionEvent> event = session_.observe(*result.observation)) {
+      if (!event->success) ROS_WARN("%s", event->message.c_str());
+      record(*event, true);
+    }
+  }
   record_handled(detection.stamp);
 }
 
@@ -150,72 +176,49 @@ void CalibrationNode::record_handled(const ros::Time& stamp) {
   if (detection_ages_.size() > kAgeWindow) detection_ages_.pop_front();
 }
 
-void CalibrationNode::handle(const Detection& detection) {
-  // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.
-  if (!detection.stamp.isZero()) {
-    tf_buffer_.canTransform(config_.rig.frames.base, config_.rig.frames.effector, detection.stamp,
-                            ros::Duration(config_.tf_timeout));
+// ------------------------------------------------------------------ the session's changes and the worker
+
+void CalibrationNode::record(const SessionEvent& event, bool appended) {  // lock held
+  last_event_ = event.message;
+  if (event.changed && !appended) analysis_.reset();  // it describes samples that are gone
+  if (event.changed) {
+    ROS_INFO("%s (%zu samples)", event.message.c_str(), session_.samples().size());
+    work_.notify_one();
   }
-  const ObservationResult result = make_observation(tf_buffer_, config_, detection);
-  if (result.refusal) return refuse(result.refusal->message);
-
-  std::lock_guard<std::mutex> lock(mutex_);
-  const std::optional<SampleOutcome> outcome = sampler_.observe(*result.observation);
-  if (!outcome) return;
-  if (outcome->accepted) {
-    samples_changed(outcome->message);
-  } else {
-    ROS_WARN("%s", outcome->message.c_str());
-    last_event_ = outcome->message;
-    publish_status();
-  }
-}
-
-void CalibrationNode::refuse(const std::string& reason) {
-  ROS_WARN_THROTTLE(2.0, "sample refused: %s", reason.c_str());
-  std::lock_guard<std::mutex> lock(mutex_);
-  last_event_ = "refused: " + reason;
-}
-
-// ------------------------------------------------------------------ state
-
-SampleSet CalibrationNode::sample_set() const {
-  return make_sample_set(config_.rig, noise_, sampler_.samples());
-}
-
-void CalibrationNode::samples_changed(const std::string& event) {
-  last_event_ = event;
-  ROS_INFO("%s (%zu samples)", event.c_str(), sampler_.samples().size());
-  try {
-    io::write_file_atomically(config_.session_file, io::format_samples(sample_set()));
-  } catch (const HandEyeError& e) {
-    ROS_ERROR("could not save the session: %s", e.what());
-  }
-  estimate_.reset();
-  next_pose_.reset();
-  if (sampler_.samples().size() >= 3) {
-    try {
-      const SampleSet set = sample_set();
-      estimate_ = solve_samples(set, config_.reject_outliers);
-      publish_estimate(*estimate_);
-      const SampleSet kept = without_rejected(set, *estimate_);
-      const SuggestOptions options = suggest_options(config_.suggest_criterion);
-      const Suggestion s = rank_candidates(kept, *estimate_, candidates(kept, options), options);
-      if (!s.ranked.empty()) next_pose_ = s.ranked.front();
-    } catch (const HandEyeError& e) {
-      last_event_ = event + (estimate_ ? "; no next pose: " : "; no estimate yet: ") + e.what();
-    }
+  if (!event.persist_error.empty()) {
+    ROS_ERROR("could not save the session: %s", event.persist_error.c_str());
+    last_event_ += "; the session file could not be written: " + event.persist_error;
   }
   publish_status();
 }
 
-void CalibrationNode::publish_status() {  // called with mutex_ held
+void CalibrationNode::work() {
+  // Below the detection thread: on two cores a ranking must not take the CPU from the inputs.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10);
+  std::unique_lock<std::mutex> lock(mutex_);
+  std::uint64_t analysed = session_.samples().empty() ? session_.generation() : ~std::uint64_t{0};
+  while (true) {
+    work_.wait(lock, [&] { return stopping_ || session_.generation() != analysed; });
+    if (stopping_) return;
+    const SessionSnapshot snapshot = session_.snapshot();
+    analysed = snapshot.generation;
+    lock.unlock();
+    Analysis analysis = session_.analyse(snapshot);  // const, reads only the immutable settings
+    lock.lock();
+    if (analysis.generation != session_.generation()) continue;  // the samples changed meanwhile: stale
+    analysis_ = std::move(analysis);
+    if (analysis_->estimate) publish_estimate(*analysis_->estimate);
+    publish_status();
+  }
+}
+
+void CalibrationNode::publish_status() {  // lock held
   CalibrationStatus status;
   status.header.stamp = ros::Time::now();
-  status.samples = static_cast<int>(sampler_.samples().size());
-  status.samples_needed = 3;
+  status.samples = static_cast<int>(session_.samples().size());
+  status.samples_needed = CalibrationSession::kMinimumSamples;
   status.last_event = last_event_;
-  status.state = to_string(sampler_.state());
+  status.state = to_string(session_.state());
   status.parent_frame = config_.rig.camera_parent_frame();
   status.child_frame = config_.rig.frames.camera;
   status.working_distance = config_.working_distance;
@@ -225,8 +228,14 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
   status.detection_age_median_ms = quantile(ages, 0.5) * 1e3;
   status.detection_age_p99_ms = quantile(ages, 0.99) * 1e3;
   status.detection_age_max_ms = ages.empty() ? 0.0 : *std::max_element(ages.begin(), ages.end()) * 1e3;
-  if (estimate_) {
-    const PoseWithCovariance X{estimate_->T_parent_camera, estimate_->pose_covariance};
+  // The latest analysis: of the current samples, or of fewer while the worker
+  // catches up with a new one (estimate_samples says which).
+  const bool current = analysis_ && analysis_->generation == session_.generation();
+  if (current && !analysis_->problem.empty()) status.last_event += "; " + analysis_->problem;
+  if (analysis_ && analysis_->estimate) {
+    status.estimate_samples = static_cast<int>(analysis_->samples);
+    const Calibration& c = *analysis_->estimate;
+    const PoseWithCovariance X{c.T_parent_camera, c.pose_covariance};
     status.has_estimate = true;
     status.estimate = conversions::to_msg(X);
     for (int i = 0; i < 3; ++i) {
@@ -236,17 +245,16 @@ void CalibrationNode::publish_status() {  // called with mutex_ held
     // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
     status.object_error_mm = object_sigma(X, config_.working_distance) * 1e3;
     status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
-    for (const auto& r : estimate_->rejected) {
+    for (const auto& r : c.rejected) {
       status.rejected_samples.push_back(r.index);
       status.rejected_reasons.push_back(r.reason);
     }
   }
-  if (next_pose_) {
+  if (current && analysis_->next_pose) {
     status.has_suggestion = true;
+    status.next_pose = stamped(analysis_->next_pose->T_base_effector, config_.rig.frames.base);
     status.next_pose.header.stamp = status.header.stamp;
-    status.next_pose.header.frame_id = config_.rig.frames.base;
-    status.next_pose.pose = conversions::to_pose_msg(next_pose_->T_base_effector);
-    status.next_pose_object_error_mm = next_pose_->object_sigma * 1e3;
+    status.next_pose_object_error_mm = analysis_->next_pose->object_sigma * 1e3;
   }
   status_pub_.publish(status);
 }
@@ -258,27 +266,64 @@ void CalibrationNode::publish_estimate(const Calibration& c) {
   estimate.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
   estimate_pub_.publish(estimate);
   try {
-    markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(), ros::Time::now()));
+    markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(),
+                                            estimate.header.stamp));
   } catch (const HandEyeError& e) {
     ROS_WARN("cannot draw the covariance: %s", e.what());
   }
 }
 
+// ------------------------------------------------------------------ TF
+
+std::string CalibrationNode::publish_tf(const Eigen::Isometry3d& X) {
+  // A TF frame has one parent. The camera driver already publishes its own tree
+  // (camera_link -> camera_optical_frame); X goes above that tree's root, composed
+  // with the driver's transforms, while messages and files keep X for the camera frame.
+  const std::string& parent = config_.rig.camera_parent_frame();
+  const std::string& camera = config_.rig.frames.camera;
+  std::string root = camera, up;
+  while (root != published_root_ && tf_buffer_._getParent(root, ros::Time(0), up) && up != parent) root = up;
+  const bool ours = !published_root_.empty() && root == published_root_;  // below our own edge from an earlier call
+  if (!ours && tf_buffer_.canTransform(parent, camera, ros::Time(0))) {
+    return "no TF published: " + camera + " is already connected to " + parent + " by another TF (a URDF mount?); "
+           "remove that link, or set publish_tf false and use the result file";
+  }
+  Eigen::Isometry3d T_camera_root = Eigen::Isometry3d::Identity();
+  if (root != camera) {
+    try {
+      T_camera_root = conversions::to_eigen(tf_buffer_.lookupTransform(camera, root, ros::Time(0)).transform);
+    } catch (const tf2::TransformException& e) {
+      return std::string("no TF published: ") + e.what();
+    }
+  }
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = ros::Time::now();
+  tf.header.frame_id = parent;
+  tf.child_frame_id = root;
+  tf.transform = conversions::to_transform_msg(X * T_camera_root);
+  static_broadcaster_.sendTransform(tf);
+  published_root_ = root;
+  return parent + " -> " + root;
+}
+
 // ------------------------------------------------------------------ services
 
 bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const SampleSet set = sample_set();
+  SessionSnapshot snapshot;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snapshot = session_.snapshot();
+  }
+  Calibration c;
   try {
-    calibration_ = solve_samples(set, config_.reject_outliers);
+    c = session_.calibrate(snapshot);  // on the snapshot: no lock, no wait behind the worker
   } catch (const HandEyeError& e) {
     res.success = false;
     res.message = e.what();
-    res.samples_used = static_cast<int>(set.samples.size());
+    res.samples_used = static_cast<int>(snapshot.samples.samples.size());
     ROS_WARN("calibrate: %s", e.what());
     return true;
   }
-  const Calibration& c = *calibration_;
   res.success = true;
   res.calibration.header.stamp = ros::Time::now();
   res.calibration.header.frame_id = config_.rig.camera_parent_frame();
@@ -298,24 +343,25 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.rejected_samples.push_back(r.index);
     res.rejected_reasons.push_back(r.reason);
   }
-  res.message = "X = T_" + config_.rig.camera_parent_frame() + "_" + config_.rig.frames.camera + " from " + std::to_string(c.samples_used) +
-                " samples; worst-axis 1 sigma " + number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
+  res.message = "X = T_" + config_.rig.camera_parent_frame() + "_" + config_.rig.frames.camera + " from " +
+                std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
+                number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
-
   calibration_pub_.publish(res.calibration);
   publish_estimate(c);
   if (config_.publish_tf) {
-    geometry_msgs::TransformStamped tf;
-    tf.header = res.calibration.header;
-    tf.child_frame_id = config_.rig.frames.camera;
-    tf.transform = conversions::to_transform_msg(c.T_parent_camera);
-    static_broadcaster_.sendTransform(tf);
+    res.published_tf = publish_tf(c.T_parent_camera);
+    if (res.published_tf.rfind("no TF", 0) == 0) ROS_WARN("calibrate: %s", res.published_tf.c_str());
   }
   try {
-    io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(set)));
+    io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));
     res.calibration_file = config_.calibration_file;
   } catch (const HandEyeError& e) {
     res.message += "; but the result file could not be written: " + std::string(e.what());
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    calibration_ = Calibrated{c, std::move(snapshot)};
   }
   ROS_INFO("calibrate: %s", res.message.c_str());
   return true;
@@ -323,95 +369,76 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
 
 bool CalibrationNode::take_sample(TakeSample::Request&, TakeSample::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const SampleOutcome outcome = sampler_.take_sample(ros::Time::now().toSec());
-  res.success = outcome.accepted;
-  res.message = outcome.message;
-  if (outcome.accepted) {
-    samples_changed(outcome.message);
-  } else {
-    last_event_ = outcome.message;
-  }
-  res.samples = static_cast<int>(sampler_.samples().size());
+  const SessionEvent event = session_.take_sample(ros::Time::now().toSec());
+  record(event, true);
+  res.success = event.success;
+  res.message = event.message;
+  res.samples = static_cast<int>(session_.samples().size());
   return true;
 }
 
 bool CalibrationNode::remove_sample(RemoveSample::Request& req, RemoveSample::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::size_t count = sampler_.samples().size();
-  res.success = req.index >= 0 && sampler_.remove(static_cast<std::size_t>(req.index));
-  res.message = res.success ? "removed sample " + std::to_string(req.index)
-                            : "no sample " + std::to_string(req.index) + ": valid indices are 0.." +
-                                  std::to_string(static_cast<long>(count) - 1) + " (see list_samples)";
-  if (res.success) samples_changed(res.message);
-  res.samples = static_cast<int>(sampler_.samples().size());
+  const SessionEvent event = session_.remove(req.index);
+  if (event.success) record(event, false);
+  res.success = event.success;
+  res.message = event.message;
+  res.samples = static_cast<int>(session_.samples().size());
   return true;
 }
 
 bool CalibrationNode::list_samples(ListSamples::Request&, ListSamples::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  for (const PoseSample& s : sampler_.samples()) {
+  for (const PoseSample& s : session_.samples()) {
     res.effector_poses.push_back(conversions::to_pose_msg(s.T_base_effector));
     res.pattern_poses.push_back(conversions::to_pose_msg(s.T_camera_pattern));
     res.stamps.push_back(s.stamp.value_or(0.0));
   }
-  res.samples = static_cast<int>(sampler_.samples().size());
+  res.samples = static_cast<int>(session_.samples().size());
   return true;
 }
 
 bool CalibrationNode::reset(Reset::Request&, Reset::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  sampler_.reset();
-  samples_changed("reset: all samples dropped");
-  res.success = true;
+  const SessionEvent event = session_.reset();
+  record(event, false);
+  res.success = event.success;
   res.message = "all samples dropped";
   return true;
 }
 
 bool CalibrationNode::save_samples(SaveSamples::Request& req, SaveSamples::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  try {
-    io::write_file_atomically(expand_home(req.path), io::format_samples(sample_set()));
-    res.success = true;
-    res.message = "saved " + std::to_string(sampler_.samples().size()) + " samples to " + expand_home(req.path);
-  } catch (const HandEyeError& e) {
-    res.success = false;
-    res.message = e.what();
-  }
+  const SessionEvent event = session_.save(req.path);
+  res.success = event.success;
+  res.message = event.message;
   return true;
 }
 
 bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  try {
-    const SampleSet loaded = io::read_samples(expand_home(req.path));
-    if (loaded.rig.setup != config_.rig.setup) {
-      throw HandEyeError(ErrorCode::MalformedFile,
-                         std::string("the file is ") + to_string(loaded.rig.setup) + " but this node is " +
-                             to_string(config_.rig.setup),
-                         req.path, "load a file recorded with the same setup");
-    }
-    sampler_.set_samples(loaded.samples);
-    res.success = true;
-    res.message = "loaded " + std::to_string(loaded.samples.size()) + " samples from " + req.path;
-    samples_changed(res.message);
-  } catch (const HandEyeError& e) {
-    res.success = false;
-    res.message = e.what();  // the current samples are kept
-  }
-  res.samples = static_cast<int>(sampler_.samples().size());
+  const SessionEvent event = session_.load(req.path);
+  if (event.success) record(event, false);
+  res.success = event.success;
+  res.message = event.message;
+  res.samples = static_cast<int>(session_.samples().size());
   return true;
 }
 
 bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibration::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  res.path = req.path.empty() ? config_.calibration_file : expand_home(req.path);
-  if (!calibration_) {
+  std::optional<Calibrated> calibrated;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    calibrated = calibration_;
+  }
+  res.path = req.path.empty() ? config_.calibration_file : req.path;
+  if (!calibrated) {
     res.success = false;
     res.message = "no calibration yet: call calibrate first";
     return true;
   }
   try {
-    io::write_file_atomically(res.path, io::format_result(*calibration_, io::context_of(sample_set())));
+    io::write_file_atomically(res.path, io::format_result(calibrated->calibration, io::context_of(calibrated->snapshot.samples)));
     res.success = true;
     res.message = "saved to " + res.path;
   } catch (const HandEyeError& e) {
@@ -421,63 +448,31 @@ bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibr
   return true;
 }
 
-}  // namespace handeye
-
-namespace handeye {
-
-SuggestOptions CalibrationNode::suggest_options(const std::string& criterion) const {
-  SuggestOptions options;
-  options.criterion = criterion_from_string(criterion.empty() ? config_.suggest_criterion : criterion);
-  options.working_distance = config_.working_distance;
-  options.candidates = config_.suggest_candidates;
-  options.max_step_translation = config_.reach_translation;
-  options.max_step_rotation = config_.reach_rotation;
-  options.min_translation = config_.sampler.min_translation;
-  options.min_rotation = config_.sampler.min_rotation;
-  options.seed = static_cast<unsigned>(sampler_.samples().size());  // fresh candidates after each sample
-  return options;
-}
-
-std::vector<Eigen::Isometry3d> CalibrationNode::candidates(const SampleSet& set, const SuggestOptions& options) const {
-  return candidate_poses_.empty() ? sample_candidates(set, *estimate_, options) : candidate_poses_;
-}
-
 bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!estimate_) {
-    res.message = "no estimate yet: " + std::to_string(sampler_.samples().size()) +
-                  " sample(s); take at least 3 (rotating about different axes) first";
-    return true;
+  SessionSnapshot snapshot;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snapshot = session_.snapshot();
   }
   try {
-    const SampleSet set = without_rejected(sample_set(), *estimate_);
-    const SuggestOptions options = suggest_options(req.criterion);
-    const Suggestion s = rank_candidates(set, *estimate_, candidates(set, options), options);
-    if (s.ranked.empty()) {
-      throw HandEyeError(ErrorCode::NoData, "every candidate was refused by the prediction", "candidates",
-                         "give candidates that rotate about new axes, or raise reach_translation_mm/reach_rotation_deg");
+    SuggestRequest request;
+    request.criterion = req.criterion;
+    request.count = req.count;
+    request.target_object_sigma = req.target_mm * 1e-3;
+    const SuggestResult r = session_.suggest(snapshot, request);  // outside the lock: it may take a while
+    const std::string& base = config_.rig.frames.base;
+    for (int i = 0; i < r.count && i < static_cast<int>(r.suggestion.ranked.size()); ++i) {
+      res.poses.push_back(stamped(r.suggestion.ranked[i].T_base_effector, base));
+      res.predicted_object_error_mm.push_back(r.suggestion.ranked[i].object_sigma * 1e3);
     }
-    const double target = (req.target_mm > 0.0 ? req.target_mm : config_.target_tolerance_mm) * 1e-3;
-    const Plan plan = plan_poses(set, *estimate_, target, 30, options, candidate_poses_);
-    const auto stamped = [&](const Eigen::Isometry3d& E) {
-      geometry_msgs::PoseStamped pose;
-      pose.header.stamp = ros::Time::now();
-      pose.header.frame_id = config_.rig.frames.base;
-      pose.pose = conversions::to_pose_msg(E);
-      return pose;
-    };
-    const int count = req.count > 0 ? req.count : 5;
-    for (int i = 0; i < count && i < static_cast<int>(s.ranked.size()); ++i) {
-      res.poses.push_back(stamped(s.ranked[i].T_base_effector));
-      res.predicted_object_error_mm.push_back(s.ranked[i].object_sigma * 1e3);
-    }
-    for (const ScoredPose& p : plan.poses) res.plan.push_back(stamped(p.T_base_effector));
-    res.current_object_error_mm = s.current_object_sigma * 1e3;
-    res.poses_to_target = plan.reached ? static_cast<int>(plan.poses.size()) : -1;
+    for (const ScoredPose& p : r.plan.poses) res.plan.push_back(stamped(p.T_base_effector, base));
+    res.current_object_error_mm = r.suggestion.current_object_sigma * 1e3;
+    res.poses_to_target = r.plan.reached ? static_cast<int>(r.plan.poses.size()) : -1;
     res.success = true;
-    res.message = plan.reached ? std::to_string(plan.poses.size()) + " more pose(s) reach " +
-                                     number_text(target * 1e3) + " mm (predicted)"
-                               : "the target " + number_text(target * 1e3) + " mm is not reached within 30 more poses";
+    const std::string target = number_text(r.target_object_sigma * 1e3);
+    res.message = r.plan.reached ? std::to_string(r.plan.poses.size()) + " more pose(s) reach " + target + " mm (predicted)"
+                                 : "the target " + target + " mm is not reached within " +
+                                       std::to_string(session_.settings().max_plan_poses) + " more poses";
   } catch (const HandEyeError& e) {
     res.message = e.what();
   }

@@ -4,7 +4,7 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "handeye_calibration");
   try {
     handeye::CalibrationNode node(ros::NodeHandle(), ros::NodeHandle("~"));
-    ros::spin();
+    ros::MultiThreadedSpinner(2).spin();  // /suggest_pose may take a while; /calibrate does not wait for it
   } catch (const std::exception& e) {
     ROS_FATAL("handeye_calibration: %s", e.what());
     return 1;

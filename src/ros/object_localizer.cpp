@@ -11,16 +11,6 @@
 
 namespace handeye {
 
-namespace {
-
-/// Isotropic 6x6 from 1 sigma in mm and degrees.
-Matrix6d isotropic(double sigma_mm, double sigma_deg) {
-  const double t = sigma_mm * 1e-3, r = sigma_deg * M_PI / 180.0;
-  return DecoupledCovariance{r * r * Eigen::Matrix3d::Identity(), t * t * Eigen::Matrix3d::Identity()}
-      .as_pose_covariance();
-}
-
-}  // namespace
 
 ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_node)
     : node_(node), private_node_(private_node), tf_listener_(tf_buffer_) {
@@ -34,7 +24,6 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
   tf_timeout_ = param(private_node_, "tf_timeout", 0.5);
 
   // X from a result file when given; the calibration topic replaces it on every /calibrate.
-  std::optional<MeasurementNoise> calibration_noise;
   const std::string calibration_file = param<std::string>(private_node_, "calibration_file", "");
   if (!calibration_file.empty()) {
     const io::CalibrationFile file = io::read_result(calibration_file);
@@ -45,24 +34,22 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
                          calibration_file, "set ~eye_on_hand to match, or give the other calibration");
     }
     X_ = file.T_parent_camera;
-    calibration_noise = file.noise;
+    calibration_noise_ = file.noise;
     ROS_INFO("X from %s (%s)", calibration_file.c_str(), sigma_label(*X_).c_str());
   }
 
-  // The robot's pose noise: parameters, else the calibration's noise model, else exact (said aloud).
+  // Stated 1 sigmas; which covariance each pose gets is choose_covariance's rule.
   if (private_node_.hasParam("robot_sigma_mm") || private_node_.hasParam("robot_sigma_deg")) {
-    robot_covariance_ = isotropic(param(private_node_, "robot_sigma_mm", 0.0), param(private_node_, "robot_sigma_deg", 0.0));
-  } else if (calibration_noise) {
-    robot_covariance_ = calibration_noise->robot.as_pose_covariance();
-  } else if (rig_.eye_in_hand()) {
+    stated_robot_ = isotropic_covariance(param(private_node_, "robot_sigma_mm", 0.0) * 1e-3,
+                                         param(private_node_, "robot_sigma_deg", 0.0) * M_PI / 180.0);
+  }
+  if (private_node_.hasParam("object_sigma_mm") || private_node_.hasParam("object_sigma_deg")) {
+    stated_object_ = isotropic_covariance(param(private_node_, "object_sigma_mm", 0.0) * 1e-3,
+                                          param(private_node_, "object_sigma_deg", 0.0) * M_PI / 180.0);
+  }
+  if (rig_.eye_in_hand() && robot_covariance().origin == CovarianceOrigin::None) {
     ROS_WARN("no ~robot_sigma_mm/~robot_sigma_deg and no noise model in the calibration: the robot pose is "
              "taken as exact, which understates the object's covariance");
-  }
-  // Detections without a covariance: parameters, else the calibration pattern's noise, else refused.
-  if (private_node_.hasParam("object_sigma_mm") || private_node_.hasParam("object_sigma_deg")) {
-    detection_fallback_ = isotropic(param(private_node_, "object_sigma_mm", 0.0), param(private_node_, "object_sigma_deg", 0.0));
-  } else if (calibration_noise) {
-    detection_fallback_ = calibration_noise->camera.as_pose_covariance();
   }
 
   object_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("object_pose", 10);
@@ -79,6 +66,11 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
   } else {
     throw std::invalid_argument("~object_input must be tags or pose_with_covariance, not `" + input + "`");
   }
+}
+
+ChosenCovariance ObjectLocalizer::robot_covariance() const {
+  return choose_covariance(std::nullopt, stated_robot_,
+                           calibration_noise_ ? std::optional<PoseNoise>(calibration_noise_->robot) : std::nullopt);
 }
 
 void ObjectLocalizer::on_calibration(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
@@ -127,11 +119,11 @@ void ObjectLocalizer::locate(const Detection& detection) {
   input.rig = rig_;
   input.X = *X;
   input.T_camera_object.pose = conversions::to_eigen(detection.pose);
-  if (detection.covariance) {
-    input.T_camera_object.covariance = *detection.covariance;  // the full 6x6, cross block included
-  } else if (detection_fallback_) {
-    input.T_camera_object.covariance = *detection_fallback_;
-  } else {
+  const ChosenCovariance detection_covariance = choose_covariance(
+      detection.covariance, stated_object_,
+      calibration_noise_ ? std::optional<PoseNoise>(calibration_noise_->camera) : std::nullopt);
+  input.T_camera_object.covariance = detection_covariance.covariance;  // a message's full 6x6, cross block included
+  if (detection_covariance.origin == CovarianceOrigin::None) {
     refuse({"no_detection_covariance", "a detection without a covariance was ignored: set ~object_sigma_mm and "
                                        "~object_sigma_deg, or use a calibration file with a noise model"});
     return;
@@ -141,7 +133,7 @@ void ObjectLocalizer::locate(const Detection& detection) {
       input.T_base_effector = {
           conversions::to_eigen(tf_buffer_.lookupTransform(rig_.frames.base, rig_.frames.effector, detection.stamp,
                                                            ros::Duration(tf_timeout_)).transform),
-          robot_covariance_};
+          robot_covariance().covariance};
     } catch (const tf2::TransformException& e) {
       refuse({"no_robot_tf", "no TF " + rig_.frames.base + " -> " + rig_.frames.effector + " at the detection stamp " +
                                  std::to_string(detection.stamp.toSec()) + ": " + e.what()});

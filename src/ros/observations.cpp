@@ -51,7 +51,7 @@ Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern)
   return d;
 }
 
-ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfig& config, const Detection& detection) {
+ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, const Detection& detection) {
   ObservationResult result;
   if (detection.stamp.isZero()) {
     result.refusal = Refusal{"zero_stamp", "a detection has a zero stamp; the detector must stamp with the image time"};
@@ -84,23 +84,23 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfi
   try {
     // The robot pose at the detection's stamp; never the latest (Time(0)).
     o.T_base_effector = conversions::to_eigen(
-        tf.lookupTransform(config.rig.frames.base, config.rig.frames.effector, detection.stamp).transform);
+        tf.lookupTransform(rig.frames.base, rig.frames.effector, detection.stamp).transform);
   } catch (const tf2::TransformException& e) {
-    result.refusal = Refusal{"no_robot_tf", "no TF " + config.rig.frames.base + " -> " + config.rig.frames.effector +
+    result.refusal = Refusal{"no_robot_tf", "no TF " + rig.frames.base + " -> " + rig.frames.effector +
                                                 " at the detection stamp " + std::to_string(detection.stamp.toSec()) +
                                                 ": " + e.what() +
                                                 ". Is the robot state publisher running, and are the clocks in sync?"};
     return result;
   }
   PoseWithCovariance pattern{conversions::to_eigen(detection.pose), detection.covariance.value_or(Matrix6d::Zero())};
-  if (!detection.frame.empty() && detection.frame != config.rig.frames.camera) {
+  if (!detection.frame.empty() && detection.frame != rig.frames.camera) {
     try {  // a detection in another frame of the same camera: pose and covariance move together
       const Eigen::Isometry3d T_camera_frame = conversions::to_eigen(
-          tf.lookupTransform(config.rig.frames.camera, detection.frame, detection.stamp).transform);
+          tf.lookupTransform(rig.frames.camera, detection.frame, detection.stamp).transform);
       pattern = compose(PoseWithCovariance{T_camera_frame, Matrix6d::Zero()}, pattern);  // the frame change is exact
     } catch (const tf2::TransformException& e) {
       result.refusal = Refusal{"detection_frame", "the detection is in frame `" + detection.frame + "`, not `" +
-                                                      config.rig.frames.camera + "`, and TF cannot relate them: " +
+                                                      rig.frames.camera + "`, and TF cannot relate them: " +
                                                       e.what() + ". Set tracking_base_frame to the detector's frame"};
       return result;
     }

@@ -17,6 +17,7 @@
 #include "handeye_covariance/core/simulation.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/ros/bag.h"
+#include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
 namespace cli {
@@ -65,18 +66,26 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   if (output.empty()) output = default_result_path(input);
 
   io::Input data = io::read_input(input);
-  if (!noise_path.empty()) {
-    if (!std::holds_alternative<SampleSet>(data)) {
-      throw HandEyeError(ErrorCode::MalformedFile, "--noise applies to samples files", input,
-                         "put the motions' noise in the motions file's `noise: {A, B}` block");
-    }
-    std::get<SampleSet>(data).noise = io::read_noise_file(noise_path);
+  if (!noise_path.empty() && !std::holds_alternative<SampleSet>(data)) {
+    throw HandEyeError(ErrorCode::MalformedFile, "--noise applies to samples files", input,
+                       "put the motions' noise in the motions file's `noise: {A, B}` block");
   }
-  const bool from_samples = std::holds_alternative<SampleSet>(data);
-  const Calibration calibration =
-      from_samples ? solve_samples(std::get<SampleSet>(data), !keep_outliers) : solve(std::get<MotionSet>(data));
-  const io::ResultContext context =
-      from_samples ? io::context_of(std::get<SampleSet>(data)) : io::context_of(std::get<MotionSet>(data));
+  Calibration calibration;
+  io::ResultContext context;
+  if (const SampleSet* samples = std::get_if<SampleSet>(&data)) {
+    // Samples go through the session the node and the bag replay use.
+    SessionSettings settings = session_settings(*samples);
+    if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
+    settings.reject_outliers = !keep_outliers;
+    CalibrationSession session(settings);
+    session.replace(samples->samples, "read " + input);
+    const SessionSnapshot snapshot = session.snapshot();
+    calibration = session.calibrate(snapshot);
+    context = io::context_of(snapshot.samples);
+  } else {
+    calibration = solve(std::get<MotionSet>(data));
+    context = io::context_of(std::get<MotionSet>(data));
+  }
   io::write_file_atomically(output, io::format_result(calibration, context));
   out << io::human_summary(calibration, context);
   out << "  result written to     " << output << "\n";
@@ -190,11 +199,13 @@ int bag_command(const std::vector<std::string>& args, std::ostream& out, std::os
 
   SessionConfig config;
   if (!config_path.empty()) io::read_session_config(config_path, config);
-  std::optional<MeasurementNoise> noise;
-  if (!config.noise_config.empty()) noise = io::read_noise_file(config.noise_config);
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();  // the node's session file is the node's
+  CalibrationSession session(settings);
   ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
-  const BagReplay replay = replay_bag(bag_path, config, noise, [&](double f) { progress(f); });
-  const Calibration calibration = solve_samples(replay.samples, config.reject_outliers);  // before writing anything
+  const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });
+  const SessionSnapshot snapshot = session.snapshot();
+  const Calibration calibration = session.calibrate(snapshot);  // before writing anything
 
   out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
   for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
@@ -210,9 +221,9 @@ int bag_command(const std::vector<std::string>& args, std::ostream& out, std::os
   if (replay.repeated_stamps > 0) {
     out << "  " << replay.repeated_stamps << " detection(s) repeat a stamp already seen (the same image twice): each used once\n";
   }
-  const io::ResultContext context = io::context_of(replay.samples);
+  const io::ResultContext context = io::context_of(snapshot.samples);
   io::write_file_atomically(output, io::format_result(calibration, context));
-  if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(replay.samples));
+  if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(snapshot.samples));
   out << io::human_summary(calibration, context);
   out << "  result written to     " << output << "\n";
   if (!samples_out.empty()) out << "  samples written to    " << samples_out << "\n";
@@ -323,32 +334,43 @@ io::PoseFile pose_argument(const std::string& value, const std::string& option) 
   return file;
 }
 
-/// The covariance of a pose argument: isotropic sigmas when given, else the
-/// file's own covariance, else `fallback` (the calibration's noise model), said aloud.
-Matrix6d covariance_of(const io::PoseFile& pose, const po::variables_map& vm, const std::string& prefix,
-                       const std::optional<PoseNoise>& fallback, const std::string& fallback_name,
-                       std::ostream& out) {
+/// The 1 sigma options `--<prefix>-sigma-mm/-deg` as a covariance, if given.
+std::optional<Matrix6d> stated_covariance(const po::variables_map& vm, const std::string& prefix) {
   const std::string mm = prefix + "-sigma-mm", deg = prefix + "-sigma-deg";
-  if (vm.count(mm) || vm.count(deg)) {
-    if (!vm.count(mm) || !vm.count(deg)) {
-      throw HandEyeError(ErrorCode::MissingKey, "give both --" + mm + " and --" + deg, "--" + prefix,
-                         "state the translation and the rotation 1 sigma (0 for exact)");
-    }
-    const double sigma_t = vm[mm].as<double>() * 1e-3, sigma_R = vm[deg].as<double>() * M_PI / 180.0;
-    if (!(sigma_t >= 0.0) || !(sigma_R >= 0.0)) {
-      throw HandEyeError(ErrorCode::InvalidNoise, "a 1 sigma must be a number >= 0", "--" + mm + "/--" + deg,
-                         "give the standard deviation per axis, e.g. 0.3 (mm) and 0.05 (deg)");
-    }
-    return DecoupledCovariance{sigma_R * sigma_R * Eigen::Matrix3d::Identity(),
-                               sigma_t * sigma_t * Eigen::Matrix3d::Identity()}.as_pose_covariance();
+  if (!vm.count(mm) && !vm.count(deg)) return std::nullopt;
+  if (!vm.count(mm) || !vm.count(deg)) {
+    throw HandEyeError(ErrorCode::MissingKey, "give both --" + mm + " and --" + deg, "--" + prefix,
+                       "state the translation and the rotation 1 sigma (0 for exact)");
   }
-  if (pose.has_covariance) return pose.value.covariance;
-  if (!fallback) {
-    throw HandEyeError(ErrorCode::MissingKey, "no covariance for the " + prefix + " pose", "--" + prefix,
-                       "add `covariance:` to its file, or give --" + mm + " and --" + deg);
+  const double sigma_t = vm[mm].as<double>() * 1e-3, sigma_R = vm[deg].as<double>() * M_PI / 180.0;
+  if (!(sigma_t >= 0.0) || !(sigma_R >= 0.0)) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "a 1 sigma must be a number >= 0", "--" + mm + "/--" + deg,
+                       "give the standard deviation per axis, e.g. 0.3 (mm) and 0.05 (deg)");
   }
-  out << "  (" << prefix << " covariance: " << fallback_name << ")\n";
-  return fallback->as_pose_covariance();
+  return isotropic_covariance(sigma_t, sigma_R);
+}
+
+/// The covariance of a pose argument by choose_covariance's rule (the object_localizer's):
+/// the file's own, else the stated sigmas, else the calibration's noise model; said aloud.
+Matrix6d covariance_of(const io::PoseFile& pose, const po::variables_map& vm, const std::string& prefix,
+                       const std::optional<PoseNoise>& model, const std::string& model_name, std::ostream& notes) {
+  const std::optional<Matrix6d> stated = stated_covariance(vm, prefix);
+  const ChosenCovariance chosen =
+      choose_covariance(pose.has_covariance ? std::optional<Matrix6d>(pose.value.covariance) : std::nullopt, stated, model);
+  switch (chosen.origin) {
+    case CovarianceOrigin::None:
+      throw HandEyeError(ErrorCode::MissingKey, "no covariance for the " + prefix + " pose", "--" + prefix,
+                         "add `covariance:` to its file, or give --" + prefix + "-sigma-mm and --" + prefix + "-sigma-deg");
+    case CovarianceOrigin::Input:
+      if (stated) notes << "  (--" << prefix << "-sigma-* not used: the " << prefix << " file has its own covariance)\n";
+      break;
+    case CovarianceOrigin::CalibrationModel:
+      notes << "  (" << prefix << " covariance: " << model_name << ")\n";
+      break;
+    case CovarianceOrigin::Stated:
+      break;
+  }
+  return chosen.covariance;
 }
 
 int compose_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
@@ -471,7 +493,7 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
   if (!estimate) {
     std::optional<PoseNoise> robot;
     if (vm.count("robot-sigma-mm") || vm.count("robot-sigma-deg")) {
-      robot = PoseNoise::from_pose_covariance(covariance_of(io::PoseFile{}, vm, "robot", std::nullopt, "", out));
+      robot = PoseNoise::from_pose_covariance(*stated_covariance(vm, "robot"));
     }
     if (!calibration_path.empty()) {
       const io::CalibrationFile calibration = io::read_result(calibration_path);
@@ -515,55 +537,73 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
 }
 
 int suggest_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
-  std::string input, candidates_path, criterion = "object_sigma", output;
-  int count = 5, max_poses = 30;
-  double target_mm = 1.0, reach_mm = 500.0, reach_deg = 90.0;
-  SuggestOptions options;
+  // The node's defaults (config/calibration_defaults.yaml), overridden by the options.
+  SessionConfig config;
+  const SessionSettings defaults;
+  std::string input, output, config_path;
+  int count = 5, max_poses = defaults.max_plan_poses;
+  double target_mm = config.target_tolerance_mm, reach_mm = config.reach_translation * 1e3,
+         reach_deg = config.reach_rotation * 180.0 / M_PI, working_distance = config.working_distance;
+  unsigned seed = defaults.suggest.seed;
   po::options_description description(
       "suggest: which poses to add next, and how many more reach the target (ranked by the predicted covariance)");
   description.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples file of the session so far (YAML, >= 3 samples)")(
-      "candidates", po::value(&candidates_path),
+      "config,c", po::value(&config_path), "YAML with the node's settings (the defaults below come from there)")(
+      "candidates", po::value(&config.candidate_poses_file),
       "candidate effector poses (YAML `candidates: [{translation, rotation}]`); default: sampled views of the pattern")(
       "count,n", po::value(&count), "how many ranked next poses to print (default 5)")(
-      "criterion", po::value(&criterion), "object_sigma (default) or determinant")(
-      "working-distance", po::value(&options.working_distance), "m along the optical axis, for object_sigma (default 0.7)")(
-      "target-mm", po::value(&target_mm), "plan until the object 1 sigma reaches this (default 1.0)")(
-      "max-poses", po::value(&max_poses), "plan at most this many more poses (default 30)")(
-      "reach-mm", po::value(&reach_mm), "sampled candidates: at most this far from the last pose (default 500)")(
-      "reach-deg", po::value(&reach_deg), "sampled candidates: at most this rotation from the last pose (default 90)")(
-      "seed", po::value(&options.seed), "sampled candidates: random seed (default 1)")(
+      "criterion", po::value(&config.suggest_criterion), "object_sigma (default) or determinant")(
+      "working-distance", po::value(&working_distance),
+      ("m along the optical axis, for object_sigma (default " + number_text(working_distance) + ")").c_str())(
+      "target-mm", po::value(&target_mm), ("plan until the object 1 sigma reaches this (default " + number_text(target_mm) + ")").c_str())(
+      "max-poses", po::value(&max_poses), ("plan at most this many more poses (default " + std::to_string(max_poses) + ")").c_str())(
+      "reach-mm", po::value(&reach_mm), ("sampled candidates: at most this far from the last pose (default " + number_text(reach_mm) + ")").c_str())(
+      "reach-deg", po::value(&reach_deg), ("sampled candidates: at most this rotation from the last pose (default " + number_text(reach_deg) + ")").c_str())(
+      "seed", po::value(&seed), ("sampled candidates: random seed, plus the number of samples (default " + std::to_string(seed) + ")").c_str())(
       "output,o", po::value(&output), "write the suggestions and the plan (YAML)");
   po::variables_map vm;
   if (!parse("suggest", "--input FILE [--candidates FILE] [--criterion object_sigma|determinant] [--target-mm 1]",
              description, args, vm, out)) {
     return kOk;
   }
-  options.criterion = criterion_from_string(criterion);
-  if (!(options.working_distance > 0.0) || !(target_mm > 0.0) || count < 1 || max_poses < 0) {
+  if (!config_path.empty()) {  // the file first, then the options given on the command line
+    const SessionConfig command_line = config;
+    io::read_session_config(config_path, config);
+    if (vm.count("candidates")) config.candidate_poses_file = command_line.candidate_poses_file;
+    if (vm.count("criterion")) config.suggest_criterion = command_line.suggest_criterion;
+    if (!vm.count("working-distance")) working_distance = config.working_distance;
+    if (!vm.count("target-mm")) target_mm = config.target_tolerance_mm;
+    if (!vm.count("reach-mm")) reach_mm = config.reach_translation * 1e3;
+    if (!vm.count("reach-deg")) reach_deg = config.reach_rotation * 180.0 / M_PI;
+  }
+  if (!(working_distance > 0.0) || !(target_mm > 0.0) || count < 1 || max_poses < 0) {
     throw HandEyeError(ErrorCode::MalformedFile, "--working-distance and --target-mm must be > 0, --count >= 1",
                        "options", "give positive values");
   }
-  options.max_step_translation = reach_mm * 1e-3;
-  options.max_step_rotation = reach_deg * M_PI / 180.0;
+  config.working_distance = working_distance;
+  config.target_tolerance_mm = target_mm;
+  config.reach_translation = reach_mm * 1e-3;
+  config.reach_rotation = reach_deg * M_PI / 180.0;
   const SampleSet all = io::read_samples(input);
-  const Calibration calibration = solve_robust(all);
-  const SampleSet samples = without_rejected(all, calibration);  // plan from the consistent samples
-  const std::vector<Eigen::Isometry3d> given =
-      candidates_path.empty() ? std::vector<Eigen::Isometry3d>{} : io::read_candidate_poses(candidates_path);
-  const std::vector<Eigen::Isometry3d> candidates =
-      candidates_path.empty() ? sample_candidates(samples, calibration, options) : given;
-  const Suggestion suggestion = rank_candidates(samples, calibration, candidates, options);
-  if (suggestion.ranked.empty()) {
-    throw HandEyeError(ErrorCode::NoData, "every candidate was refused by the prediction", candidates_path.empty() ? "candidates" : candidates_path,
-                       "give candidates that rotate about new axes, or widen --reach-mm/--reach-deg");
-  }
-  const Plan plan = plan_poses(samples, calibration, target_mm * 1e-3, max_poses, options, given);
+  SessionSettings settings = session_settings(all, config);
+  settings.max_plan_poses = max_poses;
+  settings.suggest.seed = seed;
+  CalibrationSession session(settings);
+  session.replace(all.samples, "read " + input);
+  SuggestRequest request;
+  request.count = count;
+  const SuggestResult result = session.suggest(session.snapshot(), request);
+  const SampleSet& samples = result.samples;  // the consistent ones
+  const Suggestion& suggestion = result.suggestion;
+  const Plan& plan = result.plan;
+  const SuggestOptions& options = result.options;
+  const bool sampled = settings.candidate_poses.empty();
 
   char line[320];
   out << "Now: " << samples.samples.size() << " samples, object 1 sigma " << number_text(suggestion.current_object_sigma * 1e3)
       << " mm at " << number_text(options.working_distance) << " m (worst axis); criterion " << to_string(options.criterion)
-      << ", " << suggestion.considered << " candidates" << (candidates_path.empty() ? " (sampled views)" : "")
+      << ", " << suggestion.considered << " candidates" << (sampled ? " (sampled views)" : "")
       << (suggestion.refused ? ", " + std::to_string(suggestion.refused) + " refused" : "") << "\n";
   out << "Next poses, best first (T_base_effector):\n"
          "   #  translation [m]                     quaternion [x y z w]                      object 1 sigma after [mm]\n";

@@ -1,6 +1,6 @@
 // libFuzzer target: detection messages -> samples, the path every live and
-// replayed detection takes (observations.h, sampler.h, then make_sample_set and
-// the estimator). The fuzz bytes fill a TagDetectionArray field by field: any
+// replayed detection takes (observations.h, then the CalibrationSession the node
+// and the bag replay share, and the estimator). The fuzz bytes fill a TagDetectionArray field by field: any
 // ids, sizes, stamps, frames, poses and covariances, NaN and Inf included. The
 // robot's TF is a fixed, valid chain. Anything may be refused; nothing may
 // crash, leak, hit undefined behaviour or throw an unnamed exception, and every
@@ -14,8 +14,7 @@
 #include <cstdlib>
 #include <cstdint>
 
-#include "handeye_covariance/core/outliers.h"
-#include "handeye_covariance/core/sampler.h"
+#include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/ros/observations.h"
 
@@ -72,7 +71,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   SessionConfig config;
   config.tag_ids = {0};
   if (in.ConsumeBool()) config.tag_ids.clear();
-  Sampler sampler(config.sampler);
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();
+  CalibrationSession session(settings);
   const int messages = in.ConsumeIntegralInRange<int>(1, 40);
   TagDetectionArray previous;
   for (int m = 0; m < messages && in.remaining_bytes() > 0; ++m) {
@@ -83,8 +84,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       for (TagDetection& t : previous.detections) t.pose.header.stamp = ros::Time();
       std::optional<Refusal> refusal;
       if (const auto detection = select_detection(previous, config.tag_ids, refusal)) {
-        const ObservationResult result = make_observation(robot_tf(), config, *detection);
-        if (result.observation) sampler.observe(*result.observation);
+        const ObservationResult result = make_observation(robot_tf(), config.rig, *detection);
+        if (result.observation) session.observe(*result.observation);
       }
       continue;
     }
@@ -116,22 +117,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::optional<Refusal> refusal;
     const std::optional<Detection> detection = select_detection(msg, config.tag_ids, refusal);
     if (!detection) continue;
-    const ObservationResult result = make_observation(robot_tf(), config, *detection);
+    const ObservationResult result = make_observation(robot_tf(), config.rig, *detection);
     if (!result.observation) continue;
-    sampler.observe(*result.observation);
+    session.observe(*result.observation);
   }
   static const bool report = std::getenv("FUZZ_REPORT") != nullptr;
   static long inputs = 0, with_samples = 0;
   ++inputs;
-  with_samples += sampler.samples().empty() ? 0 : 1;
+  const std::vector<PoseSample>& samples = session.samples();
+  with_samples += samples.empty() ? 0 : 1;
   if (report && inputs % 20000 == 0) std::fprintf(stderr, "%ld inputs, %ld gave samples\n", inputs, with_samples);
-  for (std::size_t i = 0; i < sampler.samples().size(); ++i) {
-    check_pose(sampler.samples()[i].T_base_effector, "accepted sample");  // throws (and so aborts) if invalid
-    check_pose(sampler.samples()[i].T_camera_pattern, "accepted sample");
-    if (sampler.samples()[i].noise) check_covariance(sampler.samples()[i].noise->camera, "accepted sample's covariance");
+  for (const PoseSample& sample : samples) {
+    check_pose(sample.T_base_effector, "accepted sample");  // throws (and so aborts) if invalid
+    check_pose(sample.T_camera_pattern, "accepted sample");
+    if (sample.noise) check_covariance(sample.noise->camera, "accepted sample's covariance");
   }
   try {
-    solve_robust(make_sample_set(config.rig, std::nullopt, sampler.samples()));
+    session.calibrate(session.snapshot());
   } catch (const HandEyeError&) {
   }
   return 0;

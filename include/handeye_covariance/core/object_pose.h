@@ -13,9 +13,30 @@
 // because X's translation error is strongly correlated with its rotation error.
 #pragma once
 
+#include <optional>
+
 #include "handeye_covariance/core/measurements.h"
 
 namespace handeye {
+
+/// Where a pose's covariance comes from: one rule for `handeye compose` and the
+/// object_localizer node. In order: the input's own (a message's or a pose
+/// file's covariance), what the user stated (1 sigma options or parameters),
+/// the calibration's noise model (the pattern's for a detection, the robot's
+/// for a robot pose); else none, and the caller refuses the pose or takes it as
+/// exact, saying so.
+enum class CovarianceOrigin { Input, Stated, CalibrationModel, None };
+const char* to_string(CovarianceOrigin origin);  // "its own", "stated", "the calibration's noise model", "none"
+
+struct ChosenCovariance {
+  Matrix6d covariance = Matrix6d::Zero();  // zero when origin is None
+  CovarianceOrigin origin = CovarianceOrigin::None;
+};
+ChosenCovariance choose_covariance(const std::optional<Matrix6d>& input, const std::optional<Matrix6d>& stated,
+                                   const std::optional<PoseNoise>& calibration_model);
+
+/// Isotropic 6x6 from a 1 sigma per axis (m, rad).
+Matrix6d isotropic_covariance(double sigma_translation, double sigma_rotation);
 
 struct ObjectPoseInput {
   Rig rig;  // only its setup matters here

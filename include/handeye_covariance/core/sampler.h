@@ -49,7 +49,9 @@ struct SampleOutcome {
 
 class Sampler {
  public:
-  explicit Sampler(SamplerOptions options = {});
+  /// `robot_noise` goes with every sample that carries the detector's covariance
+  /// (zero: the robot taken as exact, as in the paper's real-data study).
+  explicit Sampler(SamplerOptions options = {}, PoseNoise robot_noise = {});
 
   /// Feeds one observation. With auto_sample, returns the outcome when this
   /// observation completed a still period (a sample was taken or refused).
@@ -75,17 +77,11 @@ class Sampler {
   SampleOutcome try_add(const Observation& observation);
 
   SamplerOptions options_;
+  PoseNoise robot_noise_;
   std::deque<Observation> history_;  // the last still_window (+ margin) seconds
   std::vector<PoseSample> samples_;
   bool waiting_for_motion_ = false;
   std::optional<Observation> anchor_;  // where the robot stood at the last sample attempt
 };
-
-/// The sample set to solve: the samples plus the noise model. A detector's
-/// per-sample pattern noise keeps the configured robot noise (zero when none is
-/// configured: the robot taken as exact, as in the paper's real-data study).
-/// With no configured noise and no detector noise, the noise is estimated.
-SampleSet make_sample_set(const Rig& rig, const std::optional<MeasurementNoise>& configured,
-                          const std::vector<PoseSample>& samples);
 
 }  // namespace handeye

@@ -1,5 +1,6 @@
 // Offline: simulated calibration bags, and calibrating from a bag without a
-// roscore (rosbag::View + an offline tf2::BufferCore, the node's Sampler).
+// roscore (rosbag::View + an offline tf2::BufferCore, into the node's
+// CalibrationSession, so both take and refuse the same samples).
 #pragma once
 
 #include <functional>
@@ -9,6 +10,7 @@
 
 #include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
 
@@ -54,16 +56,18 @@ struct BagReplay {
   std::map<std::string, std::string> refusal_examples;  // kind -> one full message
   int stamps_went_back = 0;             // detections stamped before the previous one in the bag (a looping recording)
   int repeated_stamps = 0;              // detections whose stamp was already seen: used once
-  SampleSet samples;                    // with the noise model, ready to solve
+  SampleSet samples;                    // the session's at the end, with its noise model
   double duration = 0.0;                // s of bag
 };
 
-/// `progress(fraction)` is called as the detections are read, for bags longer
-/// than 5 s (may be empty).
+/// Feeds the bag's detections, in stamp order, into `session` (made from the
+/// same `config`). `progress(fraction)` is called as the detections are read,
+/// for bags longer than 5 s (may be empty).
 /// Throws HandEyeError: IoError (unreadable, truncated or corrupt bag) or
 /// NoData (topic missing, no detections, or no sample could be taken).
-BagReplay replay_bag(const std::string& path, const SessionConfig& config,
-                     const std::optional<MeasurementNoise>& noise,
+BagReplay replay_bag(const std::string& path, const SessionConfig& config, CalibrationSession& session,
                      std::function<void(double)> progress = {});
+/// The same into a session of its own (session_settings(config), nothing persisted).
+BagReplay replay_bag(const std::string& path, const SessionConfig& config, std::function<void(double)> progress = {});
 
 }  // namespace handeye

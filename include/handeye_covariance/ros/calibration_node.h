@@ -1,6 +1,13 @@
-// The calibration node: TF + pattern detections in, stamp-matched samples,
-// /calibrate out as PoseWithCovarianceStamped, a static TF and a YAML file.
-// The logic lives in the ROS-free core (Sampler, solve); this class is glue.
+// The calibration node: an adapter between ROS and a CalibrationSession.
+//
+//   detections (own queue and thread) -> stamp-matched observations -> the session, under a short lock
+//   a worker thread                   -> estimate and next pose of each new generation of samples,
+//                                        on a snapshot, outside the lock; stale results are dropped
+//   services (a multi-threaded spinner) -> the session's changes, or computations on a snapshot
+//
+// So a detection never waits behind a solve or a ranking, and /calibrate never
+// waits behind a ranking. The session writes its file before a change is
+// reported (crash safety).
 #pragma once
 
 #include <ros/callback_queue.h>
@@ -9,36 +16,34 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <memory>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <optional>
+#include <thread>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/next_best_pose.h"
 #include "handeye_covariance/core/session_config.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/observations.h"
-#include "handeye_covariance/core/sampler.h"
-#include <geometry_msgs/PoseStamped.h>
-#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
 
 class CalibrationNode {
  public:
   /// Reads ~parameters (see config/calibration_defaults.yaml), advertises
-  /// everything and, with ~resume, reloads the session file.
-  explicit CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node);
+  /// everything, starts the detection thread and the worker and, with ~resume,
+  /// reloads the session file.
+  CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node);
   ~CalibrationNode();
 
  private:
-  // Inputs: each gives a detection of the pattern (observations.h).
+  // Inputs, on the detection thread: each gives a detection of the pattern (observations.h).
   void on_tags(const TagDetectionArray::ConstPtr& msg);
   void on_tf_poll(const ros::TimerEvent&);
   void observe(const Detection& detection);
-  void handle(const Detection& detection);
   /// Counts a handled detection and its age (now - stamp) for ~status.
   void record_handled(const ros::Time& stamp);
 
@@ -51,20 +56,21 @@ class CalibrationNode {
   bool load_samples(LoadSamples::Request&, LoadSamples::Response&);
   bool save_calibration(SaveCalibration::Request&, SaveCalibration::Response&);
   bool suggest_pose(SuggestPose::Request&, SuggestPose::Response&);
-  /// The options and candidates for a suggestion (lock held; needs estimate_).
-  SuggestOptions suggest_options(const std::string& criterion) const;
-  std::vector<Eigen::Isometry3d> candidates(const SampleSet& set, const SuggestOptions& options) const;
 
-  /// After the samples changed (lock held): persist, re-estimate, publish status.
-  void samples_changed(const std::string& event);
-  void refuse(const std::string& reason);
-  void publish_status();
+  /// After a change of the session (lock held): log it, wake the worker, publish
+  /// ~status. The last analysis stays on ~status while the worker catches up only
+  /// when the change `appended` a sample.
+  void record(const SessionEvent& event, bool appended);
+  /// The worker: analyses each new generation of samples outside the lock.
+  void work();
+  void publish_status();  // lock held
   /// The running estimate (~estimate) and its markers (~markers).
   void publish_estimate(const Calibration& c);
-  SampleSet sample_set() const;
+  /// Publishes X as TF at the root of the camera's own tree; returns the edge
+  /// ("tool0 -> camera_link") or why none was published.
+  std::string publish_tf(const Eigen::Isometry3d& X);
 
   SessionConfig config_;
-  std::optional<MeasurementNoise> noise_;  // from config_.noise_config
   ros::NodeHandle node_, private_node_, detection_node_;
   ros::CallbackQueue detection_queue_;  // detections in order, on their own thread
   std::unique_ptr<ros::AsyncSpinner> detection_spinner_;
@@ -75,17 +81,23 @@ class CalibrationNode {
   ros::Timer tf_poll_, status_timer_;
   ros::Publisher calibration_pub_, estimate_pub_, status_pub_, markers_pub_;
   std::vector<ros::ServiceServer> services_;
+  ros::Time last_tf_stamp_;     // detection thread only
+  std::string published_root_;  // the camera-tree frame X was published to (calibrate only)
 
   mutable std::mutex mutex_;  // guards everything below
-  Sampler sampler_;
-  std::optional<Calibration> estimate_;    // from the accepted samples, for ~status
-  std::optional<Calibration> calibration_; // from the last successful /calibrate
-  std::optional<ScoredPose> next_pose_;    // the best next pose for the current samples, for ~status
-  std::vector<Eigen::Isometry3d> candidate_poses_;  // from config_.candidate_poses_file
+  std::condition_variable work_;
+  bool stopping_ = false;
+  CalibrationSession session_;
+  std::optional<Analysis> analysis_;  // of the latest generation analysed
+  struct Calibrated {
+    Calibration calibration;
+    SessionSnapshot snapshot;  // what it was solved from (frames and noise for the result file)
+  };
+  std::optional<Calibrated> calibration_;  // from the last successful /calibrate
   std::string last_event_ = "started";
-  ros::Time last_tf_stamp_;
   std::uint32_t detections_received_ = 0;
   std::deque<double> detection_ages_;  // s, the last kAgeWindow handled detections
+  std::thread worker_;                 // last: starts once everything above exists
 };
 
 }  // namespace handeye

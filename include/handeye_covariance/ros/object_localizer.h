@@ -38,8 +38,11 @@ class ObjectLocalizer {
   std::vector<int> tag_ids_;
   bool publish_tf_ = false;
   double tf_timeout_ = 0.5;
-  Matrix6d robot_covariance_ = Matrix6d::Zero();
-  std::optional<Matrix6d> detection_fallback_;  // for detections that carry no covariance
+  /// The robot pose's covariance (choose_covariance: stated, else the calibration's model, else exact).
+  ChosenCovariance robot_covariance() const;
+
+  std::optional<Matrix6d> stated_robot_, stated_object_;  // ~robot_sigma_*, ~object_sigma_*
+  std::optional<MeasurementNoise> calibration_noise_;     // the calibration file's noise model
 
   ros::NodeHandle node_, private_node_;
   tf2_ros::Buffer tf_buffer_;

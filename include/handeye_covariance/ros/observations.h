@@ -49,6 +49,6 @@ struct ObservationResult {
   std::optional<Observation> observation;
   std::optional<Refusal> refusal;
 };
-ObservationResult make_observation(const tf2::BufferCore& tf, const SessionConfig& config, const Detection& detection);
+ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, const Detection& detection);
 
 }  // namespace handeye

@@ -1,0 +1,146 @@
+// One calibration session, without ROS: the samples, the sampler that takes
+// them, the noise model, the estimate with its rejected samples, and the
+// suggested next poses. The node, `handeye bag`, `handeye solve` (samples) and
+// `handeye suggest` all go through this class, so each decision is made once:
+// which noise a sample gets, when there is an estimate, which candidates are
+// ranked with which seed, how far a plan goes.
+//
+// Threads: the class is not thread-safe; its owner serialises the changes. The
+// computations (analyse, calibrate, suggest) are const and read only the
+// settings, which never change after construction, so the node runs them on a
+// snapshot() outside its lock, on a worker thread.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/core/next_best_pose.h"
+#include "handeye_covariance/core/sampler.h"
+#include "handeye_covariance/core/session_config.h"
+
+namespace handeye {
+
+/// Everything a session needs, resolved from a SessionConfig (files read,
+/// names checked) or set directly by a tool.
+struct SessionSettings {
+  Rig rig;
+  SamplerOptions sampler;
+  /// The configured noise: the global noise block of every sample set. Absent:
+  /// the detector's per-sample covariances (their mean for samples without one),
+  /// else estimated from the residuals.
+  std::optional<MeasurementNoise> noise;
+  bool reject_outliers = true;
+  /// Next-best pose. The minimum step between poses is the sampler's
+  /// (min_translation, min_rotation); candidates are drawn with
+  /// suggest.seed + the number of samples, so each new sample brings fresh ones.
+  SuggestOptions suggest;
+  std::vector<Eigen::Isometry3d> candidate_poses;  // empty: sampled views
+  int max_plan_poses = 30;                         // a plan adds at most this many
+  double target_object_sigma = 1e-3;               // m, for plans and ~status
+  std::string session_file;                        // empty: the samples are not persisted
+};
+
+/// The settings of a SessionConfig: reads noise_config and candidate_poses_file
+/// and checks suggest_criterion (HandEyeError naming the setting).
+SessionSettings session_settings(const SessionConfig& config);
+/// A session over a samples file: the file's setup, frames and noise block, the
+/// other settings from `config` (by default the node's defaults); nothing persisted.
+SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config = {});
+
+/// What a change did.
+struct SessionEvent {
+  bool success = false;       // the request was honoured
+  bool changed = false;       // the samples changed (generation() moved on)
+  std::string message;        // "accepted sample 4", "removed sample 2", or why not
+  std::string persist_error;  // non-empty: the session file could not be written
+};
+
+/// The samples at one moment, with their noise model: what the computations use.
+struct SessionSnapshot {
+  std::uint64_t generation = 0;
+  SampleSet samples;
+};
+
+/// The running estimate of one generation of samples (the node's ~status).
+struct Analysis {
+  std::uint64_t generation = 0;
+  std::size_t samples = 0;
+  std::optional<Calibration> estimate;  // X with its covariance; `rejected` indexes the samples
+  std::optional<ScoredPose> next_pose;  // the best next pose by the configured criterion
+  std::string problem;                  // why there is no estimate or no next pose; empty otherwise
+};
+
+struct SuggestRequest {
+  std::string criterion;             // empty: the configured one
+  int count = 5;                     // ranked poses wanted
+  double target_object_sigma = 0.0;  // m; 0: the configured target
+};
+
+struct SuggestResult {
+  Calibration estimate;     // of the consistent samples the suggestion starts from
+  SampleSet samples;        // those samples
+  SuggestOptions options;   // as used (criterion, seed)
+  Suggestion suggestion;    // ranked candidates, best first
+  Plan plan;                // greedy plan to the target
+  double target_object_sigma = 0.0;
+  int count = 0;
+};
+
+class CalibrationSession {
+ public:
+  static constexpr int kMinimumSamples = 3;
+
+  explicit CalibrationSession(SessionSettings settings);
+
+  const SessionSettings& settings() const { return settings_; }
+
+  // Changes. Each one that changes the samples moves generation() on and, with a
+  // session file, writes it atomically before it returns.
+
+  /// Auto-sampling: an event when this observation completed a still period.
+  std::optional<SessionEvent> observe(const Observation& observation);
+  /// Manual sampling at `now` (s, the observations' clock).
+  SessionEvent take_sample(double now);
+  SessionEvent remove(int index);
+  SessionEvent reset();
+  /// Replaces the samples with a samples file's; refuses another setup and keeps
+  /// the current samples on any error.
+  SessionEvent load(const std::string& path);
+  /// Replaces the samples (each keeps its own noise, if it has one).
+  SessionEvent replace(std::vector<PoseSample> samples, const std::string& what);
+  /// Reloads the session file when it exists.
+  SessionEvent resume();
+  /// Writes the samples with their noise model (the session file's format).
+  SessionEvent save(const std::string& path) const;
+
+  // State.
+  std::uint64_t generation() const { return generation_; }
+  const std::vector<PoseSample>& samples() const { return sampler_.samples(); }
+  SamplerState state() const { return sampler_.state(); }
+  /// The samples with the noise model (see SessionSettings::noise).
+  SampleSet sample_set() const;
+  SessionSnapshot snapshot() const { return {generation_, sample_set()}; }
+
+  // Computations on a snapshot.
+
+  /// The estimate and the best next pose; never throws (problems are reported).
+  Analysis analyse(const SessionSnapshot& snapshot) const;
+  /// X with its covariance, outliers rejected when configured. Throws HandEyeError.
+  Calibration calibrate(const SessionSnapshot& snapshot) const;
+  /// Ranked next poses and the plan to the target. Throws HandEyeError (no
+  /// estimate, every candidate refused, unknown criterion).
+  SuggestResult suggest(const SessionSnapshot& snapshot, const SuggestRequest& request) const;
+
+ private:
+  SessionEvent changed(std::string message);
+  SuggestOptions suggest_options(const std::string& criterion, std::size_t samples) const;
+
+  const SessionSettings settings_;
+  Sampler sampler_;
+  std::uint64_t generation_ = 0;
+};
+
+}  // namespace handeye

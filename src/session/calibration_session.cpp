@@ -1,0 +1,231 @@
+#include "handeye_covariance/session/calibration_session.h"
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/io/yaml_io.h"
+
+namespace handeye {
+
+namespace {
+
+std::string expand_home(const std::string& path) {
+  if (path.rfind("~/", 0) != 0) return path;
+  const char* home = std::getenv("HOME");
+  return std::string(home ? home : ".") + path.substr(1);
+}
+
+}  // namespace
+
+SessionSettings session_settings(const SessionConfig& config) {
+  SessionSettings s;
+  s.rig = config.rig;
+  s.sampler = config.sampler;
+  if (!config.noise_config.empty()) s.noise = io::read_noise_file(expand_home(config.noise_config));
+  s.reject_outliers = config.reject_outliers;
+  s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
+  s.suggest.working_distance = config.working_distance;
+  s.suggest.candidates = config.suggest_candidates;
+  s.suggest.max_step_translation = config.reach_translation;
+  s.suggest.max_step_rotation = config.reach_rotation;
+  if (!config.candidate_poses_file.empty()) {
+    s.candidate_poses = io::read_candidate_poses(expand_home(config.candidate_poses_file));
+  }
+  s.target_object_sigma = config.target_tolerance_mm * 1e-3;
+  s.session_file = expand_home(config.session_file);
+  return s;
+}
+
+SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config) {
+  SessionSettings s = session_settings(config);
+  s.rig = samples.rig;
+  s.noise = samples.noise;
+  s.session_file.clear();
+  return s;
+}
+
+CalibrationSession::CalibrationSession(SessionSettings settings)
+    : settings_(std::move(settings)),
+      // A sample with the detector's covariance gets the configured robot noise, else none (exact).
+      sampler_(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}) {}
+
+// ------------------------------------------------------------------ changes
+
+SessionEvent CalibrationSession::changed(std::string message) {
+  ++generation_;
+  SessionEvent event;
+  event.success = true;
+  event.changed = true;
+  event.message = std::move(message);
+  if (!settings_.session_file.empty()) {
+    try {
+      io::write_file_atomically(settings_.session_file, io::format_samples(sample_set()));
+    } catch (const HandEyeError& e) {
+      event.persist_error = e.what();
+    }
+  }
+  return event;
+}
+
+std::optional<SessionEvent> CalibrationSession::observe(const Observation& observation) {
+  const std::optional<SampleOutcome> outcome = sampler_.observe(observation);
+  if (!outcome) return std::nullopt;
+  if (outcome->accepted) return changed(outcome->message);
+  return SessionEvent{false, false, outcome->message, ""};
+}
+
+SessionEvent CalibrationSession::take_sample(double now) {
+  const SampleOutcome outcome = sampler_.take_sample(now);
+  if (outcome.accepted) return changed(outcome.message);
+  return {false, false, outcome.message, ""};
+}
+
+SessionEvent CalibrationSession::remove(int index) {
+  const std::size_t count = samples().size();
+  if (index < 0 || !sampler_.remove(static_cast<std::size_t>(index))) {
+    return {false, false,
+            "no sample " + std::to_string(index) + ": valid indices are 0.." + std::to_string(static_cast<long>(count) - 1) +
+                " (see list_samples)",
+            ""};
+  }
+  return changed("removed sample " + std::to_string(index));
+}
+
+SessionEvent CalibrationSession::reset() {
+  sampler_.reset();
+  return changed("reset: all samples dropped");
+}
+
+SessionEvent CalibrationSession::replace(std::vector<PoseSample> samples, const std::string& what) {
+  sampler_.set_samples(std::move(samples));
+  return changed(what);
+}
+
+SessionEvent CalibrationSession::load(const std::string& path) {
+  try {
+    const SampleSet loaded = io::read_samples(expand_home(path));
+    if (loaded.rig.setup != settings_.rig.setup) {
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         std::string("the file is ") + to_string(loaded.rig.setup) + " but this session is " +
+                             to_string(settings_.rig.setup),
+                         path, "load a file recorded with the same setup");
+    }
+    const std::size_t n = loaded.samples.size();
+    return replace(loaded.samples, "loaded " + std::to_string(n) + " samples from " + path);
+  } catch (const HandEyeError& e) {
+    return {false, false, e.what(), ""};  // the current samples are kept
+  }
+}
+
+SessionEvent CalibrationSession::resume() {
+  if (settings_.session_file.empty() || !std::filesystem::exists(settings_.session_file)) {
+    return {false, false, "no session file to resume from", ""};
+  }
+  SessionEvent event = load(settings_.session_file);
+  if (event.success) event.message = "resumed " + std::to_string(samples().size()) + " samples";
+  return event;
+}
+
+SessionEvent CalibrationSession::save(const std::string& path) const {
+  try {
+    io::write_file_atomically(expand_home(path), io::format_samples(sample_set()));
+    return {true, false, "saved " + std::to_string(samples().size()) + " samples to " + expand_home(path), ""};
+  } catch (const HandEyeError& e) {
+    return {false, false, e.what(), ""};
+  }
+}
+
+// ------------------------------------------------------------------ the noise model
+
+SampleSet CalibrationSession::sample_set() const {
+  SampleSet set;
+  set.rig = settings_.rig;
+  set.noise = settings_.noise;
+  set.samples = samples();
+  if (!settings_.noise) {
+    // Samples without a covariance of their own get the mean of the others'.
+    Matrix6d mean_camera = Matrix6d::Zero();
+    int with_noise = 0;
+    for (const PoseSample& sample : set.samples) {
+      if (!sample.noise) continue;
+      mean_camera += sample.noise->camera.as_pose_covariance();
+      ++with_noise;
+    }
+    if (with_noise > 0) {
+      MeasurementNoise fallback;
+      fallback.camera = PoseNoise::from_pose_covariance(mean_camera / with_noise);
+      set.noise = fallback;
+    }
+  }
+  return set;
+}
+
+// ------------------------------------------------------------------ computations
+
+Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const {
+  return solve_samples(snapshot.samples, settings_.reject_outliers);
+}
+
+SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {
+  SuggestOptions options = settings_.suggest;
+  if (!criterion.empty()) options.criterion = criterion_from_string(criterion);
+  options.min_translation = settings_.sampler.min_translation;  // as distinct as the sampler requires
+  options.min_rotation = settings_.sampler.min_rotation;
+  options.seed = settings_.suggest.seed + static_cast<unsigned>(samples);  // fresh candidates after each sample
+  return options;
+}
+
+SuggestResult CalibrationSession::suggest(const SessionSnapshot& snapshot, const SuggestRequest& request) const {
+  const std::size_t n = snapshot.samples.samples.size();
+  if (n < static_cast<std::size_t>(kMinimumSamples)) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "no estimate yet: " + std::to_string(n) + " sample(s); take at least " +
+                           std::to_string(kMinimumSamples) + " (rotating about different axes) first",
+                       "samples", "take more samples, then ask again");
+  }
+  SuggestResult r;
+  r.options = suggest_options(request.criterion, n);
+  r.estimate = calibrate(snapshot);
+  r.samples = without_rejected(snapshot.samples, r.estimate);  // plan from the consistent samples
+  const std::vector<Eigen::Isometry3d> candidates = settings_.candidate_poses.empty()
+                                                        ? sample_candidates(r.samples, r.estimate, r.options)
+                                                        : settings_.candidate_poses;
+  r.suggestion = rank_candidates(r.samples, r.estimate, candidates, r.options);
+  if (r.suggestion.ranked.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "every candidate was refused by the prediction", "candidates",
+                       "give candidates that rotate about new axes, or widen the reach (reach_translation_mm, "
+                       "reach_rotation_deg)");
+  }
+  r.target_object_sigma = request.target_object_sigma > 0.0 ? request.target_object_sigma : settings_.target_object_sigma;
+  r.count = request.count > 0 ? request.count : 5;
+  r.plan = plan_poses(r.samples, r.estimate, r.target_object_sigma, settings_.max_plan_poses, r.options,
+                      settings_.candidate_poses);
+  return r;
+}
+
+Analysis CalibrationSession::analyse(const SessionSnapshot& snapshot) const {
+  Analysis a;
+  a.generation = snapshot.generation;
+  a.samples = snapshot.samples.samples.size();
+  if (a.samples < static_cast<std::size_t>(kMinimumSamples)) return a;
+  try {
+    a.estimate = calibrate(snapshot);
+  } catch (const HandEyeError& e) {
+    a.problem = std::string("no estimate yet: ") + e.what();
+    return a;
+  }
+  try {
+    const SampleSet kept = without_rejected(snapshot.samples, *a.estimate);
+    const SuggestOptions options = suggest_options("", a.samples);
+    const std::vector<Eigen::Isometry3d> candidates =
+        settings_.candidate_poses.empty() ? sample_candidates(kept, *a.estimate, options) : settings_.candidate_poses;
+    const Suggestion s = rank_candidates(kept, *a.estimate, candidates, options);
+    if (!s.ranked.empty()) a.next_pose = s.ranked.front();
+  } catch (const HandEyeError& e) {
+    a.problem = std::string("no next pose: ") + e.what();
+  }
+  return a;
+}
+
+}  // namespace handeye

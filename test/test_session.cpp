@@ -1,0 +1,287 @@
+// CalibrationSession without ROS: sampling, changes and their persistence, the
+// noise model, and the computations the node runs on a worker (estimate, next
+// pose, suggestions) on snapshots.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/session/calibration_session.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+
+std::string temp(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "/session_test";
+  std::filesystem::create_directories(dir);
+  return dir + "/" + name;
+}
+
+SessionSettings settings(const std::string& session_file = "") {
+  SessionSettings s;
+  s.rig = {Setup::EyeInHand, {"base_link", "tool0", "camera_optical_frame", "tag_0"}};
+  s.sampler.still_window = 0.5;
+  s.suggest.candidates = 40;
+  s.session_file = session_file;
+  return s;
+}
+
+/// Observations of a robot that holds each pose of a simulated session for 1 s
+/// (20 Hz), with the noisy pattern poses; `covariance` is sent with each.
+std::vector<Observation> observations(const SimulatedSession& s, const std::optional<PoseNoise>& covariance = {}) {
+  std::vector<Observation> out;
+  double t = 0.0;
+  for (const PoseSample& sample : s.samples.samples) {
+    for (int k = 0; k < 20; ++k, t += 0.05) {
+      Observation o;
+      o.stamp = t;
+      o.T_base_effector = sample.T_base_effector;
+      o.T_camera_pattern = sample.T_camera_pattern;
+      o.pattern_noise = covariance;
+      out.push_back(o);
+    }
+    t += 1.0;  // moving: no detections
+  }
+  return out;
+}
+
+SimulatedSession simulated(int n, unsigned seed = 4) {
+  Rng rng(seed);
+  return simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), n, test::sim_noise());
+}
+
+TEST(Session, AutoSamplesPersistsEachChangeAndMovesTheGeneration) {
+  const std::string file = temp("auto.yaml");
+  std::filesystem::remove(file);
+  CalibrationSession session(settings(file));
+  const SimulatedSession sim = simulated(6);
+  int accepted = 0;
+  std::uint64_t generation = session.generation();
+  for (const Observation& o : observations(sim)) {
+    if (const auto event = session.observe(o)) {
+      ASSERT_TRUE(event->success) << event->message;
+      EXPECT_TRUE(event->changed);
+      EXPECT_TRUE(event->persist_error.empty()) << event->persist_error;
+      EXPECT_GT(session.generation(), generation);
+      generation = session.generation();
+      ++accepted;
+      // Written before the change is reported: the file holds exactly these samples.
+      EXPECT_EQ(io::read_samples(file).samples.size(), session.samples().size());
+    }
+  }
+  EXPECT_EQ(accepted, 6);
+  EXPECT_EQ(session.samples().size(), 6u);
+  EXPECT_EQ(session.state(), SamplerState::WaitingForMotion);
+
+  // A second session with the same file resumes where the first stopped.
+  CalibrationSession resumed(settings(file));
+  const SessionEvent event = resumed.resume();
+  ASSERT_TRUE(event.success) << event.message;
+  EXPECT_EQ(event.message, "resumed 6 samples");
+  ASSERT_EQ(resumed.samples().size(), 6u);
+  EXPECT_TRUE(resumed.samples()[5].T_camera_pattern.isApprox(session.samples()[5].T_camera_pattern, 1e-15));
+}
+
+TEST(Session, ChangesSayWhatHappenedAndRefuseBadRequests) {
+  CalibrationSession session(settings());
+  const SimulatedSession sim = simulated(5);
+  ASSERT_TRUE(session.replace(sim.samples.samples, "five").changed);
+  const std::uint64_t g = session.generation();
+
+  SessionEvent bad = session.remove(7);
+  EXPECT_FALSE(bad.success);
+  EXPECT_FALSE(bad.changed);
+  EXPECT_NE(bad.message.find("valid indices are 0..4"), std::string::npos) << bad.message;
+  EXPECT_FALSE(session.remove(-1).success);
+  EXPECT_EQ(session.generation(), g);
+  EXPECT_TRUE(session.remove(0).changed);
+  EXPECT_EQ(session.samples().size(), 4u);
+
+  const std::string saved = temp("saved.yaml");
+  ASSERT_TRUE(session.save(saved).success);
+  SessionSettings to_hand = settings();
+  to_hand.rig.setup = Setup::EyeToHand;
+  CalibrationSession other(to_hand);
+  const SessionEvent wrong_setup = other.load(saved);
+  EXPECT_FALSE(wrong_setup.success);
+  EXPECT_NE(wrong_setup.message.find("eye_in_hand"), std::string::npos) << wrong_setup.message;
+  const SessionEvent missing = session.load(temp("does_not_exist.yaml"));
+  EXPECT_FALSE(missing.success);
+  EXPECT_NE(missing.message.find("IoError"), std::string::npos) << missing.message;
+  EXPECT_EQ(session.samples().size(), 4u) << "a failed load keeps the samples";
+
+  EXPECT_TRUE(session.reset().changed);
+  EXPECT_TRUE(session.samples().empty());
+  EXPECT_NE(session.take_sample(0.0).message.find("no stamp-matched observation"), std::string::npos);
+  ASSERT_TRUE(session.load(saved).success);
+  EXPECT_EQ(session.samples().size(), 4u);
+
+  // An unwritable session file is reported with the change, which still happens.
+  CalibrationSession unwritable(settings("/proc/handeye_not_writable/samples.yaml"));
+  const SessionEvent e = unwritable.replace(sim.samples.samples, "five");
+  EXPECT_TRUE(e.changed);
+  EXPECT_NE(e.persist_error.find("IoError"), std::string::npos) << e.persist_error;
+}
+
+TEST(Session, OneNoiseModel) {
+  const SimulatedSession sim = simulated(6);
+  PoseNoise detector;
+  detector.rotation = 4e-6 * Eigen::Matrix3d::Identity();
+  detector.translation = 1e-7 * Eigen::Matrix3d::Identity();
+  detector.translation_rotation(2, 0) = 2e-7;  // the cross block travels too
+
+  // Configured noise: the global block; a detector's sample keeps its covariance
+  // and gets the configured robot noise.
+  SessionSettings configured = settings();
+  configured.noise = paper_noise(1e-5);
+  CalibrationSession with_config(configured);
+  for (const Observation& o : observations(sim, detector)) with_config.observe(o);
+  SampleSet set = with_config.sample_set();
+  ASSERT_EQ(set.samples.size(), 6u);
+  EXPECT_EQ(set.noise->camera.rotation, configured.noise->camera.rotation);
+  ASSERT_TRUE(set.samples[2].noise);
+  EXPECT_EQ(set.samples[2].noise->camera.as_pose_covariance(), detector.as_pose_covariance());
+  EXPECT_EQ(set.samples[2].noise->robot.rotation, configured.noise->robot.rotation);
+
+  // None configured: the robot is exact, and the detector's mean covers samples without one.
+  CalibrationSession detector_only(settings());
+  for (const Observation& o : observations(sim, detector)) detector_only.observe(o);
+  std::vector<PoseSample> mixed = detector_only.samples();
+  mixed[0].noise.reset();
+  detector_only.replace(mixed, "mixed");
+  set = detector_only.sample_set();
+  ASSERT_TRUE(set.noise);
+  EXPECT_TRUE(set.noise->camera.as_pose_covariance().isApprox(detector.as_pose_covariance(), 1e-12));
+  EXPECT_TRUE(set.samples[1].noise->robot.as_pose_covariance().isZero(0.0));
+  EXPECT_NO_THROW(detector_only.calibrate(detector_only.snapshot()));
+
+  // Neither: no noise block, so the estimator estimates it.
+  CalibrationSession bare(settings());
+  bare.replace(simulated(6).samples.samples, "plain");
+  std::vector<PoseSample> plain = bare.samples();
+  for (PoseSample& s : plain) s.noise.reset();
+  bare.replace(plain, "plain");
+  EXPECT_FALSE(bare.sample_set().noise);
+  EXPECT_EQ(bare.calibrate(bare.snapshot()).noise_origin, NoiseOrigin::EstimatedFromResiduals);
+}
+
+TEST(Session, AnalysisOfASnapshotNamesTheEstimateAndTheNextPose) {
+  SessionSettings s = settings();
+  s.noise = test::sim_noise();
+  CalibrationSession session(s);
+  const SimulatedSession sim = simulated(8);
+  session.replace({sim.samples.samples.begin(), sim.samples.samples.begin() + 2}, "two");
+  Analysis a = session.analyse(session.snapshot());
+  EXPECT_FALSE(a.estimate);
+  EXPECT_TRUE(a.problem.empty()) << "fewer than 3 samples is not a problem, only too early";
+
+  session.replace(sim.samples.samples, "eight");
+  const SessionSnapshot snapshot = session.snapshot();
+  session.remove(0);  // the session moves on; the snapshot does not
+  a = session.analyse(snapshot);
+  EXPECT_EQ(a.generation, snapshot.generation);
+  EXPECT_NE(a.generation, session.generation());
+  EXPECT_EQ(a.samples, 8u);
+  ASSERT_TRUE(a.estimate) << a.problem;
+  ASSERT_TRUE(a.next_pose) << a.problem;
+  const PoseWithCovariance X{a.estimate->T_parent_camera, a.estimate->pose_covariance};
+  EXPECT_LT(a.next_pose->object_sigma, object_sigma(X, s.suggest.working_distance));
+  const Vector6d error = pose_error(a.estimate->T_parent_camera, sim.X);
+  EXPECT_LT(error.dot(a.estimate->pose_covariance.ldlt().solve(error)), 22.5);  // chi2(6) 0.999
+
+  // A degenerate session: a problem, not an exception.
+  std::vector<PoseSample> same(3, sim.samples.samples[0]);
+  session.replace(same, "degenerate");
+  a = session.analyse(session.snapshot());
+  EXPECT_FALSE(a.estimate);
+  EXPECT_NE(a.problem.find("no estimate yet"), std::string::npos) << a.problem;
+}
+
+TEST(Session, OutlierRejectionFollowsTheSetting) {
+  SessionSettings s = settings();
+  s.noise = test::sim_noise();
+  SimulatedSession sim = simulated(12, 9);
+  sim.samples.samples[3].T_camera_pattern = sim.samples.samples[0].T_camera_pattern;  // a wrong detection
+  CalibrationSession rejecting(s);
+  rejecting.replace(sim.samples.samples, "with an outlier");
+  const Calibration c = rejecting.calibrate(rejecting.snapshot());
+  ASSERT_EQ(c.rejected.size(), 1u);
+  EXPECT_EQ(c.rejected[0].index, 3);
+  s.reject_outliers = false;
+  CalibrationSession keeping(s);
+  keeping.replace(sim.samples.samples, "with an outlier");
+  try {
+    const Calibration kept = keeping.calibrate(keeping.snapshot());
+    EXPECT_TRUE(kept.rejected.empty());
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), ErrorCode::AngleMismatch) << e.what();
+  }
+}
+
+TEST(Session, SuggestionsUseOneSeedPolicyAndTheConfiguredPlan) {
+  SessionSettings s = settings();
+  s.noise = test::sim_noise();
+  s.max_plan_poses = 4;
+  CalibrationSession session(s);
+  const SimulatedSession sim = simulated(5);
+  session.replace({sim.samples.samples.begin(), sim.samples.samples.begin() + 2}, "two");
+  try {
+    session.suggest(session.snapshot(), {});
+    FAIL() << "suggested from 2 samples";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("no estimate yet"), std::string::npos) << e.what();
+  }
+  session.replace(sim.samples.samples, "five");
+  SuggestRequest request;
+  request.count = 3;
+  request.target_object_sigma = 1e-6;  // out of reach: the plan stops at max_plan_poses
+  const SuggestResult r = session.suggest(session.snapshot(), request);
+  EXPECT_EQ(r.count, 3);
+  EXPECT_EQ(r.options.seed, s.suggest.seed + 5u);
+  EXPECT_EQ(r.options.min_translation, s.sampler.min_translation);
+  EXPECT_FALSE(r.plan.reached);
+  EXPECT_EQ(r.plan.poses.size(), 4u);
+  ASSERT_FALSE(r.suggestion.ranked.empty());
+  EXPECT_LE(r.suggestion.ranked.front().score, r.suggestion.ranked.back().score);
+  // The same snapshot gives the same suggestion; a new sample brings new candidates.
+  EXPECT_TRUE(session.suggest(session.snapshot(), request).suggestion.ranked.front().T_base_effector.isApprox(
+      r.suggestion.ranked.front().T_base_effector));
+  request.criterion = "trace";
+  EXPECT_THROW(session.suggest(session.snapshot(), request), HandEyeError);
+}
+
+TEST(Session, SettingsFromAConfigReadTheFilesAndRefuseTypos) {
+  SessionConfig config;
+  config.suggest_criterion = "determinant";
+  config.target_tolerance_mm = 0.5;
+  config.reach_translation = 0.3;
+  SessionSettings s = session_settings(config);
+  EXPECT_EQ(s.suggest.criterion, SuggestCriterion::Determinant);
+  EXPECT_DOUBLE_EQ(s.target_object_sigma, 0.5e-3);
+  EXPECT_DOUBLE_EQ(s.suggest.max_step_translation, 0.3);
+  EXPECT_FALSE(s.noise);
+
+  const std::string noise_file = temp("noise.yaml");
+  SampleSet with_noise = simulated(3).samples;
+  io::write_file_atomically(noise_file, io::format_samples(with_noise));
+  config.noise_config = noise_file;
+  s = session_settings(config);
+  ASSERT_TRUE(s.noise);
+  EXPECT_EQ(s.noise->camera.rotation, test::sim_noise().camera.rotation);
+
+  config.suggest_criterion = "trace";
+  try {
+    session_settings(config);
+    FAIL() << "accepted criterion `trace`";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown criterion"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace handeye
