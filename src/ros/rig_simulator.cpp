@@ -6,6 +6,12 @@
 // ~output:=images the rig instead renders what its camera sees (the tag layout
 // ~layout_file, or one tag ~tag_size of id 0) and publishes the image and its
 // CameraInfo, stamped with the capture time, for the apriltag_detector node.
+// With ~camera_link set, the rig publishes a camera driver's own TF tree
+// (camera_link -> the optical frame, the usual optical rotation) and can stamp
+// its detections in another frame of that tree (~detection_frame); their pose
+// and covariance are then expressed in that frame. The detection noise is
+// drawn in the optical frame: lateral (~pattern_translation_noise_mm) and depth
+// (~pattern_depth_noise_mm) differ, as a monocular detector's do.
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <ros/ros.h>
@@ -41,8 +47,17 @@ class RigSimulator {
     tag_ids_ = param(pn, "tag_ids", std::vector<int>{0});
     const double rotation_sigma = param(pn, "pattern_rotation_noise_deg", 0.05) * M_PI / 180.0;
     const double translation_sigma = param(pn, "pattern_translation_noise_mm", 0.3) * 1e-3;
+    const double depth_sigma = param(pn, "pattern_depth_noise_mm", translation_sigma * 1e3) * 1e-3;
     noise_.rotation = rotation_sigma * rotation_sigma * Eigen::Matrix3d::Identity();
-    noise_.translation = translation_sigma * translation_sigma * Eigen::Matrix3d::Identity();
+    noise_.translation = Eigen::Vector3d(translation_sigma, translation_sigma, depth_sigma).cwiseAbs2().asDiagonal();
+    camera_link_ = param<std::string>(pn, "camera_link", "");
+    detection_frame_ = param<std::string>(pn, "detection_frame", camera_);
+    // camera_link: x forward, y left, z up; the optical frame: z forward, x right, y down.
+    T_link_optical_ = se3::make_pose((Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished(),
+                                     Eigen::Vector3d(0.0, 0.015, 0.0));
+    if (detection_frame_ != camera_ && detection_frame_ != camera_link_) {
+      throw std::invalid_argument("~detection_frame must be ~tracking_base_frame or ~camera_link");
+    }
 
     const std::vector<double> truth = param(pn, "truth", std::vector<double>{});
     const Eigen::Isometry3d X =
@@ -80,7 +95,17 @@ class RigSimulator {
     offset.header.frame_id = "flange";
     offset.child_frame_id = effector_;
     offset.transform = conversions::to_transform_msg(flange_T_tool_);
-    if (publish_robot_tf_) static_broadcaster_.sendTransform(offset);
+    std::vector<geometry_msgs::TransformStamped> statics;
+    if (publish_robot_tf_) statics.push_back(offset);
+    if (!camera_link_.empty()) {  // the camera driver's tree
+      geometry_msgs::TransformStamped optical;
+      optical.header.stamp = offset.header.stamp;
+      optical.header.frame_id = camera_link_;
+      optical.child_frame_id = camera_;
+      optical.transform = conversions::to_transform_msg(T_link_optical_);
+      statics.push_back(optical);
+    }
+    if (!statics.empty()) static_broadcaster_.sendTransform(statics);
 
     start_ = ros::Time::now();
     tf_timer_ = node.createTimer(ros::Duration(1.0 / param(pn, "tf_rate", 200.0)), &RigSimulator::publish_tf, this);
@@ -123,12 +148,14 @@ class RigSimulator {
       publish_image(capture);
       return;
     }
-    const Eigen::Isometry3d P = perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_);
+    // Noise in the optical frame; the detection (pose and covariance) in detection_frame.
+    PoseWithCovariance P{perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_), noise_.as_pose_covariance()};
+    if (detection_frame_ != camera_) P = compose({T_link_optical_, Matrix6d::Zero()}, P);
     geometry_msgs::PoseWithCovarianceStamped pose;
     pose.header.stamp = capture;
-    pose.header.frame_id = camera_;
-    pose.pose.pose = conversions::to_pose_msg(P);
-    if (detection_covariance_) pose.pose.covariance = conversions::to_msg(PoseWithCovariance{P, noise_.as_pose_covariance()}).covariance;
+    pose.header.frame_id = detection_frame_;
+    pose.pose = conversions::to_msg(P);
+    if (!detection_covariance_) pose.pose.covariance.fill(0.0);
     if (output_ == "tags") {
       TagDetectionArray array;
       array.header = pose.header;
@@ -149,14 +176,15 @@ class RigSimulator {
       geometry_msgs::TransformStamped tf;
       tf.header = pose.header;
       tf.child_frame_id = pattern_frame_;
-      tf.transform = conversions::to_transform_msg(P);
+      tf.transform = conversions::to_transform_msg(P.pose);
       broadcaster_.sendTransform(tf);
     }
   }
 
   Rng rng_;
   Setup setup_;
-  std::string base_, effector_, camera_, pattern_frame_, output_;
+  std::string base_, effector_, camera_, pattern_frame_, output_, camera_link_, detection_frame_;
+  Eigen::Isometry3d T_link_optical_;
   bool publish_robot_tf_, detection_covariance_;
   double latency_;
   std::vector<int> tag_ids_;
