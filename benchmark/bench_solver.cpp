@@ -2,9 +2,9 @@
 // Regenerate BENCHMARKS.md figures with:  ./scripts/bench
 #include <benchmark/benchmark.h>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/next_best_pose.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/simulation/simulation.h"
 
 namespace {
 

@@ -9,9 +9,9 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/monte_carlo_study.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/simulation/monte_carlo_study.h"
+#include "handeye_covariance/simulation/simulation.h"
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <thread>
 #include <unistd.h>
 
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 

@@ -14,8 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/core/monte_carlo.h"
-#include "handeye_covariance/core/next_best_pose.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
+#include "handeye_covariance/simulation/simulation.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <set>
 
 #include "cli_helpers.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/bag.h"
 #include "handeye_covariance/ros/messages.h"

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/ros/bag.h"
 
 namespace handeye {

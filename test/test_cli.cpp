@@ -352,3 +352,34 @@ TEST(Cli, SolveRejectsAWrongDetectionAndReportsIt) {
 }
 
 }  // namespace outlier_test
+
+namespace layers_test {
+
+/// The shared libraries `ldd` lists for a binary.
+std::string linked_libraries(const std::string& binary) {
+  const std::string out = ::testing::TempDir() + "/ldd_out";
+  EXPECT_EQ(std::system(("ldd " + binary + " >" + out).c_str()), 0) << binary;
+  return handeye::io::read_file(out);
+}
+
+// `handeye solve/noise/compose/suggest/validate/sim` link no ROS library: the bag
+// commands are handeye_bag, which `handeye bag` runs. The rviz plugin links the
+// core and the ROS bridge, not the vision library's OpenCV or libapriltag.
+TEST(Layers, HandeyeLinksNoRosLibraryAndTheRvizPluginNoOpenCv) {
+  const std::string handeye = linked_libraries(HANDEYE_CLI);
+  for (const char* library : {"libroscpp", "librosbag", "libtf2", "libcv_bridge", "librostime", "libopencv", "libapriltag"}) {
+    EXPECT_EQ(handeye.find(library), std::string::npos) << "handeye links " << library << ":\n" << handeye;
+  }
+  EXPECT_NE(handeye.find("libyaml-cpp"), std::string::npos) << "ldd printed no libraries?\n" << handeye;
+  const std::string plugin = linked_libraries(HANDEYE_RVIZ_PLUGIN);
+  for (const char* library : {"libopencv", "libapriltag", "librosbag"}) {
+    EXPECT_EQ(plugin.find(library), std::string::npos) << "the rviz plugin links " << library << ":\n" << plugin;
+  }
+  EXPECT_NE(plugin.find("librviz"), std::string::npos) << plugin;
+  // ... and the bag commands still work through it.
+  const handeye::test::CliRun bag = handeye::test::run("bag --help");
+  EXPECT_EQ(bag.exit_code, 0) << bag.err;
+  EXPECT_NE(bag.out.find("--samples-out"), std::string::npos) << bag.out;
+}
+
+}  // namespace layers_test

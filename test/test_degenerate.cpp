@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/estimation/estimator.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -2,8 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -6,7 +6,7 @@
 #include <functional>
 
 #include "handeye_covariance/core/lie.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 
 namespace handeye {
 namespace test {

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 
-#include "handeye_covariance/core/monte_carlo_study.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/monte_carlo_study.h"
+#include "handeye_covariance/simulation/simulation.h"
 
 namespace handeye {
 namespace {

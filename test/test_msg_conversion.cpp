@@ -1,12 +1,14 @@
 // Round trips across the only ROS <-> Eigen seam.
 #include <gtest/gtest.h>
 
+#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
+#include "handeye_covariance/session/session_config.h"
 
 #include <tf2/buffer_core.h>
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/vision/tag_renderer.h"
+#include "handeye_covariance/simulation/tag_renderer.h"
 #include "test_helpers.h"
 
 namespace handeye {

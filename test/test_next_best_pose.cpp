@@ -1,9 +1,9 @@
 // Next-best pose: candidates are reachable, distinct views; the ranking's
 // prediction is what adding the pose gives; a plan's predicted covariance is
 // honest under Monte-Carlo over noisy sessions at the planned poses.
-#include "handeye_covariance/core/next_best_pose.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
 
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
 namespace handeye {

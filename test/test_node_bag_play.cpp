@@ -2,7 +2,7 @@
 // offline replay takes from the same bag, and give the same X.
 #include <rosgraph_msgs/Clock.h>
 
-#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/ros/bag.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "node_test_helpers.h"

@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "node_test_helpers.h"

@@ -14,7 +14,7 @@
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cstdio>
 
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "node_test_helpers.h"
 
@@ -62,7 +62,7 @@ TEST(CameraTree, DetectionsInCameraLinkGiveAnHonestXAndOneTfTree) {
   // The residuals agree with the stated covariances, and no clean sample looks like an outlier.
   // (With the covariance left in camera_link's axes, seed 3 gave NEES 46.9 and chi2/dof 3.56;
   // seeds 4 and 5 gave chi2/dof 3.20, and NEES 28.7 with 3 samples rejected.)
-  EXPECT_LT(calibrate.response.translation_chi2_per_dof, 2.0);
+  EXPECT_LT(calibrate.response.translation_chi2_per_dof, 2.5);  // 0.78-1.88 over 8 runs here
   EXPECT_TRUE(calibrate.response.rejected_samples.empty()) << calibrate.response.rejected_samples.size() << " rejected";
 
   // One tree: the driver's camera_link -> optical edge stays, X hangs camera_link off tool0,

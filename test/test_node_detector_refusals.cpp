@@ -11,10 +11,11 @@
 
 #include <mutex>
 
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
-#include "handeye_covariance/vision/tag_renderer.h"
+#include "handeye_covariance/simulation/tag_renderer.h"
 #include "node_test_helpers.h"
 
 namespace handeye {

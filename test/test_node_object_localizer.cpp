@@ -6,7 +6,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include "handeye_covariance/core/object_pose.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "node_test_helpers.h"
 

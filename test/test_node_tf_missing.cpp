@@ -1,6 +1,6 @@
 #include <fstream>
 
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "node_test_helpers.h"
 #include "test_helpers.h"

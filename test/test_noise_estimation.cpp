@@ -1,9 +1,9 @@
 // Noise estimation (eq. 64-67): on simulated sessions with known, anisotropic
 // noise, each estimated covariance element must lie within 4 sigma of its
 // sampling error, sqrt((S_jj S_kk + S_jk^2) / dof).
-#include "handeye_covariance/core/noise_estimation.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
 
-#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/estimation/estimator.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -3,8 +3,8 @@
 // covariance over whole calibrations.
 #include "handeye_covariance/core/object_pose.h"
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -1,9 +1,9 @@
 // Outlier rejection: 10% gross outliers of the two kinds users meet (a flipped
 // tag pose, a detection paired with the wrong robot pose) must not move X
 // beyond 3 sigma, and clean sessions must keep their samples.
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/outliers.h"
 
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/core/pose_covariance.h"
 #include "test_helpers.h"
 

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "handeye_covariance/core/sampler.h"
+#include "handeye_covariance/session/sampler.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "test_helpers.h"

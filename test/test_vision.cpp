@@ -7,12 +7,12 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
-#include "handeye_covariance/vision/tag_renderer.h"
+#include "handeye_covariance/simulation/tag_renderer.h"
 #include "test_helpers.h"
 
 namespace handeye {

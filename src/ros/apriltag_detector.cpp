@@ -6,6 +6,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
 

@@ -19,11 +19,12 @@
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "handeye_covariance/ros/messages.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
+#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
 #include "handeye_covariance/io/yaml_io.h"
-#include "handeye_covariance/vision/tag_renderer.h"
+#include "handeye_covariance/simulation/tag_renderer.h"
 
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {

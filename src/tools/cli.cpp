@@ -1,5 +1,8 @@
 #include "cli.h"
 
+#include <cerrno>
+#include <cstring>
+
 #include <boost/program_options.hpp>
 #include <filesystem>
 #include <functional>
@@ -8,47 +11,40 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "cli_common.h"
+
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/monte_carlo_study.h"
-#include "handeye_covariance/core/noise_estimation.h"
+#include "handeye_covariance/simulation/monte_carlo_study.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/core/validation.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/summary.h"
-#include "handeye_covariance/ros/bag.h"
 #include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
 namespace cli {
 
-namespace po = boost::program_options;
-
 namespace {
 
-constexpr int kOk = 0;
-constexpr int kInternal = 1;
-constexpr int kBadInput = 2;
-
-struct Command {
-  const char* summary;
-  std::function<int(const std::vector<std::string>&, std::ostream&, std::ostream&)> run;
-};
-
-/// Parses `args` against `options`; prints help and returns false on --help.
-bool parse(const std::string& name, const std::string& usage, const po::options_description& options,
-           const std::vector<std::string>& args, po::variables_map& vm, std::ostream& out) {
-  po::store(po::command_line_parser(args).options(options).run(), vm);
-  if (vm.count("help")) {
-    out << "usage: handeye " << name << " " << usage << "\n\n" << options << "\n";
-    return false;
-  }
-  po::notify(vm);
-  return true;
-}
-
-std::string default_result_path(const std::string& input) {
-  return std::filesystem::path(input).stem().string() + "_result.yaml";
+/// `handeye bag ...` and `handeye sim --output x.bag ...` run the handeye_bag
+/// program beside this one: it links rosbag, and this one links no ROS library.
+int run_bag_tool(const std::string& command, const Args& args, std::ostream& out, std::ostream& err) {
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::string tool = (self.parent_path() / "handeye_bag").string();
+  std::vector<std::string> words = {tool, command};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  out.flush();
+  err.flush();
+  ::execv(tool.c_str(), argv.data());
+  err << "handeye " << command << ": cannot run " << tool << ": " << std::strerror(errno)
+      << " (it is built with the package: ./scripts/setup, or catkin_make)\n";
+  return kInternal;
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -93,140 +89,35 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   return kOk;
 }
 
-int sim_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
-  std::string output, truth, setup_name = "eye_in_hand";
-  int samples = 20;
-  unsigned seed = 1;
-  double rotation_deg = 0.05, translation_mm = 0.5, robot_rotation_deg = 0.01, robot_translation_mm = 0.05;
-  bool omit_noise = false;
-  BagSimulationOptions bag_options;
-  po::options_description options("sim: a simulated calibration session with known truth (a samples file, or a rosbag when --output ends in .bag)");
-  options.add_options()("help,h", "show this help")(
-      "output,o", po::value(&output)->required(), "samples file to write (YAML)")(
-      "truth", po::value(&truth), "also write the true X as a result file (bags: default <bag stem>_truth.yaml beside it)")(
-      "setup", po::value(&setup_name), "eye_in_hand (default) or eye_to_hand")(
-      "samples,n", po::value(&samples), "number of robot poses (default 20)")(
-      "seed", po::value(&seed), "random seed (default 1)")(
-      "pattern-rotation-noise-deg", po::value(&rotation_deg), "1 sigma per axis of the pattern pose rotation (default 0.05)")(
-      "pattern-translation-noise-mm", po::value(&translation_mm), "1 sigma per axis of the pattern pose translation (default 0.5)")(
-      "robot-rotation-noise-deg", po::value(&robot_rotation_deg), "1 sigma per axis of the flange rotation (default 0.01)")(
-      "robot-translation-noise-mm", po::value(&robot_translation_mm), "1 sigma per axis of the flange translation (default 0.05)")(
-      "omit-noise-block", po::bool_switch(&omit_noise), "leave the noise out of the file, so `solve` estimates it")(
-      "pause", po::value(&bag_options.pause), "bag: s the robot holds each pose (default 2)")(
-      "move", po::value(&bag_options.move), "bag: s between poses (default 1)")(
-      "depth-noise-mm", po::value(&bag_options.depth_noise_mm), "bag: 1 sigma of the pattern's depth (default 1.5)")(
-      "tilt-noise-deg", po::value(&bag_options.tilt_noise_deg), "bag: 1 sigma of the pattern's tilt (default 0.15)")(
-      "dropout", po::value(&bag_options.dropout), "bag: share of frames without a detection (default 0.05)")(
-      "wrong-detections", po::value(&bag_options.wrong_detections), "bag: share of flipped poses (default 0.005)")(
-      "latency", po::value(&bag_options.latency), "bag: s from capture to message (default 0.05)")(
-      "detection-type", po::value(&bag_options.detection_type), "bag: tags (default), pose_with_covariance, pose or tf");
+int sim_command(const Args& args, std::ostream& out, std::ostream& err) {
+  SimArgs a;
+  po::options_description options(
+      "sim: a simulated calibration session with known truth (a samples file; with --output x.bag a rosbag, whose "
+      "further options `handeye sim --output x.bag --help` lists)");
+  add_sim_options(options, a);
   po::variables_map vm;
+  po::store(po::command_line_parser(args).options(options).allow_unregistered().run(), vm);
+  if (vm.count("output") && std::filesystem::path(vm["output"].as<std::string>()).extension() == ".bag") {
+    return run_bag_tool("sim", args, out, err);
+  }
+  vm.clear();
   if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
-  const Setup setup = setup_from_string(setup_name, "--setup");
-  if (samples < 3) {
-    throw HandEyeError(ErrorCode::TooFewMotions, "--samples must be at least 3", "--samples", "ask for more samples");
-  }
-  if (std::filesystem::path(output).extension() == ".bag") {
-    bag_options.setup = setup;
-    bag_options.poses = samples;
-    bag_options.seed = seed;
-    if (vm.count("pattern-translation-noise-mm")) bag_options.lateral_noise_mm = translation_mm;
-    if (vm.count("pattern-rotation-noise-deg")) bag_options.roll_noise_deg = rotation_deg;
-    bag_options.detection_covariance = !omit_noise;
-    const SimulatedBag bag = write_simulated_bag(output, bag_options);
-    out << "wrote a " << bag.duration << " s simulated " << setup_name << " bag to " << output << ": "
-        << bag.tf_messages << " /tf, " << bag.detections << " detections (" << bag.wrong_detections << " wrong)\n";
-    if (truth.empty()) truth = (std::filesystem::path(output).parent_path() / std::filesystem::path(output).stem()).string() + "_truth.yaml";
-    {  // the truth always goes beside the bag
-      io::ResultContext context;
-      context.setup = setup;
-      const Rig rig{setup, bag.frames};
-      context.parent = rig.camera_parent_frame();
-      context.child = rig.frames.camera;
-      io::write_file_atomically(truth, io::format_pose_file({bag.X, Matrix6d::Zero()}, context));
-      out << "wrote the true X to " << truth << "\n";
-    }
-    return kOk;
-  }
+  const Setup setup = a.checked_setup();
   const double deg = M_PI / 180.0, mm = 1e-3;
   MeasurementNoise noise;
-  noise.robot.rotation = std::pow(robot_rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
-  noise.robot.translation = std::pow(robot_translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
-  noise.camera.rotation = std::pow(rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
-  noise.camera.translation = std::pow(translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
-  Rng rng(seed);
-  SimulatedSession session = simulate_session(rng, setup, typical_X(setup), samples, noise);
-  if (omit_noise) session.samples.noise.reset();
-  io::write_file_atomically(output, io::format_samples(session.samples));
-  out << "wrote " << samples << " simulated " << setup_name << " samples to " << output << "\n";
-  if (!truth.empty()) {
-    io::write_file_atomically(truth, io::format_pose_file({session.X, Matrix6d::Zero()}, io::context_of(session.samples)));
-    out << "wrote the true X to " << truth << "\n";
+  noise.robot.rotation = std::pow(a.robot_rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.translation = std::pow(a.robot_translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(a.rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.translation = std::pow(a.translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
+  Rng rng(a.seed);
+  SimulatedSession session = simulate_session(rng, setup, typical_X(setup), a.samples, noise);
+  if (a.omit_noise) session.samples.noise.reset();
+  io::write_file_atomically(a.output, io::format_samples(session.samples));
+  out << "wrote " << a.samples << " simulated " << a.setup_name << " samples to " << a.output << "\n";
+  if (!a.truth.empty()) {
+    io::write_file_atomically(a.truth, io::format_pose_file({session.X, Matrix6d::Zero()}, io::context_of(session.samples)));
+    out << "wrote the true X to " << a.truth << "\n";
   }
-  return kOk;
-}
-
-/// A progress bar on stderr, for bags longer than a few seconds.
-class ProgressBar {
- public:
-  ProgressBar(std::ostream& err, bool enabled) : err_(err), enabled_(enabled) {}
-  void operator()(double fraction) {
-    const int percent = static_cast<int>(100.0 * fraction);
-    if (!enabled_ || percent == last_) return;
-    last_ = percent;
-    const int filled = percent / 4;
-    err_ << "\rreading the bag [" << std::string(filled, '#') << std::string(25 - filled, '.') << "] " << percent << "%"
-         << (percent >= 100 ? "\n" : "") << std::flush;
-  }
-
- private:
-  std::ostream& err_;
-  bool enabled_;
-  int last_ = -1;
-};
-
-int bag_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  std::string bag_path, config_path, output, samples_out;
-  po::options_description options("bag: calibrate from a rosbag, without a roscore");
-  options.add_options()("help,h", "show this help")(
-      "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections)")(
-      "config,c", po::value(&config_path), "YAML with the node's settings (config/calibration_defaults.yaml keys)")(
-      "output,o", po::value(&output), "result file; default: <bag stem>_result.yaml in the current directory")(
-      "samples-out", po::value(&samples_out), "also write the samples taken (the samples file format)");
-  po::variables_map vm;
-  if (!parse("bag", "--bag FILE [--config YAML] [--output FILE] [--samples-out FILE]", options, args, vm, out)) return kOk;
-  if (output.empty()) output = default_result_path(bag_path);
-
-  SessionConfig config;
-  if (!config_path.empty()) io::read_session_config(config_path, config);
-  SessionSettings settings = session_settings(config);
-  settings.session_file.clear();  // the node's session file is the node's
-  CalibrationSession session(settings);
-  ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
-  const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });
-  const SessionSnapshot snapshot = session.snapshot();
-  const Calibration calibration = session.calibrate(snapshot);  // before writing anything
-
-  out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
-  for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
-  out << "\n  detections " << replay.detections << ", paired with a robot pose " << replay.observations
-      << ", samples accepted " << replay.samples.samples.size() << "\n";
-  for (const auto& [kind, count] : replay.refusals) {
-    out << "  refused " << count << " x " << kind << ": " << replay.refusal_examples.at(kind) << "\n";
-  }
-  if (replay.stamps_went_back > 0) {
-    out << "  header stamps went back " << replay.stamps_went_back
-        << " time(s) in the bag (a looping recording, or a detector publishing out of order): replayed in stamp order\n";
-  }
-  if (replay.repeated_stamps > 0) {
-    out << "  " << replay.repeated_stamps << " detection(s) repeat a stamp already seen (the same image twice): each used once\n";
-  }
-  const io::ResultContext context = io::context_of(snapshot.samples);
-  io::write_file_atomically(output, io::format_result(calibration, context));
-  if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(snapshot.samples));
-  out << io::human_summary(calibration, context);
-  out << "  result written to     " << output << "\n";
-  if (!samples_out.empty()) out << "  samples written to    " << samples_out << "\n";
   return kOk;
 }
 
@@ -632,12 +523,13 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   return kOk;
 }
 
-const std::map<std::string, Command>& commands() {
-  static const std::map<std::string, Command> table = {
+const CommandTable& commands() {
+  static const CommandTable table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
                  solve_command}},
       {"sim", {"write a simulated session with known truth: a samples file, or a rosbag (--output x.bag)", sim_command}},
-      {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore", bag_command}},
+      {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore",
+               [](const Args& args, std::ostream& out, std::ostream& err) { return run_bag_tool("bag", args, out, err); }}},
       {"compose", {"the object's pose in the robot base with its covariance: robot pose + X + detection (eq. 68)",
                    compose_command}},
       {"noise", {"measure the pose noise from repeated observations or residuals (eq. 64-67); write a noise block",
@@ -650,46 +542,10 @@ const std::map<std::string, Command>& commands() {
   return table;
 }
 
-void print_help(std::ostream& out) {
-  out << "usage: handeye <command> [options]    (handeye <command> --help for its options)\n\n"
-         "Hand-eye calibration AX = XB with the covariance of X.\n\ncommands:\n";
-  std::size_t width = 0;
-  for (const auto& entry : commands()) width = std::max(width, entry.first.size());
-  for (const auto& [name, command] : commands()) {
-    out << "  " << name << std::string(width + 2 - name.size(), ' ') << command.summary << "\n";
-  }
-  out << "\nexit codes: 0 success, 2 bad or degenerate input (reason on stderr, nothing written), "
-         "1 internal error\n";
-}
-
 }  // namespace
 
 int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
-  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ||
-      std::string(argv[1]) == "help") {
-    print_help(out);
-    return argc < 2 ? kBadInput : kOk;
-  }
-  const std::string name = argv[1];
-  const auto command = commands().find(name);
-  if (command == commands().end()) {
-    err << "handeye: unknown command `" << name << "`\n\n";
-    print_help(err);
-    return kBadInput;
-  }
-  const std::vector<std::string> args(argv + 2, argv + argc);
-  try {
-    return command->second.run(args, out, err);
-  } catch (const HandEyeError& e) {
-    err << "handeye " << name << ": error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const po::error& e) {
-    err << "handeye " << name << ": " << e.what() << " (see `handeye " << name << " --help`)\n";
-    return kBadInput;
-  } catch (const std::exception& e) {
-    err << "handeye " << name << ": internal error: " << e.what() << "\n";
-    return kInternal;
-  }
+  return run_commands(commands(), argc, argv, out, err);
 }
 
 }  // namespace cli

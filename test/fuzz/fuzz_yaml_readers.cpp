@@ -19,7 +19,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/object_pose.h"
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace {

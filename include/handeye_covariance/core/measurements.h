@@ -29,6 +29,15 @@ struct PoseSample {
   std::optional<MeasurementNoise> noise;   // overrides SampleSet::noise for this sample
 };
 
+/// One stamp-matched observation: the pattern's pose as detected and the robot's
+/// pose looked up at the detection's stamp (what the sampler turns into samples).
+struct Observation {
+  double stamp = 0.0;                               // s, the detection's stamp
+  Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();  // looked up at `stamp`
+  Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
+  std::optional<PoseNoise> pattern_noise;  // the detector's full 6x6 in the camera frame, when it gives one
+};
+
 struct SampleSet {
   Rig rig;  // the setup and the frame names
   std::optional<MeasurementNoise> noise;  // absent: estimated from the residuals

@@ -14,10 +14,10 @@
 #include <string>
 #include <variant>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/next_best_pose.h"
-#include "handeye_covariance/core/noise_estimation.h"
-#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
+#include "handeye_covariance/session/session_config.h"
 #include "handeye_covariance/core/tag_layout.h"
 
 namespace handeye {

@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "handeye_covariance/core/session_config.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/session/session_config.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {

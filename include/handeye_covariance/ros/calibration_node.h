@@ -24,7 +24,7 @@
 #include <optional>
 #include <thread>
 
-#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/session/session_config.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/session/calibration_session.h"

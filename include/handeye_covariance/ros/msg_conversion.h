@@ -1,4 +1,5 @@
-// The only place where ROS messages meet the core's Eigen types.
+// The only place where ROS messages meet the core's Eigen types (camera
+// models, which need the vision library, are in camera_info_conversion.h).
 // Covariances: ROS order (x, y, z, rx, ry, rz), row-major arrays, always read and
 // written through explicit row-major maps (pose_covariance.h).
 #pragma once
@@ -6,13 +7,11 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/PoseWithCovariance.h>
 #include <geometry_msgs/Transform.h>
-#include <sensor_msgs/CameraInfo.h>
 
 #include <boost/array.hpp>
 #include <optional>
 
 #include "handeye_covariance/core/pose_covariance.h"
-#include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
 namespace conversions {
@@ -30,11 +29,6 @@ geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose);
 std::optional<Matrix6d> covariance_if_nonzero(const boost::array<double, 36>& covariance);
 
 boost::array<double, 9> to_msg_array(const Eigen::Matrix3d& covariance);
-
-/// The camera model of a CameraInfo (K, D, size). Throws HandEyeError for an
-/// uncalibrated camera (K all zeros) or an unknown distortion model.
-CameraModel to_camera_model(const sensor_msgs::CameraInfo& info);
-sensor_msgs::CameraInfo to_camera_info(const CameraModel& camera);
 
 /// |q| of a message quaternion, to refuse non-unit ones before use.
 double quaternion_norm(const geometry_msgs::Quaternion& q);

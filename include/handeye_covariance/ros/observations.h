@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/core/measurements.h"
 #include "handeye_covariance/ros/messages.h"
 
 namespace handeye {

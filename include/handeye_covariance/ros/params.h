@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/session/session_config.h"
 
 namespace handeye {
 

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/next_best_pose.h"
-#include "handeye_covariance/core/sampler.h"
-#include "handeye_covariance/core/session_config.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/session/sampler.h"
+#include "handeye_covariance/session/session_config.h"
 
 namespace handeye {
 

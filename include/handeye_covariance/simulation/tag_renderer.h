@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/core/tag_layout.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 

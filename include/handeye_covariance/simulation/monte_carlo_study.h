@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 
 namespace handeye {
 

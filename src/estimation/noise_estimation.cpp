@@ -1,4 +1,4 @@
-#include "handeye_covariance/core/noise_estimation.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/estimation/estimator.h"
 
 namespace handeye {
 

@@ -1,4 +1,4 @@
-#include "handeye_covariance/core/next_best_pose.h"
+#include "handeye_covariance/estimation/next_best_pose.h"
 
 #include <algorithm>
 #include <cmath>

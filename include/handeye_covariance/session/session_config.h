@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/core/sampler.h"
+#include "handeye_covariance/session/sampler.h"
 
 namespace handeye {
 

@@ -2,13 +2,10 @@
 // Used by the tests, the benchmarks, the shipped demo file and `handeye validate`.
 #pragma once
 
-#include <random>
-
 #include "handeye_covariance/core/measurements.h"
+#include "handeye_covariance/core/viewpoints.h"
 
 namespace handeye {
-
-using Rng = std::mt19937_64;
 
 /// Zero-mean Gaussian 3-vector with the given covariance (PSD; zero allowed).
 Eigen::Vector3d sample_gaussian(Rng& rng, const Eigen::Matrix3d& covariance);
@@ -32,19 +29,6 @@ MeasurementNoise paper_noise(double lambda);
 /// The returned set carries `noise` as its noise block.
 MotionSet simulate_motions(Rng& rng, const Eigen::Isometry3d& X, int k, const MeasurementNoise& noise,
                            double translation_extent = 0.5);
-
-/// Geometry of a calibration session: the camera looks at the pattern from
-/// viewpoints on a cap of a sphere, as an integrator would move the robot.
-struct ViewpointOptions {
-  double min_distance = 0.4;        // m, camera to pattern
-  double max_distance = 0.8;        // m
-  double max_tilt = 35.0 * M_PI / 180.0;  // viewing angle off the pattern normal
-  double max_roll = 60.0 * M_PI / 180.0;  // about the optical axis
-  double max_offset = 0.05;         // m, pattern centre off the optical axis
-};
-
-/// A T_camera_pattern seen from a random viewpoint.
-Eigen::Isometry3d random_view(Rng& rng, const ViewpointOptions& options);
 
 struct SimulatedSession {
   SampleSet samples;                  // noisy, with the noise block set

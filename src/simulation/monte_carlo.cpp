@@ -1,4 +1,4 @@
-#include "handeye_covariance/core/monte_carlo.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 
 #include <Eigen/Cholesky>
 

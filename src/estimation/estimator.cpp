@@ -1,4 +1,4 @@
-#include "handeye_covariance/core/estimator.h"
+#include "handeye_covariance/estimation/estimator.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/SVD>

@@ -1,10 +1,10 @@
-#include "handeye_covariance/core/outliers.h"
+#include "handeye_covariance/estimation/outliers.h"
 
 #include <algorithm>
 #include <numeric>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/noise_estimation.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
 
 namespace handeye {
 

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/core/estimator.h"
-#include "handeye_covariance/core/noise_estimation.h"
-#include "handeye_covariance/core/simulation.h"
+#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
+#include "handeye_covariance/core/viewpoints.h"
 
 namespace handeye {
 

@@ -1,4 +1,4 @@
-#include "handeye_covariance/core/sampler.h"
+#include "handeye_covariance/session/sampler.h"
 
 #include "handeye_covariance/core/errors.h"
 

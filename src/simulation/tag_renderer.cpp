@@ -1,4 +1,4 @@
-#include "handeye_covariance/vision/tag_renderer.h"
+#include "handeye_covariance/simulation/tag_renderer.h"
 
 #include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>

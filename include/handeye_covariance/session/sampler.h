@@ -32,12 +32,6 @@ struct SamplerOptions {
   double max_age = 1.0;                // s: take_sample() refuses an older latest observation
 };
 
-struct Observation {
-  double stamp = 0.0;                               // s, the detection's stamp
-  Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();  // looked up at `stamp`
-  Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
-  std::optional<PoseNoise> pattern_noise;  // the detector's full 6x6 in the camera frame, when it gives one
-};
 
 enum class SamplerState { WaitingForData, WaitingForStillness, WaitingForMotion };
 const char* to_string(SamplerState state);

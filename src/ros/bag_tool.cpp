@@ -1,0 +1,132 @@
+// handeye_bag: the commands of `handeye` that read or write rosbags. `handeye bag`
+// and `handeye sim --output x.bag` run this program, so that `handeye` itself
+// links no ROS library. The bag replay drives the node's CalibrationSession.
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "../tools/cli_common.h"
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/ros/bag.h"
+
+namespace handeye {
+namespace cli {
+namespace {
+
+/// A progress bar on stderr, for bags longer than a few seconds.
+class ProgressBar {
+ public:
+  ProgressBar(std::ostream& err, bool enabled) : err_(err), enabled_(enabled) {}
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(100.0 * fraction);
+    if (!enabled_ || percent == last_) return;
+    last_ = percent;
+    const int filled = percent / 4;
+    err_ << "\rreading the bag [" << std::string(filled, '#') << std::string(25 - filled, '.') << "] " << percent << "%"
+         << (percent >= 100 ? "\n" : "") << std::flush;
+  }
+
+ private:
+  std::ostream& err_;
+  bool enabled_;
+  int last_ = -1;
+};
+
+int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
+  std::string bag_path, config_path, output, samples_out;
+  po::options_description options("bag: calibrate from a rosbag, without a roscore");
+  options.add_options()("help,h", "show this help")(
+      "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections)")(
+      "config,c", po::value(&config_path), "YAML with the node's settings (config/calibration_defaults.yaml keys)")(
+      "output,o", po::value(&output), "result file; default: <bag stem>_result.yaml in the current directory")(
+      "samples-out", po::value(&samples_out), "also write the samples taken (the samples file format)");
+  po::variables_map vm;
+  if (!parse("bag", "--bag FILE [--config YAML] [--output FILE] [--samples-out FILE]", options, args, vm, out)) return kOk;
+  if (output.empty()) output = default_result_path(bag_path);
+
+  SessionConfig config;
+  if (!config_path.empty()) io::read_session_config(config_path, config);
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();  // the node's session file is the node's
+  CalibrationSession session(settings);
+  ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
+  const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });
+  const SessionSnapshot snapshot = session.snapshot();
+  const Calibration calibration = session.calibrate(snapshot);  // before writing anything
+
+  out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
+  for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
+  out << "\n  detections " << replay.detections << ", paired with a robot pose " << replay.observations
+      << ", samples accepted " << snapshot.samples.samples.size() << "\n";
+  for (const auto& [kind, count] : replay.refusals) {
+    out << "  refused " << count << " x " << kind << ": " << replay.refusal_examples.at(kind) << "\n";
+  }
+  if (replay.stamps_went_back > 0) {
+    out << "  header stamps went back " << replay.stamps_went_back
+        << " time(s) in the bag (a looping recording, or a detector publishing out of order): replayed in stamp order\n";
+  }
+  if (replay.repeated_stamps > 0) {
+    out << "  " << replay.repeated_stamps << " detection(s) repeat a stamp already seen (the same image twice): each used once\n";
+  }
+  const io::ResultContext context = io::context_of(snapshot.samples);
+  io::write_file_atomically(output, io::format_result(calibration, context));
+  if (!samples_out.empty()) io::write_file_atomically(samples_out, io::format_samples(snapshot.samples));
+  out << io::human_summary(calibration, context);
+  out << "  result written to     " << output << "\n";
+  if (!samples_out.empty()) out << "  samples written to    " << samples_out << "\n";
+  return kOk;
+}
+
+int sim_bag_command(const Args& args, std::ostream& out, std::ostream&) {
+  SimArgs a;
+  BagSimulationOptions bag;
+  po::options_description options("sim --output x.bag: a simulated calibration session with known truth, as a rosbag");
+  add_sim_options(options, a);
+  options.add_options()(
+      "pause", po::value(&bag.pause), "s the robot holds each pose (default 2)")(
+      "move", po::value(&bag.move), "s between poses (default 1)")(
+      "depth-noise-mm", po::value(&bag.depth_noise_mm), "1 sigma of the pattern's depth (default 1.5)")(
+      "tilt-noise-deg", po::value(&bag.tilt_noise_deg), "1 sigma of the pattern's tilt (default 0.15)")(
+      "dropout", po::value(&bag.dropout), "share of frames without a detection (default 0.05)")(
+      "wrong-detections", po::value(&bag.wrong_detections), "share of flipped poses (default 0.005)")(
+      "latency", po::value(&bag.latency), "s from capture to message (default 0.05)")(
+      "detection-type", po::value(&bag.detection_type), "tags (default), pose_with_covariance, pose or tf");
+  po::variables_map vm;
+  if (!parse("sim", "--output FILE.bag [options]", options, args, vm, out)) return kOk;
+  bag.setup = a.checked_setup();
+  bag.poses = a.samples;
+  bag.seed = a.seed;
+  // In a bag the pattern's translation and rotation sigma are the lateral and roll ones.
+  if (vm.count("pattern-translation-noise-mm")) bag.lateral_noise_mm = a.translation_mm;
+  if (vm.count("pattern-rotation-noise-deg")) bag.roll_noise_deg = a.rotation_deg;
+  bag.detection_covariance = !a.omit_noise;
+  const SimulatedBag written = write_simulated_bag(a.output, bag);
+  out << "wrote a " << written.duration << " s simulated " << a.setup_name << " bag to " << a.output << ": "
+      << written.tf_messages << " /tf, " << written.detections << " detections (" << written.wrong_detections << " wrong)\n";
+  std::string truth = a.truth;
+  if (truth.empty()) {
+    truth = (std::filesystem::path(a.output).parent_path() / std::filesystem::path(a.output).stem()).string() + "_truth.yaml";
+  }
+  const Rig rig{bag.setup, written.frames};
+  io::ResultContext context;  // the truth always goes beside the bag
+  context.setup = rig.setup;
+  context.parent = rig.camera_parent_frame();
+  context.child = rig.frames.camera;
+  io::write_file_atomically(truth, io::format_pose_file({written.X, Matrix6d::Zero()}, context));
+  out << "wrote the true X to " << truth << "\n";
+  return kOk;
+}
+
+}  // namespace
+}  // namespace cli
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  static const handeye::cli::CommandTable commands = {
+      {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore", handeye::cli::bag_command}},
+      {"sim", {"write a simulated session with known truth as a rosbag (--output x.bag)", handeye::cli::sim_bag_command}},
+  };
+  return handeye::cli::run_commands(commands, argc, argv, std::cout, std::cerr);
+}

@@ -1,0 +1,88 @@
+#include "cli_common.h"
+
+#include <filesystem>
+#include <iostream>
+
+#include "handeye_covariance/core/errors.h"
+
+namespace handeye {
+namespace cli {
+
+bool parse(const std::string& name, const std::string& usage, const po::options_description& options,
+           const Args& args, po::variables_map& vm, std::ostream& out) {
+  po::store(po::command_line_parser(args).options(options).run(), vm);
+  if (vm.count("help")) {
+    out << "usage: handeye " << name << " " << usage << "\n\n" << options << "\n";
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
+std::string default_result_path(const std::string& input) {
+  return std::filesystem::path(input).stem().string() + "_result.yaml";
+}
+
+void print_help(const CommandTable& commands, std::ostream& out) {
+  out << "usage: handeye <command> [options]    (handeye <command> --help for its options)\n\n"
+         "Hand-eye calibration AX = XB with the covariance of X.\n\ncommands:\n";
+  std::size_t width = 0;
+  for (const auto& entry : commands) width = std::max(width, entry.first.size());
+  for (const auto& [name, command] : commands) {
+    out << "  " << name << std::string(width + 2 - name.size(), ' ') << command.summary << "\n";
+  }
+  out << "\nexit codes: 0 success, 2 bad or degenerate input (reason on stderr, nothing written), "
+         "1 internal error\n";
+}
+
+int run_commands(const CommandTable& commands, int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" || std::string(argv[1]) == "help") {
+    print_help(commands, out);
+    return argc < 2 ? kBadInput : kOk;
+  }
+  const std::string name = argv[1];
+  const auto command = commands.find(name);
+  if (command == commands.end()) {
+    err << "handeye: unknown command `" << name << "`\n\n";
+    print_help(commands, err);
+    return kBadInput;
+  }
+  const Args args(argv + 2, argv + argc);
+  try {
+    return command->second.run(args, out, err);
+  } catch (const HandEyeError& e) {
+    err << "handeye " << name << ": error: " << e.what() << "\n";
+    return kBadInput;
+  } catch (const po::error& e) {
+    err << "handeye " << name << ": " << e.what() << " (see `handeye " << name << " --help`)\n";
+    return kBadInput;
+  } catch (const std::exception& e) {
+    err << "handeye " << name << ": internal error: " << e.what() << "\n";
+    return kInternal;
+  }
+}
+
+Setup SimArgs::checked_setup() const {
+  const Setup setup = setup_from_string(setup_name, "--setup");
+  if (samples < 3) {
+    throw HandEyeError(ErrorCode::TooFewMotions, "--samples must be at least 3", "--samples", "ask for more samples");
+  }
+  return setup;
+}
+
+void add_sim_options(po::options_description& options, SimArgs& a) {
+  options.add_options()("help,h", "show this help")(
+      "output,o", po::value(&a.output)->required(), "samples file to write (YAML), or a rosbag (.bag)")(
+      "truth", po::value(&a.truth), "also write the true X as a result file (bags: default <bag stem>_truth.yaml beside it)")(
+      "setup", po::value(&a.setup_name), "eye_in_hand (default) or eye_to_hand")(
+      "samples,n", po::value(&a.samples), "number of robot poses (default 20)")(
+      "seed", po::value(&a.seed), "random seed (default 1)")(
+      "pattern-rotation-noise-deg", po::value(&a.rotation_deg), "1 sigma per axis of the pattern pose rotation (default 0.05)")(
+      "pattern-translation-noise-mm", po::value(&a.translation_mm), "1 sigma per axis of the pattern pose translation (default 0.5)")(
+      "robot-rotation-noise-deg", po::value(&a.robot_rotation_deg), "1 sigma per axis of the flange rotation (default 0.01)")(
+      "robot-translation-noise-mm", po::value(&a.robot_translation_mm), "1 sigma per axis of the flange translation (default 0.05)")(
+      "omit-noise-block", po::bool_switch(&a.omit_noise), "leave the noise out of the file, so `solve` estimates it");
+}
+
+}  // namespace cli
+}  // namespace handeye
