@@ -167,6 +167,7 @@ LoadReport run_load(const LoadOptions& o) {
     // Stamped now and published at once: the robot TF for this stamp is at most 1/tf_rate away.
     const ros::Time stamp = ros::Time::now();
     const double t = elapsed();
+    if (t < o.tf_warmup) return;
     TagDetectionArray array;
     array.header.stamp = stamp;
     array.header.frame_id = o.camera_frame;
@@ -260,6 +261,24 @@ LoadReport run_load(const LoadOptions& o) {
     }
   }
   report.age_median_ms = median(medians);
+  constexpr int kBin = 10;
+  int largest = 0;
+  for (const LoadRow& r : report.rows) largest = std::max(largest, r.samples);
+  for (int first = 0; first <= largest; first += kBin) {
+    LoadReport::AgeBin bin;
+    bin.first_sample = first;
+    bin.last_sample = first + kBin - 1;
+    std::vector<double> bin_medians;
+    for (const LoadRow& r : report.rows) {
+      if (r.samples < first || r.samples > bin.last_sample || r.detections_handled == 0) continue;
+      ++bin.rows;
+      bin_medians.push_back(r.age_median_ms);
+      bin.p99_worst_ms = std::max(bin.p99_worst_ms, r.age_p99_ms);
+      bin.max_ms = std::max(bin.max_ms, r.age_max_ms);
+    }
+    bin.median_ms = median(bin_medians);
+    if (bin.rows > 0) report.age_by_samples.push_back(bin);
+  }
   if (m >= 2 && m * sxx - sx * sx > 0) report.rss_slope_mb_per_min = (m * sxy - sx * sy) / (m * sxx - sx * sx);
   return report;
 }
@@ -296,6 +315,12 @@ std::string format_load_summary(const LoadReport& r, const LoadOptions& o) {
   out << std::setprecision(1);
   out << "| detection age at the node: median / worst p99 / max | " << r.age_median_ms << " / " << r.age_p99_worst_ms
       << " / " << r.age_max_ms << " ms |\n";
+  out << "\nDetection age against the number of samples in the session:\n\n"
+         "| samples | seconds | age median [ms] | worst p99 [ms] | max [ms] |\n|---|---:|---:|---:|---:|\n";
+  for (const LoadReport::AgeBin& b : r.age_by_samples) {
+    out << "| " << b.first_sample << "-" << b.last_sample << " | " << b.rows << " | " << b.median_ms << " | "
+        << b.p99_worst_ms << " | " << b.max_ms << " |\n";
+  }
   return out.str();
 }
 

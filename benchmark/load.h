@@ -21,8 +21,12 @@ struct LoadOptions {
   double duration = 600.0;      // s
   double tf_rate = 1000.0;      // Hz
   double detection_rate = 30.0; // Hz
-  int poses = 20;               // per session
+  int poses = 60;               // per session (a long one: the node's work grows with it)
   double pause = 2.0, move = 1.0;  // s, at each pose and between poses
+  /// s of robot TF before the first detection, as a robot publishes TF long before the
+  /// camera pipeline runs; without it the first detections wait tf_timeout for TF
+  /// history and are refused (a start-up effect, not the node's work).
+  double tf_warmup = 1.0;
   std::string node = "/handeye_eye_on_hand/handeye_calibration";  // its ~status and pid
   std::string reset_service = "/handeye_eye_on_hand/reset";
   std::string detections_topic = "/tag_detections";
@@ -57,6 +61,15 @@ struct LoadReport {
   double age_median_ms = 0.0;        // median of the per-second medians
   double age_p99_worst_ms = 0.0;     // worst per-second p99
   double age_max_ms = 0.0;
+  /// Detection age against the session's size: rows grouped by their sample
+  /// count in bins of `bin_width` samples (the node's window of 300 detections
+  /// spans about 3 samples, so a row belongs to its bin up to that blur).
+  struct AgeBin {
+    int first_sample = 0, last_sample = 0;
+    int rows = 0;
+    double median_ms = 0.0, p99_worst_ms = 0.0, max_ms = 0.0;
+  };
+  std::vector<AgeBin> age_by_samples;
 };
 
 /// Runs the load against the node (ros::init must have been called). Throws

@@ -6,6 +6,8 @@
 
 #include <functional>
 
+#include <geometry_msgs/PoseStamped.h>
+
 #include "handeye_covariance/ros/messages.h"
 
 namespace handeye {
@@ -30,6 +32,20 @@ struct StatusWatcher {
     ros::NodeHandle nh;
     subscriber = nh.subscribe<CalibrationStatus>(topic, 10, [this](const CalibrationStatus::ConstPtr& msg) {
       latest = *msg;
+      received = true;
+    });
+  }
+};
+
+/// Keeps the simulated rig's true X (latched on /rig_simulator/truth).
+struct TruthWatcher {
+  geometry_msgs::PoseStamped truth;
+  bool received = false;
+  ros::Subscriber subscriber;
+  TruthWatcher() {
+    ros::NodeHandle nh;
+    subscriber = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1, [this](const auto& msg) {
+      truth = *msg;
       received = true;
     });
   }

@@ -216,3 +216,56 @@ TEST(Observations, ADetectionInAnotherCameraFrameMovesItsCovarianceWithItsPose) 
 
 }  // namespace
 }  // namespace handeye
+
+namespace handeye {
+namespace {
+
+geometry_msgs::TransformStamped edge(const std::string& parent, const std::string& child, const Eigen::Isometry3d& T) {
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform = conversions::to_transform_msg(T);
+  return t;
+}
+
+// Where /calibrate puts X in TF: above the camera driver's own tree, so that
+// every frame keeps one parent; never beside a link that already connects the
+// camera to the robot.
+TEST(CameraTfEdge, XGoesAboveTheCamerasOwnTreeAndNeverGivesAFrameASecondParent) {
+  const Rig rig = SessionConfig{}.rig;  // tool0, camera_optical_frame
+  Rng rng(5);
+  const Eigen::Isometry3d X = random_pose(rng, 0.2), T_link_optical = random_pose(rng, 0.05);
+
+  tf2::BufferCore bare;  // no driver tree: X itself, tool0 -> camera_optical_frame
+  CameraTfEdge e = camera_tf_edge(bare, rig, X, "");
+  EXPECT_TRUE(e.refusal.empty()) << e.refusal;
+  EXPECT_EQ(e.parent, "tool0");
+  EXPECT_EQ(e.child, "camera_optical_frame");
+  EXPECT_TRUE(e.transform.isApprox(X));
+
+  tf2::BufferCore driver;  // camera_link -> camera_optical_frame: tool0 -> camera_link = X T_optical_link
+  driver.setTransform(edge("camera_link", "camera_optical_frame", T_link_optical), "driver", true);
+  e = camera_tf_edge(driver, rig, X, "");
+  ASSERT_TRUE(e.refusal.empty()) << e.refusal;
+  EXPECT_EQ(e.child, "camera_link");
+  EXPECT_TRUE((e.transform * T_link_optical).isApprox(X, 1e-12));
+
+  // Our own edge from an earlier /calibrate is found and replaced, not refused.
+  driver.setTransform(edge("tool0", "camera_link", e.transform), "us", true);
+  const Eigen::Isometry3d X2 = random_pose(rng, 0.2);
+  e = camera_tf_edge(driver, rig, X2, "camera_link");
+  ASSERT_TRUE(e.refusal.empty()) << e.refusal;
+  EXPECT_EQ(e.child, "camera_link");
+  EXPECT_TRUE((e.transform * T_link_optical).isApprox(X2, 1e-12));
+
+  // A URDF that already mounts the camera on the robot: publishing would make a second path.
+  tf2::BufferCore urdf;
+  urdf.setTransform(edge("camera_link", "camera_optical_frame", T_link_optical), "driver", true);
+  urdf.setTransform(edge("tool0", "camera_mount", Eigen::Isometry3d::Identity()), "urdf", true);
+  urdf.setTransform(edge("camera_mount", "camera_link", Eigen::Isometry3d::Identity()), "urdf", true);
+  e = camera_tf_edge(urdf, rig, X, "");
+  EXPECT_NE(e.refusal.find("already connected to tool0"), std::string::npos) << e.refusal;
+}
+
+}  // namespace
+}  // namespace handeye

@@ -25,12 +25,7 @@ std::string kNs, kParent, kNoiseOrigin;
 
 TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ros::NodeHandle nh;
-  geometry_msgs::PoseStamped truth;
-  bool have_truth = false;
-  auto truth_sub = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1, [&](const auto& msg) {
-    truth = *msg;
-    have_truth = true;
-  });
+  test::TruthWatcher rig;
   geometry_msgs::PoseWithCovarianceStamped published;
   bool have_published = false;
   auto calibration_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
@@ -45,7 +40,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
       kNs + "handeye_calibration/markers", 1, [&](const auto& msg) { markers = msg->markers.size(); });
   auto estimate_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
       kNs + "handeye_calibration/estimate", 1, [&](const auto& msg) { running = *msg; });
-  ASSERT_TRUE(test::wait_for([&] { return have_truth; }, 20.0)) << "no truth from the rig";
+  ASSERT_TRUE(test::wait_for([&] { return rig.received; }, 20.0)) << "no truth from the rig";
 
   // 12 poses, 1.7 s each: the node must take a sample at (nearly) every pause.
   ASSERT_TRUE(test::wait_for([&] { return status.received && status.latest.samples >= 10; }, 60.0))
@@ -72,7 +67,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   // the residuals the covariance's scale is itself uncertain, and the NEES
   // follows about 6 F(6, nu) with nu = 3 (n - 1), the dof behind the estimate.
   const PoseWithCovariance X = conversions::to_core(calibrate.response.calibration.pose);
-  const Vector6d error = pose_error(X.pose, conversions::to_eigen(truth.pose));
+  const Vector6d error = pose_error(X.pose, conversions::to_eigen(rig.truth.pose));
   const double nees = error.dot(X.covariance.ldlt().solve(error));
   const int used = calibrate.response.samples_used;
   const double bound = kNoiseOrigin == "given"

@@ -25,14 +25,9 @@ const std::string kNs = "/tree_eye_on_hand/";
 
 TEST(CameraTree, DetectionsInCameraLinkGiveAnHonestXAndOneTfTree) {
   ros::NodeHandle nh;
-  geometry_msgs::PoseStamped truth;
-  bool have_truth = false;
-  auto truth_sub = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1, [&](const auto& msg) {
-    truth = *msg;
-    have_truth = true;
-  });
+  test::TruthWatcher rig;
   test::StatusWatcher status(kNs + "handeye_calibration/status");
-  ASSERT_TRUE(test::wait_for([&] { return have_truth; }, 20.0)) << "no truth from the rig";
+  ASSERT_TRUE(test::wait_for([&] { return rig.received; }, 20.0)) << "no truth from the rig";
   ASSERT_TRUE(test::wait_for(
       [&] {
         return status.received && status.latest.samples >= 12 && status.latest.estimate_samples == status.latest.samples;
@@ -47,7 +42,7 @@ TEST(CameraTree, DetectionsInCameraLinkGiveAnHonestXAndOneTfTree) {
   EXPECT_EQ(calibrate.response.published_tf, "tool0 -> camera_link");
 
   const PoseWithCovariance X = conversions::to_core(calibrate.response.calibration.pose);
-  const Eigen::Isometry3d true_X = conversions::to_eigen(truth.pose);
+  const Eigen::Isometry3d true_X = conversions::to_eigen(rig.truth.pose);
   const Vector6d error = pose_error(X.pose, true_X);
   const double nees = error.dot(X.covariance.ldlt().solve(error));
   const double bound = boost::math::quantile(boost::math::chi_squared(6.0), 0.999);

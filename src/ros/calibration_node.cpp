@@ -276,34 +276,16 @@ void CalibrationNode::publish_estimate(const Calibration& c) {
 // ------------------------------------------------------------------ TF
 
 std::string CalibrationNode::publish_tf(const Eigen::Isometry3d& X) {
-  // A TF frame has one parent. The camera driver already publishes its own tree
-  // (camera_link -> camera_optical_frame); X goes above that tree's root, composed
-  // with the driver's transforms, while messages and files keep X for the camera frame.
-  const std::string& parent = config_.rig.camera_parent_frame();
-  const std::string& camera = config_.rig.frames.camera;
-  std::string root = camera, up;
-  while (root != published_root_ && tf_buffer_._getParent(root, ros::Time(0), up) && up != parent) root = up;
-  const bool ours = !published_root_.empty() && root == published_root_;  // below our own edge from an earlier call
-  if (!ours && tf_buffer_.canTransform(parent, camera, ros::Time(0))) {
-    return "no TF published: " + camera + " is already connected to " + parent + " by another TF (a URDF mount?); "
-           "remove that link, or set publish_tf false and use the result file";
-  }
-  Eigen::Isometry3d T_camera_root = Eigen::Isometry3d::Identity();
-  if (root != camera) {
-    try {
-      T_camera_root = conversions::to_eigen(tf_buffer_.lookupTransform(camera, root, ros::Time(0)).transform);
-    } catch (const tf2::TransformException& e) {
-      return std::string("no TF published: ") + e.what();
-    }
-  }
+  const CameraTfEdge edge = camera_tf_edge(tf_buffer_, config_.rig, X, published_root_);
+  if (!edge.refusal.empty()) return edge.refusal;
   geometry_msgs::TransformStamped tf;
   tf.header.stamp = ros::Time::now();
-  tf.header.frame_id = parent;
-  tf.child_frame_id = root;
-  tf.transform = conversions::to_transform_msg(X * T_camera_root);
+  tf.header.frame_id = edge.parent;
+  tf.child_frame_id = edge.child;
+  tf.transform = conversions::to_transform_msg(edge.transform);
   static_broadcaster_.sendTransform(tf);
-  published_root_ = root;
-  return parent + " -> " + root;
+  published_root_ = edge.child;
+  return edge.parent + " -> " + edge.child;
 }
 
 // ------------------------------------------------------------------ services

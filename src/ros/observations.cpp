@@ -111,4 +111,31 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, co
   return result;
 }
 
+CameraTfEdge camera_tf_edge(const tf2::BufferCore& tf, const Rig& rig, const Eigen::Isometry3d& X,
+                            const std::string& published_root) {
+  CameraTfEdge edge;
+  edge.parent = rig.camera_parent_frame();
+  const std::string& camera = rig.frames.camera;
+  std::string root = camera, up;
+  while (root != published_root && tf._getParent(root, ros::Time(0), up) && up != edge.parent) root = up;
+  const bool ours = !published_root.empty() && root == published_root;  // below our own edge from before
+  if (!ours && tf.canTransform(edge.parent, camera, ros::Time(0))) {
+    edge.refusal = "no TF published: " + camera + " is already connected to " + edge.parent +
+                   " by another TF (a URDF mount?); remove that link, or set publish_tf false and use the result file";
+    return edge;
+  }
+  Eigen::Isometry3d T_camera_root = Eigen::Isometry3d::Identity();
+  if (root != camera) {
+    try {
+      T_camera_root = conversions::to_eigen(tf.lookupTransform(camera, root, ros::Time(0)).transform);
+    } catch (const tf2::TransformException& e) {
+      edge.refusal = std::string("no TF published: ") + e.what();
+      return edge;
+    }
+  }
+  edge.child = root;
+  edge.transform = X * T_camera_root;
+  return edge;
+}
+
 }  // namespace handeye

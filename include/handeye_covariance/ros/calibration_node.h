@@ -66,8 +66,8 @@ class CalibrationNode {
   void publish_status();  // lock held
   /// The running estimate (~estimate) and its markers (~markers).
   void publish_estimate(const Calibration& c);
-  /// Publishes X as TF at the root of the camera's own tree; returns the edge
-  /// ("tool0 -> camera_link") or why none was published.
+  /// Publishes X as TF at the root of the camera's own tree (camera_tf_edge);
+  /// returns the edge ("tool0 -> camera_link") or why none was published.
   std::string publish_tf(const Eigen::Isometry3d& X);
 
   SessionConfig config_;

@@ -51,4 +51,18 @@ struct ObservationResult {
 };
 ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, const Detection& detection);
 
+/// Where X goes in TF. A TF frame has one parent, and a camera driver already
+/// publishes its own tree (camera_link -> camera_optical_frame), so X is attached
+/// at that tree's root: the edge <X's parent> -> root with X * T_camera_root.
+/// `published_root` is the root of an earlier call (its edge is ours and is
+/// replaced). When the camera is already connected to X's parent by another TF
+/// (a URDF mount), nothing may be published: `refusal` says why.
+struct CameraTfEdge {
+  std::string parent, child;
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  std::string refusal;  // non-empty: publish nothing
+};
+CameraTfEdge camera_tf_edge(const tf2::BufferCore& tf, const Rig& rig, const Eigen::Isometry3d& X,
+                            const std::string& published_root);
+
 }  // namespace handeye
