@@ -265,6 +265,21 @@ TEST(CameraTfEdge, XGoesAboveTheCamerasOwnTreeAndNeverGivesAFrameASecondParent) 
   urdf.setTransform(edge("camera_mount", "camera_link", Eigen::Isometry3d::Identity()), "urdf", true);
   e = camera_tf_edge(urdf, rig, X, "");
   EXPECT_NE(e.refusal.find("already connected to tool0"), std::string::npos) << e.refusal;
+  // The driver's tree arrived after a first /calibrate had hung the optical frame off tool0:
+  // the driver re-parents that frame, and X moves above camera_link.
+  tf2::BufferCore late;
+  late.setTransform(edge("tool0", "camera_optical_frame", X), "us", true);
+  late.setTransform(edge("camera_link", "camera_optical_frame", T_link_optical), "driver", true);
+  e = camera_tf_edge(late, rig, X, "camera_optical_frame");
+  ASSERT_TRUE(e.refusal.empty()) << e.refusal;
+  EXPECT_EQ(e.child, "camera_link");
+
+  // Two publishers that disagree can make a loop; the walk stops and says so.
+  tf2::BufferCore loop;
+  loop.setTransform(edge("camera_link", "camera_optical_frame", T_link_optical), "a", true);
+  loop.setTransform(edge("camera_optical_frame", "camera_link", T_link_optical.inverse()), "b", true);
+  e = camera_tf_edge(loop, rig, X, "");
+  EXPECT_NE(e.refusal.find("loop"), std::string::npos) << e.refusal;
 }
 
 }  // namespace

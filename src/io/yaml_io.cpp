@@ -4,6 +4,7 @@
 
 #include <Eigen/SVD>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -686,7 +687,9 @@ void write_file_atomically(const std::string& path, const std::string& content) 
   const fs::path target(path);
   std::error_code ec;
   if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-  const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
+  // Unique per process and per call: two threads writing the same file never share a temporary.
+  static std::atomic<unsigned> calls{0};
+  const std::string temporary = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(calls++);
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   bool ok = fd >= 0;
   for (std::size_t written = 0; ok && written < content.size();) {

@@ -95,13 +95,14 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
     throw std::invalid_argument("~detection_input must be tags, pose_with_covariance, pose or tf, not `" +
                                 config_.detection_input + "`");
   }
-  worker_ = std::thread(&CalibrationNode::work, this);
-  detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
-  detection_spinner_->start();
   status_timer_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     publish_status();
   });
+  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  worker_ = std::thread(&CalibrationNode::work, this);  // last: nothing below may throw
+  detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
+  detection_spinner_->start();
   const Rig& rig = config_.rig;
   ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples", to_string(rig.setup),
            rig.camera_parent_frame().c_str(), rig.frames.camera.c_str(), config_.detection_input.c_str(),
@@ -180,7 +181,10 @@ void CalibrationNode::record_handled(const ros::Time& stamp) {
 
 void CalibrationNode::record(const SessionEvent& event, bool appended) {  // lock held
   last_event_ = event.message;
-  if (event.changed && !appended) analysis_.reset();  // it describes samples that are gone
+  if (event.changed && !appended) {  // the analysis describes samples that are gone
+    analysis_.reset();
+    last_removal_ = session_.generation();
+  }
   if (event.changed) {
     ROS_INFO("%s (%zu samples)", event.message.c_str(), session_.samples().size());
     work_.notify_one();
@@ -203,9 +207,19 @@ void CalibrationNode::work() {
     const SessionSnapshot snapshot = session_.snapshot();
     analysed = snapshot.generation;
     lock.unlock();
-    Analysis analysis = session_.analyse(snapshot);  // const, reads only the immutable settings
+    Analysis analysis;
+    try {
+      analysis = session_.analyse(snapshot);  // const, reads only the immutable settings
+    } catch (const std::exception& e) {       // analyse reports HandEyeErrors itself; anything else is a bug
+      analysis.generation = snapshot.generation;
+      analysis.samples = snapshot.samples.samples.size();
+      analysis.problem = std::string("internal error in the analysis: ") + e.what();
+      ROS_ERROR("%s", analysis.problem.c_str());
+    }
     lock.lock();
-    if (analysis.generation != session_.generation()) continue;  // the samples changed meanwhile: stale
+    // Samples removed since the snapshot make it stale; samples only appended do not
+    // (it is shown until the next analysis, with estimate_samples saying how many).
+    if (analysis.generation < last_removal_) continue;
     analysis_ = std::move(analysis);
     if (analysis_->estimate) publish_estimate(*analysis_->estimate);
     publish_status();
@@ -283,7 +297,9 @@ std::string CalibrationNode::publish_tf(const Eigen::Isometry3d& X) {
   tf.header.frame_id = edge.parent;
   tf.child_frame_id = edge.child;
   tf.transform = conversions::to_transform_msg(edge.transform);
-  static_broadcaster_.sendTransform(tf);
+  // A new child: a fresh broadcaster, so the old edge is no longer latched on /tf_static.
+  if (edge.child != published_root_) static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  static_broadcaster_->sendTransform(tf);
   published_root_ = edge.child;
   return edge.parent + " -> " + edge.child;
 }
@@ -329,6 +345,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                 std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
                 number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+  std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);
   publish_estimate(c);
   if (config_.publish_tf) {
@@ -408,6 +425,7 @@ bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Respo
 }
 
 bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibration::Response& res) {
+  std::lock_guard<std::mutex> outputs(output_mutex_);  // not while /calibrate writes the same file
   std::optional<Calibrated> calibrated;
   {
     std::lock_guard<std::mutex> lock(mutex_);

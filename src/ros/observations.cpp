@@ -116,9 +116,21 @@ CameraTfEdge camera_tf_edge(const tf2::BufferCore& tf, const Rig& rig, const Eig
   CameraTfEdge edge;
   edge.parent = rig.camera_parent_frame();
   const std::string& camera = rig.frames.camera;
-  std::string root = camera, up;
-  while (root != published_root && tf._getParent(root, ros::Time(0), up) && up != edge.parent) root = up;
-  const bool ours = !published_root.empty() && root == published_root;  // below our own edge from before
+  // Our edge from an earlier call counts only while it still hangs from X's parent
+  // (a driver tree that arrived since re-parents that frame, and X moves above it).
+  std::string up;
+  const bool still_ours = !published_root.empty() && tf._getParent(published_root, ros::Time(0), up) && up == edge.parent;
+  std::string root = camera;
+  for (int depth = 0;; ++depth) {
+    if (depth > 1000) {  // tf2's own limit on a chain; a loop in the tree would never end
+      edge.refusal = "no TF published: the TF tree above " + camera + " has a loop (two publishers disagree)";
+      return edge;
+    }
+    if (still_ours && root == published_root) break;
+    if (!tf._getParent(root, ros::Time(0), up) || up == edge.parent) break;
+    root = up;
+  }
+  const bool ours = still_ours && root == published_root;  // below our own edge from before
   if (!ours && tf.canTransform(edge.parent, camera, ros::Time(0))) {
     edge.refusal = "no TF published: " + camera + " is already connected to " + edge.parent +
                    " by another TF (a URDF mount?); remove that link, or set publish_tf false and use the result file";

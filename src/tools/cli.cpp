@@ -33,6 +33,11 @@ namespace {
 int run_bag_tool(const std::string& command, const Args& args, std::ostream& out, std::ostream& err) {
   std::error_code ec;
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) {  // never a relative "handeye_bag" from the current directory
+    err << "handeye " << command << ": cannot find this program's own path (/proc/self/exe: " << ec.message()
+        << "); run handeye_bag from the package's lib folder instead\n";
+    return kInternal;
+  }
   const std::string tool = (self.parent_path() / "handeye_bag").string();
   std::vector<std::string> words = {tool, command};
   words.insert(words.end(), args.begin(), args.end());

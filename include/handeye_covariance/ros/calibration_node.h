@@ -76,19 +76,23 @@ class CalibrationNode {
   std::unique_ptr<ros::AsyncSpinner> detection_spinner_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;  // remade when X's TF child changes
   ros::Subscriber detections_;
   ros::Timer tf_poll_, status_timer_;
   ros::Publisher calibration_pub_, estimate_pub_, status_pub_, markers_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Time last_tf_stamp_;     // detection thread only
-  std::string published_root_;  // the camera-tree frame X was published to (calibrate only)
+  // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:
+  // the spinner has two threads.
+  std::mutex output_mutex_;
+  std::string published_root_;  // the camera-tree frame X was published to (output_mutex_)
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable work_;
   bool stopping_ = false;
   CalibrationSession session_;
   std::optional<Analysis> analysis_;  // of the latest generation analysed
+  std::uint64_t last_removal_ = 0;    // generation of the last change that was not an appended sample
   struct Calibrated {
     Calibration calibration;
     SessionSnapshot snapshot;  // what it was solved from (frames and noise for the result file)
