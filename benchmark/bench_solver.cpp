@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/simulation/simulation.h"
 
@@ -51,6 +52,34 @@ void BM_SolveSamplesEstimatedNoise(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SolveSamplesEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
+
+// The pose-level estimator on the same pose streams: X, Y and their 12x12 covariance.
+void BM_SolveJoint(benchmark::State& state) {
+  Rng rng(2);
+  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                              static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
+  benchmark::DoNotOptimize(solve_joint(s.samples).pose_covariance);  // warm-up, as above
+  for (auto _ : state) {
+    Calibration c = solve_joint(s.samples);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_SolveJoint)->Arg(30)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
+
+// The same with no noise block: a 6x6 camera noise estimated, iterated with the solve.
+void BM_SolveJointEstimatedNoise(benchmark::State& state) {
+  Rng rng(3);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
+  s.samples.noise.reset();
+  benchmark::DoNotOptimize(solve_joint(s.samples).pose_covariance);
+  for (auto _ : state) {
+    Calibration c = solve_joint(s.samples);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+}
+BENCHMARK(BM_SolveJointEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -20,6 +20,15 @@ const char* to_string(StopReason reason) {
   return "unknown";
 }
 
+const char* to_string(Method method) { return method == Method::Pairs ? "pairs" : "joint"; }
+
+Method method_from_string(const std::string& name) {
+  if (name == "pairs") return Method::Pairs;
+  if (name == "joint") return Method::Joint;
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown method `" + name + "`", "method",
+                     "use joint (X and the pattern pose from the absolute poses) or pairs (the paper's AX = XB)");
+}
+
 namespace {
 
 using Eigen::Isometry3d;
@@ -875,6 +884,21 @@ Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions) {
                        "record more samples");
   }
   RotationData d = rotation_data(problem);
+  const Matrix3d R = park_martin_rotation(d.alpha, d.beta);
+  return se3::make_pose(R, unweighted_translation(R, problem));
+}
+
+Eigen::Isometry3d checked_initial_guess(const SampleSet& samples, const SolverOptions& options) {
+  if (samples.samples.size() < 3) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "got " + std::to_string(samples.samples.size()) +
+                           " sample(s); at least 3 are needed (2 motions)",
+                       "samples", "record more samples (10-30 poses rotating about different axes is typical)");
+  }
+  const Problem problem = build(samples, 1);  // consecutive motions: O(n)
+  RotationData d = rotation_data(problem);
+  update_log_covariances(d, marginals(problem, NoiseScale{}));
+  check_motions(problem, d, options);
   const Matrix3d R = park_martin_rotation(d.alpha, d.beta);
   return se3::make_pose(R, unweighted_translation(R, problem));
 }

@@ -19,6 +19,7 @@
 //     block. Its cost is O(k): each input noise touches at most two motions.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,15 @@ struct StageDiagnostics {
 /// Where the noise came from.
 enum class NoiseOrigin { Given, EstimatedFromResiduals };
 
+/// Which estimator made a Calibration.
+enum class Method {
+  Pairs,  // the paper's AX = XB on motion pairs (estimator.h)
+  Joint,  // X and the pattern pose Y jointly from the absolute poses (joint_estimator.h)
+};
+const char* to_string(Method method);  // "pairs" / "joint"
+/// Throws HandEyeError(MalformedFile) naming the valid values.
+Method method_from_string(const std::string& name);
+
 struct Calibration {
   /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
   /// input, the X of A X = X B.
@@ -84,7 +94,16 @@ struct Calibration {
   /// shared by all pairs, dominates the translation error.
   DecoupledCovariance per_pair_covariance;
 
+  /// Y, the pattern's pose: T_base_pattern (eye_in_hand) or T_effector_pattern
+  /// (eye_to_hand), with its covariance; and Cov(X, Y) (X's ROS order in the
+  /// rows, Y's in the columns). The joint estimator only.
+  std::optional<PoseWithCovariance> pattern;
+  Matrix6d cross_covariance = Matrix6d::Zero();
+
+  Method method = Method::Pairs;
   Eigen::Isometry3d initial_guess = Eigen::Isometry3d::Identity();  // Park-Martin
+  /// Pairs: the two stages. Joint: both hold the one joint solve (its chi2 over
+  /// all 6n residuals, dof 6n - 12).
   StageDiagnostics rotation_stage, translation_stage;
   int motions_used = 0;
   int samples_used = 0;  // pose input only; 0 for motion input
@@ -106,6 +125,11 @@ struct Calibration {
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of
 /// sum beta_i alpha_i^T, then t by linear least squares. Throws on < 2 motions.
 Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions);
+
+/// The closed-form start for pose input in O(n): the degeneracy checks of
+/// solve() (it throws the same named errors) on consecutive motions, then
+/// Park-Martin on them.
+Eigen::Isometry3d checked_initial_guess(const SampleSet& samples, const SolverOptions& options = {});
 
 /// Solve from independent motion pairs.
 Calibration solve(const MotionSet& motions, const SolverOptions& options = {});
