@@ -37,16 +37,20 @@ struct StatusWatcher {
   }
 };
 
-/// Keeps the simulated rig's true X (latched on /rig_simulator/truth).
+/// Keeps the simulated rig's true X and Y (latched on /rig_simulator/truth and pattern_truth).
 struct TruthWatcher {
-  geometry_msgs::PoseStamped truth;
-  bool received = false;
-  ros::Subscriber subscriber;
+  geometry_msgs::PoseStamped truth, pattern;
+  bool received = false, pattern_received = false;
+  ros::Subscriber subscriber, pattern_subscriber;
   TruthWatcher() {
     ros::NodeHandle nh;
     subscriber = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1, [this](const auto& msg) {
       truth = *msg;
       received = true;
+    });
+    pattern_subscriber = nh.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/pattern_truth", 1, [this](const auto& msg) {
+      pattern = *msg;
+      pattern_received = true;
     });
   }
 };

@@ -178,7 +178,15 @@ std::vector<Case> refusals() {
       {"pure_translation",
        [=] {
          SampleSet set = simulated(6);
-         for (PoseSample& s : set.samples) s.T_base_effector.linear() = set.samples[0].T_base_effector.linear();
+         // The robot only translates; the camera sees what such poses show (a consistent session).
+         const Eigen::Isometry3d X = typical_X(Setup::EyeInHand), Y = set.rig.pattern_pose(
+             set.samples[0].T_base_effector, X, set.samples[0].T_camera_pattern);
+         for (std::size_t i = 0; i < set.samples.size(); ++i) {
+           PoseSample& s = set.samples[i];
+           s.T_base_effector.linear() = set.samples[0].T_base_effector.linear();
+           s.T_base_effector.translation() += Eigen::Vector3d(0.01, -0.02, 0.015) * static_cast<double>(i);
+           s.T_camera_pattern = set.rig.predicted_view(s.T_base_effector, X, Y);
+         }
          return solve(write("translation.yaml", set));
        },
        "PureTranslation", {"rotate"}},

@@ -144,3 +144,40 @@ TEST(JointEstimator, CovarianceOfXAndYIsHonestWithTheNoiseGiven) {
 
 }  // namespace
 }  // namespace handeye
+
+namespace handeye {
+namespace {
+
+// No noise block (the common case): the camera noise is estimated from the
+// residuals, with as many numbers as they support, and the covariance includes
+// the estimate's own uncertainty, so the NEES of X stays about 6 (without that
+// factor it would follow Hotelling's 6 nu / (nu - 7): 8.0 at 30 poses).
+TEST(JointEstimator, WithTheNoiseEstimatedTheCovarianceStaysHonest) {
+  struct Case {
+    int n, M;
+    const char* model;
+  };
+  for (const Case& c : {Case{30, 1000, "per-axis"}, Case{100, 400, "full 6x6"}}) {
+    MonteCarloAccumulator x, y;
+    Rng rng(40 + c.n);
+    std::string model;
+    for (int m = 0; m < c.M; ++m) {
+      SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), c.n, realistic_noise());
+      s.samples.noise.reset();
+      const Calibration cal = solve_joint(s.samples);
+      EXPECT_EQ(cal.noise_origin, NoiseOrigin::EstimatedFromResiduals);
+      model = cal.noise_model;
+      x.add(pose_error(cal.T_parent_camera, s.X), cal.pose_covariance);
+      y.add(pose_error(cal.pattern->pose, s.T_world_pattern), cal.pattern->covariance);
+    }
+    const MonteCarloSummary X = x.summary(), Y = y.summary();
+    std::printf("[estimated noise, %d poses, M = %d] X NEES 6dof %.3f (t %.3f R %.3f), Y NEES 6dof %.3f; model: %s\n", c.n,
+                c.M, X.pose.nees_mean, X.translation.nees_mean, X.rotation.nees_mean, Y.pose.nees_mean, model.c_str());
+    EXPECT_NE(model.find(c.model), std::string::npos) << model;
+    EXPECT_NEAR(X.pose.nees_mean, 6.0, 0.7);
+    EXPECT_NEAR(Y.pose.nees_mean, 6.0, 0.7);
+  }
+}
+
+}  // namespace
+}  // namespace handeye

@@ -64,20 +64,31 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
 
   // Within the predicted uncertainty of the truth: the 6-dof NEES below its
   // 99.9% quantile, chi2(6) when the noise is given. When it is estimated from
-  // the residuals the covariance's scale is itself uncertain, and the NEES
-  // follows about 6 F(6, nu) with nu = 3 (n - 1), the dof behind the estimate.
+  // the residuals its scale is itself uncertain: the joint estimator's noise
+  // variances rest on n - 2 samples' worth of residuals, and the NEES follows
+  // about 6 F(6, n - 2).
   const PoseWithCovariance X = conversions::to_core(calibrate.response.calibration.pose);
   const Vector6d error = pose_error(X.pose, conversions::to_eigen(rig.truth.pose));
   const double nees = error.dot(X.covariance.ldlt().solve(error));
   const int used = calibrate.response.samples_used;
   const double bound = kNoiseOrigin == "given"
                            ? boost::math::quantile(boost::math::chi_squared(6.0), 0.999)
-                           : 6.0 * boost::math::quantile(boost::math::fisher_f(6.0, 3.0 * (used - 1)), 0.999);
+                           : 6.0 * boost::math::quantile(boost::math::fisher_f(6.0, used - 2.0), 0.999);
   std::printf("X from %d samples: NEES %.2f (99.9%% bound %.1f), error %.3f mm / %.4f deg, worst-axis sigma %.3f mm\n", used,
               nees, bound, error.head<3>().norm() * 1e3, error.tail<3>().norm() * 180.0 / M_PI,
               max_sigma(X.covariance.topLeftCorner<3, 3>().eval()) * 1e3);
   EXPECT_LT(nees, bound) << "error " << error.transpose();
   EXPECT_LT(error.head<3>().norm(), 0.003);
+  // The joint estimator gives the pattern's pose Y too, in its parent frame, just as honest.
+  EXPECT_EQ(calibrate.response.method, "joint");
+  ASSERT_TRUE(test::wait_for([&] { return rig.pattern_received; }, 5.0));
+  EXPECT_EQ(calibrate.response.pattern.header.frame_id, rig.pattern.header.frame_id);
+  const PoseWithCovariance Y = conversions::to_core(calibrate.response.pattern.pose);
+  const Vector6d y_error = pose_error(Y.pose, conversions::to_eigen(rig.pattern.pose));
+  const double y_nees = y_error.dot(Y.covariance.ldlt().solve(y_error));
+  std::printf("Y: NEES %.2f, error %.3f mm / %.4f deg\n", y_nees, y_error.head<3>().norm() * 1e3,
+              y_error.tail<3>().norm() * 180.0 / M_PI);
+  EXPECT_LT(y_nees, bound) << "error " << y_error.transpose();
   EXPECT_GT(X.covariance.trace(), 0.0);
 
   // The latched message, the TF and the file say the same.

@@ -63,7 +63,7 @@ TEST(Outliers, TenPercentGrossOutliersAreRejectedAndXStaysWithin3Sigma) {
         for (int i = 0; i < 30; ++i) {
           if (!std::count(in.outliers.begin(), in.outliers.end(), i)) oracle.samples.push_back(in.samples.samples[i]);
         }
-        const Calibration o = solve(oracle);
+        const Calibration o = estimate(oracle, Method::Joint);  // the default estimator
         EXPECT_TRUE(robust.T_parent_camera.isApprox(o.T_parent_camera, 1e-9)) << seed;
         EXPECT_TRUE(robust.pose_covariance.isApprox(o.pose_covariance, 1e-9)) << seed;
         // ... so X is within "3 sigma" of the truth: the 6-dof Mahalanobis distance
@@ -101,7 +101,7 @@ TEST(Outliers, CleanSessionsKeepTheirSamplesAndTheirCovariance) {
     const Calibration robust = solve_robust(s.samples);
     false_rejections += static_cast<int>(robust.rejected.size());
     if (robust.rejected.empty()) {
-      EXPECT_TRUE(robust.pose_covariance.isApprox(solve(s.samples).pose_covariance, 1e-12));
+      EXPECT_TRUE(robust.pose_covariance.isApprox(estimate(s.samples, Method::Joint).pose_covariance, 1e-12));
     }
   }
   EXPECT_LE(false_rejections, 1) << "the gates are at chi2 0.9999 and 6 robust sigmas";

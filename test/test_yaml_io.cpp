@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "test_helpers.h"
 
@@ -87,6 +88,22 @@ TEST(YamlIo, MotionsRoundTripExactly) {
     expect_same_pose(back.motions[i].B, set.motions[i].B);
   }
   EXPECT_EQ(back.noise->robot.rotation, set.noise->robot.rotation);
+}
+
+TEST(YamlIo, AJointResultHasThePatternPoseAndTheCrossCovariance) {
+  Rng rng(3);
+  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, paper_noise(1e-5));
+  const Calibration c = solve_joint(s.samples);
+  const YAML::Node root = YAML::Load(io::format_result(c, io::context_of(s.samples)));
+  EXPECT_EQ(root["method"].as<std::string>(), "joint");
+  EXPECT_EQ(root["pattern"]["parent"].as<std::string>(), "base_link");
+  EXPECT_EQ(root["pattern"]["child"].as<std::string>(), "tag_0");
+  EXPECT_NEAR(root["pattern"]["translation"][0].as<double>(), c.pattern->pose.translation().x(), 1e-15);
+  ASSERT_EQ(root["pattern"]["covariance"]["pose"].size(), 36u);
+  EXPECT_EQ(root["pattern"]["covariance"]["pose"][7].as<double>(), c.pattern->covariance(1, 1));
+  ASSERT_EQ(root["cross_covariance"].size(), 36u);
+  EXPECT_EQ(root["cross_covariance"][5].as<double>(), c.cross_covariance(0, 5));  // row-major: (x of X, rz of Y)
+  EXPECT_EQ(root["cross_covariance"][30].as<double>(), c.cross_covariance(5, 0));
 }
 
 TEST(YamlIo, ResultFileHasTheDocumentedLayout) {

@@ -537,7 +537,8 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
   if (problem.noise_given) spread = std::max(spread, 1.0);
   for (std::size_t i = 0; i < k; ++i) {
     const double scale = problem.noise_given ? sigma[i] : 1.0;
-    const double limit = std::max(options.angle_mismatch_sigmas * spread * scale, 1e-9);
+    const double limit = std::max(options.angle_mismatch_sigmas * spread * scale,
+                                  problem.noise_given ? 1e-9 : options.min_angle_mismatch_without_noise);
     const double mismatch = normalized[i] * scale;
     if (mismatch > limit) {
       throw HandEyeError(
@@ -895,7 +896,12 @@ Eigen::Isometry3d checked_initial_guess(const SampleSet& samples, const SolverOp
                            " sample(s); at least 3 are needed (2 motions)",
                        "samples", "record more samples (10-30 poses rotating about different axes is typical)");
   }
-  const Problem problem = build(samples, 1);  // consecutive motions: O(n)
+  // Each sample with the next few: about 100 motions for short sessions (the robust
+  // spread behind the angle-mismatch check needs them), consecutive ones beyond 100
+  // samples: O(n).
+  const int n = static_cast<int>(samples.samples.size());
+  const int window = std::min(options.pair_window, std::max(1, (100 + n - 2) / (n - 1)));
+  const Problem problem = build(samples, window);
   RotationData d = rotation_data(problem);
   update_log_covariances(d, marginals(problem, NoiseScale{}));
   check_motions(problem, d, options);

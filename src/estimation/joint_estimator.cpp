@@ -180,6 +180,10 @@ JointSolution solve_weighted(const SampleSet& set, const std::vector<SampleNoise
 
 }  // namespace
 
+Calibration estimate(const SampleSet& samples, Method method) {
+  return method == Method::Joint ? solve_joint(samples) : solve(samples);
+}
+
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   const int n = static_cast<int>(samples.samples.size());
   for (int i = 0; i < n; ++i) {
@@ -201,6 +205,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   result.samples_used = n;
   JointSolution s;
   Matrix6d camera = Matrix6d::Zero();
+  double inflation = 1.0;  // estimated noise: see joint_estimator.h
   if (given) {
     s = solve_weighted(samples, noise, nullptr, X0, Y0, options);
     result.noise = samples.noise ? *samples.noise : MeasurementNoise{};
@@ -214,10 +219,24 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     // A start of 1 mm and 0.1 deg per axis; then the residuals' own 6x6, iterated with the solve.
     camera.diagonal() << Vector3d::Constant(1e-6), Vector3d::Constant(std::pow(0.1 * M_PI / 180.0, 2));
     s = solve_weighted(samples, noise, &camera, X0, Y0, options);
+    // As many noise parameters as the residuals' dof support (joint_estimator.h).
+    const int dof = n - 2;
+    const auto model = [&](const Matrix6d& scatter) {
+      Matrix6d C = scatter / static_cast<double>(dof);
+      if (dof < options.full_noise_min_dof) C = Matrix6d(C.diagonal().asDiagonal());
+      if (dof < options.per_axis_noise_min_dof) {
+        C.diagonal() << Vector3d::Constant(C.diagonal().head<3>().mean()), Vector3d::Constant(C.diagonal().tail<3>().mean());
+      }
+      C.diagonal() = C.diagonal().cwiseMax(1e-18);  // (1e-9 m or rad)^2: noise-free input stays solvable
+      return C;
+    };
+    const bool full = dof >= options.full_noise_min_dof, per_axis = dof >= options.per_axis_noise_min_dof;
+    inflation = full ? dof / (dof - 7.0) : per_axis ? dof / (dof - 2.0) : 3.0 * dof / (3.0 * dof - 2.0);
+    result.noise_model = full ? "a full 6x6 camera noise" : per_axis ? "per-axis camera variances" : "one camera variance for translation and one for rotation";
+    result.noise_model += " from " + std::to_string(dof) + " samples' worth of residuals, robot taken as exact; covariance x" +
+                          number_text(inflation, 3) + " for the noise estimate's own uncertainty";
     for (int round = 0; round < options.max_noise_rounds; ++round) {
-      Matrix6d next = s.linearization.residual_scatter / static_cast<double>(n - 2);
-      // A floor of (1e-9 m, 1e-9 rad)^2 keeps noise-free input solvable.
-      next.diagonal() = next.diagonal().cwiseMax(1e-18);
+      const Matrix6d next = model(s.linearization.residual_scatter);
       const double change = (next - camera).norm() / std::max(camera.norm(), 1e-300);
       camera = next;
       s = solve_weighted(samples, noise, &camera, s.X, s.Y, options);
@@ -233,7 +252,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     throw HandEyeError(ErrorCode::PoorlyConstrained, "the samples do not determine X and the pattern pose together",
                        "input", "add samples that rotate the flange about different axes");
   }
-  const Eigen::Matrix<double, 12, 12> symmetric = 0.5 * (covariance + covariance.transpose());
+  const Eigen::Matrix<double, 12, 12> symmetric = 0.5 * inflation * (covariance + covariance.transpose());
   result.T_parent_camera = s.X;
   result.pose_covariance = symmetric.topLeftCorner<6, 6>();
   result.translation_covariance = result.pose_covariance.topLeftCorner<3, 3>();

@@ -4,6 +4,9 @@
 #include <cmath>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
+
+#include <Eigen/Cholesky>
 
 namespace handeye {
 
@@ -66,7 +69,8 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
     throw HandEyeError(ErrorCode::NoData, "no samples to suggest from", "samples", "take at least 3 samples first");
   }
   Rng rng(options.seed);
-  const Isometry3d pattern = pattern_pose(samples, calibration.T_parent_camera);
+  const Isometry3d pattern =
+      calibration.pattern ? calibration.pattern->pose : pattern_pose(samples, calibration.T_parent_camera);
   const Isometry3d& current = samples.samples.back().T_base_effector;
   std::vector<Isometry3d> candidates;
   for (int draw = 0; draw < 50 * options.candidates && static_cast<int>(candidates.size()) < options.candidates; ++draw) {
@@ -80,6 +84,37 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
   return candidates;
 }
 
+namespace {
+
+using Matrix12d = Eigen::Matrix<double, 12, 12>;
+
+/// The detection noise a candidate view is predicted with: the samples' own
+/// covariances averaged as information (a typical view; the arithmetic mean is
+/// dominated by the worst views), else the calibration's noise model.
+Matrix6d candidate_camera_noise(const SampleSet& samples, const Calibration& calibration) {
+  Matrix6d information = Matrix6d::Zero();
+  int count = 0;
+  for (const PoseSample& s : samples.samples) {
+    if (!s.noise) continue;
+    const Eigen::LDLT<Matrix6d> ldlt(s.noise->camera.as_pose_covariance());
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) continue;
+    information += ldlt.solve(Matrix6d::Identity());
+    ++count;
+  }
+  if (count == 0) return calibration.noise.camera.as_pose_covariance();
+  const Matrix6d C = (information / count).ldlt().solve(Matrix6d::Identity());
+  return 0.5 * (C + C.transpose());
+}
+
+/// The 12x12 covariance of (X, Y) of a joint calibration.
+Matrix12d joint_covariance(const Calibration& c) {
+  Matrix12d C;
+  C << c.pose_covariance, c.cross_covariance, c.cross_covariance.transpose(), c.pattern->covariance;
+  return C;
+}
+
+}  // namespace
+
 Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibration,
                            const std::vector<Isometry3d>& candidates, const SuggestOptions& options) {
   if (candidates.empty()) {
@@ -87,11 +122,15 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
                        "give candidate poses, or widen the reach limits (max_step_translation, max_step_rotation)");
   }
   const Isometry3d& X = calibration.T_parent_camera;
-  const Isometry3d pattern = pattern_pose(samples, X);
+  const bool joint = calibration.method == Method::Joint && calibration.pattern.has_value();
+  const Isometry3d pattern = joint ? calibration.pattern->pose : pattern_pose(samples, X);
   Suggestion suggestion;
   const PoseWithCovariance current{X, calibration.pose_covariance};
   suggestion.current_score = criterion_value(current, options.criterion, options.working_distance);
   suggestion.current_object_sigma = object_sigma(current, options.working_distance);
+  Matrix12d information = Matrix12d::Zero();
+  if (joint) information = joint_covariance(calibration).ldlt().solve(Matrix12d::Identity());
+  const Matrix6d camera = candidate_camera_noise(samples, calibration), robot = calibration.noise.robot.as_pose_covariance();
   SolverOptions solver;
   for (const Isometry3d& E : candidates) {
     PoseSample candidate;
@@ -100,12 +139,24 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
     candidate.T_camera_pattern = samples.rig.predicted_view(E, X, pattern);
     ++suggestion.considered;
     try {
-      const Calibration predicted = solve(with_candidate(samples, calibration.noise, candidate), solver);
       ScoredPose scored;
       scored.T_base_effector = E;
       scored.T_camera_pattern = candidate.T_camera_pattern;
-      scored.predicted_covariance = predicted.pose_covariance;
-      const PoseWithCovariance after{predicted.T_parent_camera, predicted.pose_covariance};
+      if (joint) {
+        // The candidate's rank-6 term at the current estimate (its residual is zero there).
+        const JointResidual r = joint_residual(samples.rig, candidate, X, pattern);
+        const Matrix6d S = camera + r.d_effector * robot * r.d_effector.transpose();
+        const Eigen::LLT<Matrix6d> llt(S);
+        if (llt.info() != Eigen::Success) throw HandEyeError(ErrorCode::InvalidNoise, "singular", "candidate", "");
+        const Matrix12d after = (information + r.jacobian.transpose() * llt.solve(r.jacobian)).ldlt().solve(Matrix12d::Identity());
+        scored.predicted_joint_covariance = 0.5 * (after + after.transpose());
+        scored.predicted_covariance = scored.predicted_joint_covariance.topLeftCorner<6, 6>();
+      } else {
+        PoseSample with_noise = candidate;  // the same typical detection noise as the joint path
+        with_noise.noise = MeasurementNoise{calibration.noise.robot, PoseNoise::from_pose_covariance(camera)};
+        scored.predicted_covariance = solve(with_candidate(samples, calibration.noise, with_noise), solver).pose_covariance;
+      }
+      const PoseWithCovariance after{X, scored.predicted_covariance};
       scored.score = criterion_value(after, options.criterion, options.working_distance);
       scored.object_sigma = object_sigma(after, options.working_distance);
       suggestion.ranked.push_back(scored);
@@ -125,14 +176,15 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
   plan.reached = plan.start_object_sigma <= target_object_sigma;
   SampleSet planned = samples;
   if (!planned.noise) planned.noise = calibration.noise;
+  Calibration current = calibration;  // joint: its covariance follows the plan's predictions
   std::vector<Isometry3d> remaining = fixed_candidates;
   SuggestOptions step_options = options;
   while (!plan.reached && static_cast<int>(plan.poses.size()) < max_poses) {
     step_options.seed = options.seed + static_cast<unsigned>(plan.poses.size());
     const std::vector<Isometry3d> candidates =
-        fixed_candidates.empty() ? sample_candidates(planned, calibration, step_options) : remaining;
+        fixed_candidates.empty() ? sample_candidates(planned, current, step_options) : remaining;
     if (candidates.empty()) break;
-    const Suggestion s = rank_candidates(planned, calibration, candidates, step_options);
+    const Suggestion s = rank_candidates(planned, current, candidates, step_options);
     if (s.ranked.empty()) break;
     const ScoredPose& best = s.ranked.front();
     plan.poses.push_back(best);
@@ -140,6 +192,12 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
     added.T_base_effector = best.T_base_effector;
     added.T_camera_pattern = best.T_camera_pattern;
     planned.samples.push_back(added);
+    if (current.method == Method::Joint && current.pattern) {
+      const Eigen::Matrix<double, 12, 12>& C = best.predicted_joint_covariance;
+      current.pose_covariance = C.topLeftCorner<6, 6>();
+      current.cross_covariance = C.topRightCorner<6, 6>();
+      current.pattern->covariance = C.bottomRightCorner<6, 6>();
+    }
     plan.reached = best.object_sigma <= target_object_sigma;
     if (!fixed_candidates.empty()) {
       remaining.erase(std::find_if(remaining.begin(), remaining.end(), [&](const Isometry3d& E) {

@@ -82,23 +82,43 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
               context.setup ? (std::string(" (") + to_string(*context.setup) + ")").c_str() : "",
               parent.c_str(), child.c_str(), child.c_str(), parent.c_str());
   out += pose_lines(c.T_parent_camera, c.pose_covariance, parent);
-  if (c.samples_used > 0) {
-    out += line("  data                  %d samples -> %d motions", c.samples_used, c.motions_used);
+  if (c.pattern) {
+    const std::string pattern_parent = name_or(context.pattern_parent, "world");
+    const std::string pattern = name_or(context.pattern_child, "pattern");
+    out += line("Pattern pose Y = T_%s_%s, estimated with X:", pattern_parent.c_str(), pattern.c_str());
+    out += pose_lines(c.pattern->pose, c.pattern->covariance, pattern_parent);
+  }
+  if (c.method == Method::Joint) {
+    out += line("  data                  %d samples (joint estimator: X and the pattern pose from the poses)", c.samples_used);
+  } else if (c.samples_used > 0) {
+    out += line("  data                  %d samples -> %d motions (pairs estimator)", c.samples_used, c.motions_used);
   } else {
     out += line("  data                  %d motions", c.motions_used);
   }
+  const auto sigmas = [](const Eigen::Matrix3d& C, double unit) {
+    const Eigen::Vector3d s = C.diagonal().cwiseMax(0.0).cwiseSqrt() * unit;
+    return line("%.4f %.4f %.4f", s.x(), s.y(), s.z());
+  };
   if (c.noise_origin == NoiseOrigin::EstimatedFromResiduals) {
-    out += line("  noise                 ESTIMATED from the residuals (no noise block given): "
-                "camera rotation %.4f deg, translation %.3f mm (1 sigma per axis, robot taken as exact)",
-                std::sqrt(c.noise.camera.rotation(0, 0)) * kDeg, std::sqrt(c.noise.camera.translation(0, 0)) * 1e3);
+    std::string estimated = "  noise                 ESTIMATED from the residuals (no noise block given); camera 1 sigma x y z [mm] " +
+                            sigmas(c.noise.camera.translation, 1e3);
+    estimated.pop_back();
+    out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDeg);
+    if (!c.noise_model.empty()) out += "                        (" + c.noise_model + ")\n";
   } else {
     out += line("  noise                 given (the noise block, or the detections' covariances)");
   }
-  out += line("  solver                rotation %d it (%s, chi2/dof %.2f), translation %d it (%s, chi2/dof %.2f)",
-              c.rotation_stage.iterations, to_string(c.rotation_stage.stop_reason),
-              c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof), c.translation_stage.iterations,
-              to_string(c.translation_stage.stop_reason),
-              c.translation_stage.chi2 / std::max(1, c.translation_stage.dof));
+  if (c.method == Method::Joint) {
+    out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,
+                to_string(c.rotation_stage.stop_reason), c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof),
+                c.rotation_stage.dof);
+  } else {
+    out += line("  solver                rotation %d it (%s, chi2/dof %.2f), translation %d it (%s, chi2/dof %.2f)",
+                c.rotation_stage.iterations, to_string(c.rotation_stage.stop_reason),
+                c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof), c.translation_stage.iterations,
+                to_string(c.translation_stage.stop_reason),
+                c.translation_stage.chi2 / std::max(1, c.translation_stage.dof));
+  }
   for (const std::string& warning : c.warnings) out += "  WARNING: " + warning + "\n";
   for (const auto& r : c.rejected) out += "  rejected samples[" + std::to_string(r.index) + "]: " + r.reason + "\n";
   return out;

@@ -455,6 +455,8 @@ ResultContext context_of(const SampleSet& samples) {
   c.setup = samples.rig.setup;
   c.parent = samples.rig.camera_parent_frame();
   c.child = samples.rig.frames.camera;
+  c.pattern_parent = samples.rig.pattern_parent_frame();
+  c.pattern_child = samples.rig.frames.pattern;
   return c;
 }
 
@@ -463,21 +465,26 @@ ResultContext context_of(const MotionSet&) { return {}; }
 namespace {
 /// The keys every result file has: frames, X, its covariance, the sample count
 /// and easy_handeye's `transformation` block.
+/// `covariance: {rotation, translation, pose}` of a pose.
+void emit_pose_covariance(YAML::Emitter& out, const Matrix6d& covariance) {
+  out << YAML::Key << "covariance" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rotation" << YAML::Value;
+  emit_covariance3(out, covariance.bottomRightCorner<3, 3>());
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_covariance3(out, covariance.topLeftCorner<3, 3>());
+  out << YAML::Key << "pose" << YAML::Value;
+  const auto pose = to_row_major_6x6(covariance);
+  emit_numbers(out, pose.data(), pose.size());
+  out << YAML::EndMap;
+}
+
 void emit_result_head(YAML::Emitter& out, const PoseWithCovariance& X, int samples_used,
                       const ResultContext& context) {
   if (context.setup) out << YAML::Key << "setup" << YAML::Value << to_string(*context.setup);
   out << YAML::Key << "parent" << YAML::Value << context.parent;
   out << YAML::Key << "child" << YAML::Value << context.child;
   emit_pose(out, X.pose);
-  out << YAML::Key << "covariance" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "rotation" << YAML::Value;
-  emit_covariance3(out, X.covariance.bottomRightCorner<3, 3>());
-  out << YAML::Key << "translation" << YAML::Value;
-  emit_covariance3(out, X.covariance.topLeftCorner<3, 3>());
-  out << YAML::Key << "pose" << YAML::Value;
-  const auto pose = to_row_major_6x6(X.covariance);
-  emit_numbers(out, pose.data(), pose.size());
-  out << YAML::EndMap;
+  emit_pose_covariance(out, X.covariance);
   out << YAML::Key << "samples_used" << YAML::Value << samples_used;
 
   Eigen::Quaterniond q(X.pose.linear());
@@ -505,6 +512,18 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   new_emitter(out) << YAML::BeginMap;
   emit_result_head(out, {calibration.T_parent_camera, calibration.pose_covariance}, calibration.samples_used, context);
   out << YAML::Key << "motions_used" << YAML::Value << calibration.motions_used;
+  out << YAML::Key << "method" << YAML::Value << to_string(calibration.method);
+  if (calibration.pattern) {  // Y with the same keys as X, and Cov(X, Y)
+    out << YAML::Key << "pattern" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "parent" << YAML::Value << context.pattern_parent;
+    out << YAML::Key << "child" << YAML::Value << context.pattern_child;
+    emit_pose(out, calibration.pattern->pose);
+    emit_pose_covariance(out, calibration.pattern->covariance);
+    out << YAML::EndMap;
+    out << YAML::Key << "cross_covariance" << YAML::Value;  // 6x6, X's ROS order in rows, Y's in columns
+    const auto cross = to_row_major_6x6(calibration.cross_covariance);
+    emit_numbers(out, cross.data(), cross.size());
+  }
 
   const bool samples = context.setup.has_value();
   out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;

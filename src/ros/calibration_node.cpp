@@ -62,6 +62,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   }
 
   calibration_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("calibration", 1, true);
+  pattern_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pattern", 1, true);
   status_pub_ = private_node_.advertise<CalibrationStatus>("status", 10, true);
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
   estimate_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("estimate", 1, true);
@@ -99,7 +100,6 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
     std::lock_guard<std::mutex> lock(mutex_);
     publish_status();
   });
-  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
   worker_ = std::thread(&CalibrationNode::work, this);  // last: nothing below may throw
   detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
   detection_spinner_->start();
@@ -297,11 +297,18 @@ std::string CalibrationNode::publish_tf(const Eigen::Isometry3d& X) {
   tf.header.frame_id = edge.parent;
   tf.child_frame_id = edge.child;
   tf.transform = conversions::to_transform_msg(edge.transform);
-  // A new child: a fresh broadcaster, so the old edge is no longer latched on /tf_static.
-  if (edge.child != published_root_) static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-  static_broadcaster_->sendTransform(tf);
+  if (edge.child != published_root_) static_edges_.erase(published_root_);  // the old edge goes
+  static_edges_[edge.child] = tf;
+  send_static_edges();
   published_root_ = edge.child;
   return edge.parent + " -> " + edge.child;
+}
+
+void CalibrationNode::send_static_edges() {
+  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  std::vector<geometry_msgs::TransformStamped> edges;
+  for (const auto& entry : static_edges_) edges.push_back(entry.second);
+  static_broadcaster_->sendTransform(edges);
 }
 
 // ------------------------------------------------------------------ services
@@ -336,6 +343,14 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.rotation_chi2_per_dof = c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof);
   res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
   res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
+  res.method = to_string(c.method);
+  if (c.pattern) {
+    res.pattern.header.stamp = res.calibration.header.stamp;
+    res.pattern.header.frame_id = config_.rig.pattern_parent_frame();
+    res.pattern.pose = conversions::to_msg(*c.pattern);
+    const std::array<double, 36> cross = to_row_major_6x6(c.cross_covariance);
+    std::copy(cross.begin(), cross.end(), res.cross_covariance.begin());
+  }
   res.warnings = c.warnings;
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
@@ -347,10 +362,19 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);
+  if (c.pattern) pattern_pub_.publish(res.pattern);
   publish_estimate(c);
   if (config_.publish_tf) {
     res.published_tf = publish_tf(c.T_parent_camera);
     if (res.published_tf.rfind("no TF", 0) == 0) ROS_WARN("calibrate: %s", res.published_tf.c_str());
+  }
+  if (config_.publish_pattern_tf && c.pattern) {
+    geometry_msgs::TransformStamped tf;
+    tf.header = res.pattern.header;
+    tf.child_frame_id = config_.rig.frames.pattern;
+    tf.transform = conversions::to_transform_msg(c.pattern->pose);
+    static_edges_[tf.child_frame_id] = tf;
+    send_static_edges();
   }
   try {
     io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));

@@ -74,6 +74,11 @@ class RigSimulator {
     truth_msg.header.frame_id = setup_ == Setup::EyeInHand ? effector_ : base_;
     truth_msg.pose = conversions::to_pose_msg(trajectory_.X);
     truth_pub_.publish(truth_msg);
+    pattern_truth_pub_ = pn.advertise<geometry_msgs::PoseStamped>("pattern_truth", 1, true);  // Y
+    geometry_msgs::PoseStamped pattern_msg;
+    pattern_msg.header.frame_id = setup_ == Setup::EyeInHand ? base_ : effector_;
+    pattern_msg.pose = conversions::to_pose_msg(trajectory_.T_world_pattern);
+    pattern_truth_pub_.publish(pattern_msg);
 
     const std::string topic = param<std::string>(pn, "detections_topic", "tag_detections");
     if (output_ == "tags") detections_ = node.advertise<TagDetectionArray>(topic, 10);
@@ -193,7 +198,7 @@ class RigSimulator {
   RigTrajectory trajectory_;
   Eigen::Isometry3d flange_T_tool_;
   ros::Time start_;
-  ros::Publisher truth_pub_, detections_, info_pub_;
+  ros::Publisher truth_pub_, pattern_truth_pub_, detections_, info_pub_;
   std::unique_ptr<TagRenderer> renderer_;
   std::unique_ptr<image_transport::ImageTransport> transport_;
   image_transport::Publisher image_pub_;

@@ -24,6 +24,7 @@ SessionSettings session_settings(const SessionConfig& config) {
   s.sampler = config.sampler;
   if (!config.noise_config.empty()) s.noise = io::read_noise_file(expand_home(config.noise_config));
   s.reject_outliers = config.reject_outliers;
+  s.method = method_from_string(config.method);
   s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
   s.suggest.working_distance = config.working_distance;
   s.suggest.candidates = config.suggest_candidates;
@@ -164,7 +165,7 @@ SampleSet CalibrationSession::sample_set() const {
 // ------------------------------------------------------------------ computations
 
 Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const {
-  return solve_samples(snapshot.samples, settings_.reject_outliers);
+  return solve_samples(snapshot.samples, settings_.reject_outliers, settings_.method);
 }
 
 SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {

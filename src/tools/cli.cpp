@@ -53,13 +53,15 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  std::string input, output, noise_path;
+  std::string input, output, noise_path, method = "joint";
   bool keep_outliers = false;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
       "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
       "keep-outliers", po::bool_switch(&keep_outliers), "samples: do not reject wrong detections (they are by default)")(
+      "method", po::value(&method),
+      "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
   po::variables_map vm;
@@ -78,6 +80,7 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
     SessionSettings settings = session_settings(*samples);
     if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
     settings.reject_outliers = !keep_outliers;
+    settings.method = method_from_string(method);
     CalibrationSession session(settings);
     session.replace(samples->samples, "read " + input);
     const SessionSnapshot snapshot = session.snapshot();

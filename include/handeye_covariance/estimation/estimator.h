@@ -44,6 +44,11 @@ struct SolverOptions {
   double min_axis_angle = 1.0 * M_PI / 180.0;
   /// |angle(A) - angle(B)| beyond this many sigma refuses the input.
   double angle_mismatch_sigmas = 8.0;
+  /// With no noise given the spread is the motions' own, which anisotropic
+  /// detector noise makes uneven (axes along the optical axis are better known):
+  /// a mismatch is then refused only beyond this too. Smaller ones are left to
+  /// the outlier stage (outliers.h) and the residuals.
+  double min_angle_mismatch_without_noise = 1.0 * M_PI / 180.0;
   /// Refuse a result whose rotation 1-sigma exceeds this (rad): the first-order
   /// covariance is meaningless there.
   double max_rotation_sigma = 0.1;
@@ -112,6 +117,7 @@ struct Calibration {
   /// The noise the covariance is based on: as given, or the estimate (isotropic
   /// camera noise, robot taken as exact) when none was given.
   MeasurementNoise noise;
+  std::string noise_model;  // when estimated: which model the residuals supported, e.g. "a full 6x6 camera noise ..."
   std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
 
   /// Samples left out by solve_robust (outliers.h), indices into its input.

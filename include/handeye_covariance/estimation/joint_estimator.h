@@ -23,7 +23,14 @@
 // camera noise is estimated as one full 6x6 in the camera frame (where depth
 // dominates), iterated with the solve: Sigma_c = sum e e^T / (n - 2) (12
 // parameters absorb 2 samples' worth of the 6n residuals); the robot is taken
-// as exact, its noise then part of the camera's.
+// as exact, its noise then part of the camera's. The model has as many numbers as
+// the residuals' dof nu = n - 2 support: the full 6x6 from nu >= 60, the 6
+// per-axis variances from nu >= 12 (depth stays apart from lateral), else one
+// translation and one rotation variance. A noise estimated from nu dof is itself
+// uncertain: the covariance of (X, Y) is the expected one over that uncertainty,
+// the point value times nu / (nu - 7) (full: the inverse-Wishart mean), nu / (nu - 2)
+// (per axis: the inverse-gamma mean), or 3 nu / (3 nu - 2) (pooled), so that the
+// NEES of X stays about 6 (Monte-Carlo in test_joint_estimator).
 #pragma once
 
 #include "handeye_covariance/estimation/estimator.h"
@@ -37,6 +44,10 @@ struct JointOptions {
   /// Noise estimation: stop when the estimated 6x6 changes by less than this (relative, Frobenius).
   double noise_tolerance = 1e-4;
   int max_noise_rounds = 20;
+  /// The estimated noise model by the residuals' dof (n - 2): the full 6x6 from this many,
+  /// else per-axis variances from 6, else one translation and one rotation variance.
+  int full_noise_min_dof = 60;
+  int per_axis_noise_min_dof = 12;
   SolverOptions checks;  // the degeneracy checks of the start
 };
 
@@ -54,5 +65,8 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Eig
 /// solve. Throws the degeneracy errors of solve(), InvalidNoise for a singular
 /// residual covariance, PoorlyConstrained beyond SolverOptions::max_rotation_sigma.
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options = {});
+
+/// Pose samples by either estimator: solve_joint, or solve (the paper's pairs).
+Calibration estimate(const SampleSet& samples, Method method);
 
 }  // namespace handeye

@@ -1,9 +1,10 @@
 // Which pose to add next, and how many more (the paper's stated future work):
 // candidates for the next effector pose are ranked by the covariance of X the
-// estimator predicts once that pose is added. The prediction is the full
-// first-order propagation of estimator.h, run on the current samples plus the
-// candidate's noise-free predicted sample, with the session's noise (given or
-// estimated).
+// estimator predicts once that pose is added, with the session's noise (given
+// or estimated). For the joint estimator a candidate adds its rank-6 term
+// H^T S^-1 H to the 12x12 information of (X, Y): no re-solve. For the pairs
+// estimator the prediction is a solve of the current samples plus the
+// candidate's noise-free predicted sample.
 //
 // Criteria:
 //   object_sigma: the worst-axis 1 sigma of an object's position at the working
@@ -49,6 +50,8 @@ struct ScoredPose {
   double score = 0.0;          // the criterion after adding this pose (smaller is better)
   double object_sigma = 0.0;   // m, after adding it (always reported)
   Matrix6d predicted_covariance = Matrix6d::Zero();
+  /// Joint: the predicted 12x12 covariance of (X, Y), for the next step of a plan.
+  Eigen::Matrix<double, 12, 12> predicted_joint_covariance = Eigen::Matrix<double, 12, 12>::Zero();
 };
 
 struct Suggestion {

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
 
@@ -36,13 +36,13 @@ struct OutlierOptions {
   double max_rejected_fraction = 0.3;
 };
 
-/// Solves with outlier rejection; Calibration::rejected lists what was
-/// dropped (indices into `samples`) and why. Throws like solve(), and
+/// Solves (by `method`) with outlier rejection; Calibration::rejected lists what
+/// was dropped (indices into `samples`) and why. Throws like the estimator, and
 /// TooManyOutliers when more than max_rejected_fraction would be rejected.
-Calibration solve_robust(const SampleSet& samples, const SolverOptions& solver = {}, const OutlierOptions& options = {});
+Calibration solve_robust(const SampleSet& samples, Method method = Method::Joint, const OutlierOptions& options = {});
 
-/// solve_robust, or plain solve when `reject` is false: one switch for every tool.
-Calibration solve_samples(const SampleSet& samples, bool reject);
+/// solve_robust, or the plain estimator when `reject` is false: one switch for every tool.
+Calibration solve_samples(const SampleSet& samples, bool reject, Method method = Method::Joint);
 
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);

@@ -68,6 +68,7 @@ std::string format_motions(const MotionSet& motions);
 struct ResultContext {
   std::optional<Setup> setup;  // absent for motion input without a setup key
   std::string parent, child;   // frame names, empty when unknown
+  std::string pattern_parent, pattern_child;  // Y's frames (samples input)
 };
 
 ResultContext context_of(const SampleSet& samples);

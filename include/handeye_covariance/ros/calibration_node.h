@@ -19,6 +19,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -76,10 +77,15 @@ class CalibrationNode {
   std::unique_ptr<ros::AsyncSpinner> detection_spinner_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;  // remade when X's TF child changes
+  /// The node's static edges (X, and Y with publish_pattern_tf) by child frame. One broadcaster
+  /// sends them all (two in one node would share the latched topic, and only the last would be
+  /// latched); it is remade when an edge's child changes, so an old edge is no longer latched.
+  void send_static_edges();
+  std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // output_mutex_
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
   ros::Subscriber detections_;
   ros::Timer tf_poll_, status_timer_;
-  ros::Publisher calibration_pub_, estimate_pub_, status_pub_, markers_pub_;
+  ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Time last_tf_stamp_;     // detection thread only
   // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:

@@ -33,6 +33,7 @@ struct SessionSettings {
   /// else estimated from the residuals.
   std::optional<MeasurementNoise> noise;
   bool reject_outliers = true;
+  Method method = Method::Joint;  // the estimator (joint_estimator.h, or the paper's pairs)
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
   /// suggest.seed + the number of samples, so each new sample brings fresh ones.

@@ -17,6 +17,7 @@ struct SessionConfig {
   std::vector<int> tag_ids;              // empty: a lone detection is taken
   std::string noise_config;              // YAML with a `noise:` block; empty: estimated
   bool publish_tf = true;
+  bool publish_pattern_tf = false;  // also TF <pattern parent> -> tracking_marker_frame for Y (joint)
   bool resume = false;
   std::string namespace_prefix = "handeye";
   std::string calibration_file, session_file;  // empty: ~/.ros/handeye_covariance/<namespace>[_samples].yaml
@@ -25,6 +26,7 @@ struct SessionConfig {
   double working_distance = 0.7;         // m
   double target_tolerance_mm = 1.0;
   bool reject_outliers = true;  // outliers.h: consensus + residual gating before the covariance
+  std::string method = "joint";  // joint (X and the pattern pose from the poses) | pairs (the paper's AX = XB)
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
@@ -55,6 +57,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("tag_ids", c.tag_ids, 1.0);
   visit("noise_config", c.noise_config, 1.0);
   visit("publish_tf", c.publish_tf, 1.0);
+  visit("publish_pattern_tf", c.publish_pattern_tf, 1.0);
   visit("resume", c.resume, 1.0);
   visit("namespace_prefix", c.namespace_prefix, 1.0);
   visit("calibration_file", c.calibration_file, 1.0);
@@ -64,6 +67,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("working_distance", c.working_distance, 1.0);
   visit("target_tolerance_mm", c.target_tolerance_mm, 1.0);
   visit("reject_outliers", c.reject_outliers, 1.0);
+  visit("method", c.method, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
   visit("reach_translation_mm", c.reach_translation, mm);
