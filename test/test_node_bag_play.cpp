@@ -15,8 +15,11 @@ std::string bag_path;
 TEST(CalibrationNode, RosbagPlayGivesTheSameSamplesAsTheOfflineReplay) {
   SessionConfig config;
   config.tag_ids = {0};
-  const BagReplay offline = replay_bag(bag_path, config);
-  const Calibration expected = solve(offline.samples);
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();
+  CalibrationSession session(settings);  // the node's own session class, offline
+  const BagReplay offline = replay_bag(bag_path, config, session);
+  const Calibration expected = session.calibrate(session.snapshot());
 
   test::StatusWatcher status("/play_eye_on_hand/handeye_calibration/status");
   ASSERT_TRUE(test::wait_for(
