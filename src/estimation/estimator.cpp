@@ -450,13 +450,13 @@ TranslationResult solve_translation(const Vector3d& t0, const Matrix3d& R, const
 }
 
 /// Least-squares t for a fixed R with unit weights (Park-Martin's second step).
-Vector3d unweighted_translation(const Matrix3d& R, const Problem& problem) {
+Vector3d unweighted_translation(const Matrix3d& R, const std::vector<Isometry3d>& A, const std::vector<Isometry3d>& B) {
   Matrix3d normal = Matrix3d::Zero();
   Vector3d rhs = Vector3d::Zero();
-  for (std::size_t i = 0; i < problem.size(); ++i) {
-    const Matrix3d M = problem.A[i].linear() - Matrix3d::Identity();
+  for (std::size_t i = 0; i < A.size(); ++i) {
+    const Matrix3d M = A[i].linear() - Matrix3d::Identity();
     normal += M.transpose() * M;
-    rhs += M.transpose() * (R * problem.B[i].translation() - problem.A[i].translation());
+    rhs += M.transpose() * (R * B[i].translation() - A[i].translation());
   }
   return normal.ldlt().solve(rhs);
 }
@@ -510,43 +510,43 @@ double median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-void check_motions(const Problem& problem, const RotationData& d, const SolverOptions& options) {
-  const std::size_t k = problem.size();
+}  // namespace
+
+void check_motion_rotations(const MotionRotations& m, const SolverOptions& options) {
+  const std::size_t k = m.alpha.size();
   if (k < 2) {
     throw HandEyeError(ErrorCode::TooFewMotions,
                        "got " + std::to_string(k) + " motion(s); at least 2 are needed", "input",
                        "record more samples (10-30 poses rotating about different axes is typical)");
   }
-  std::vector<double> sigma(k, 0.0), normalized(k);
+  const bool noise_given = m.noise_given;
+  const std::vector<double>& sigma = m.sigma;
+  std::vector<double> normalized(k);
   double largest_angle = 0.0;
   for (std::size_t i = 0; i < k; ++i) {
-    const double a = d.alpha[i].norm(), b = d.beta[i].norm();
+    const double a = m.alpha[i].norm(), b = m.beta[i].norm();
     largest_angle = std::max({largest_angle, a, b});
-    if (problem.noise_given) {
-      sigma[i] = std::hypot(angle_sigma(d.alpha[i], d.sigma_alpha[i]),
-                            angle_sigma(d.beta[i], d.sigma_beta[i]));
-    }
-    normalized[i] = std::abs(a - b) / (problem.noise_given ? std::max(sigma[i], 1e-300) : 1.0);
+    normalized[i] = std::abs(a - b) / (noise_given ? std::max(sigma[i], 1e-300) : 1.0);
   }
   // A motion is refused when its A/B angle mismatch is far beyond the noise AND
   // far beyond the other motions' (robust spread: 1.4826 x median). Uniformly
   // understated noise is therefore not blamed on one motion; the chi^2 warning
   // reports it instead.
-  double spread = problem.noise_given ? 1.0 : INFINITY;
+  double spread = noise_given ? 1.0 : INFINITY;
   if (k >= 6) spread = 1.4826 * median(normalized);
-  if (problem.noise_given) spread = std::max(spread, 1.0);
+  if (noise_given) spread = std::max(spread, 1.0);
   for (std::size_t i = 0; i < k; ++i) {
-    const double scale = problem.noise_given ? sigma[i] : 1.0;
+    const double scale = noise_given ? sigma[i] : 1.0;
     const double limit = std::max(options.angle_mismatch_sigmas * spread * scale,
-                                  problem.noise_given ? 1e-9 : options.min_angle_mismatch_without_noise);
+                                  noise_given ? 1e-9 : options.min_angle_mismatch_without_noise);
     const double mismatch = normalized[i] * scale;
     if (mismatch > limit) {
       throw HandEyeError(
           ErrorCode::AngleMismatch,
           "robot and camera rotation angles differ by " + number_text(degrees(mismatch)) + " deg (" +
-              number_text(degrees(d.alpha[i].norm())) + " vs " + number_text(degrees(d.beta[i].norm())) +
+              number_text(degrees(m.alpha[i].norm())) + " vs " + number_text(degrees(m.beta[i].norm())) +
               " deg), far beyond the noise and the other motions (limit " + number_text(degrees(limit)) + " deg)",
-          problem.label(i),
+          m.label(i),
           "the two poses of this motion were not taken at the same time, or the pattern detection "
           "is wrong; remove the sample, or check that the effector and pattern poses are paired");
     }
@@ -555,7 +555,7 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
   std::vector<std::size_t> informative;
   int above_floor = 0;
   for (std::size_t i = 0; i < k; ++i) {
-    const double angle = std::min(d.alpha[i].norm(), d.beta[i].norm());
+    const double angle = std::min(m.alpha[i].norm(), m.beta[i].norm());
     if (angle <= options.min_rotation_angle) continue;
     ++above_floor;
     if (angle > options.min_rotation_sigmas * sigma[i]) informative.push_back(i);
@@ -585,14 +585,14 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
   // Axes: compare each to the axis of the largest rotation, which is the best known.
   std::size_t reference = informative.front();
   for (std::size_t i : informative)
-    if (d.alpha[i].norm() > d.alpha[reference].norm()) reference = i;
-  const Vector3d axis = d.alpha[reference].normalized();
+    if (m.alpha[i].norm() > m.alpha[reference].norm()) reference = i;
+  const Vector3d axis = m.alpha[reference].normalized();
   double widest = 0.0, needed = options.min_axis_angle;
   for (std::size_t i : informative) {
-    const double between = std::asin(std::min(1.0, axis.cross(d.alpha[i].normalized()).norm()));
+    const double between = std::asin(std::min(1.0, axis.cross(m.alpha[i].normalized()).norm()));
     const double limit = std::max(options.min_axis_angle,
                                   options.min_rotation_sigmas *
-                                      (sigma[reference] / d.alpha[reference].norm() + sigma[i] / d.alpha[i].norm()));
+                                      (sigma[reference] / m.alpha[reference].norm() + sigma[i] / m.alpha[i].norm()));
     if (between - limit > widest - needed) {
       widest = between;
       needed = limit;
@@ -607,6 +607,23 @@ void check_motions(const Problem& problem, const RotationData& d, const SolverOp
                        "the rotation about that axis and the translation along it are unobservable; "
                        "add samples that rotate the flange about a second, different axis");
   }
+}
+
+namespace {
+
+/// What the degeneracy checks read, from a pairs problem: each motion's angle
+/// sigma from its marginal log covariances.
+MotionRotations motion_rotations(const Problem& problem, const RotationData& d) {
+  MotionRotations m;
+  m.alpha = d.alpha, m.beta = d.beta, m.noise_given = problem.noise_given;
+  m.sigma.assign(problem.size(), 0.0);
+  if (problem.noise_given) {
+    for (std::size_t i = 0; i < problem.size(); ++i) {
+      m.sigma[i] = std::hypot(angle_sigma(d.alpha[i], d.sigma_alpha[i]), angle_sigma(d.beta[i], d.sigma_beta[i]));
+    }
+  }
+  m.label = [&problem](std::size_t i) { return problem.label(i); };
+  return m;
 }
 
 // ---------------------------------------------------------------------------
@@ -767,7 +784,7 @@ StageSolution solve_stages(const Problem& problem, RotationData& d, const Matrix
   s.gains = rotation_gains(s.R, rotation.linearization, d);
   s.sigma_R = rotation_covariance(problem, scale, s.gains);
   s.per_pair_rotation_covariance = rotation.linearization.information.inverse();
-  s.translation = solve_translation(unweighted_translation(s.R, problem), s.R, s.sigma_R, m,
+  s.translation = solve_translation(unweighted_translation(s.R, problem.A, problem.B), s.R, s.sigma_R, m,
                                     problem, options);
   return s;
 }
@@ -776,13 +793,13 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   RotationData d = rotation_data(problem);
   NoiseScale scale;
   update_log_covariances(d, marginals(problem, scale));
-  check_motions(problem, d, options);
+  check_motion_rotations(motion_rotations(problem, d), options);
 
   const Matrix3d R0 = park_martin_rotation(d.alpha, d.beta);
   align_representatives(R0, d);
 
   Calibration result;
-  result.initial_guess = se3::make_pose(R0, unweighted_translation(R0, problem));
+  result.initial_guess = se3::make_pose(R0, unweighted_translation(R0, problem.A, problem.B));
   result.motions_used = static_cast<int>(problem.size());
   result.samples_used = problem.samples;
 
@@ -886,27 +903,46 @@ Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions) {
   }
   RotationData d = rotation_data(problem);
   const Matrix3d R = park_martin_rotation(d.alpha, d.beta);
-  return se3::make_pose(R, unweighted_translation(R, problem));
+  return se3::make_pose(R, unweighted_translation(R, problem.A, problem.B));
 }
 
 Eigen::Isometry3d checked_initial_guess(const SampleSet& samples, const SolverOptions& options) {
-  if (samples.samples.size() < 3) {
+  const std::size_t n = samples.samples.size();
+  if (n < 3) {
     throw HandEyeError(ErrorCode::TooFewMotions,
-                       "got " + std::to_string(samples.samples.size()) +
-                           " sample(s); at least 3 are needed (2 motions)",
-                       "samples", "record more samples (10-30 poses rotating about different axes is typical)");
+                       "got " + std::to_string(n) + " sample(s); at least 3 are needed (2 motions)", "samples",
+                       "record more samples (10-30 poses rotating about different axes is typical)");
   }
-  // Each sample with the next few: about 100 motions for short sessions (the robust
-  // spread behind the angle-mismatch check needs them), consecutive ones beyond 100
-  // samples: O(n).
-  const int n = static_cast<int>(samples.samples.size());
-  const int window = std::min(options.pair_window, std::max(1, (100 + n - 2) / (n - 1)));
-  const Problem problem = build(samples, window);
-  RotationData d = rotation_data(problem);
-  update_log_covariances(d, marginals(problem, NoiseScale{}));
-  check_motions(problem, d, options);
-  const Matrix3d R = park_martin_rotation(d.alpha, d.beta);
-  return se3::make_pose(R, unweighted_translation(R, problem));
+  if (samples.noise) check_noise_block(*samples.noise, "noise");
+  // Consecutive motions, O(n): the rotation angles with the sigma of their
+  // difference (rotation blocks only: B = P_j P_i^-1 has Sigma_Pj + R_B Sigma_Pi R_B^T,
+  // A likewise through the rig's Jacobians), then Park-Martin.
+  const Rig& rig = samples.rig;
+  MotionRotations m;
+  m.noise_given = samples.noise.has_value();
+  std::vector<Isometry3d> A(n - 1), B(n - 1);
+  m.alpha.resize(n - 1), m.beta.resize(n - 1), m.sigma.assign(n - 1, 0.0);
+  const auto noise_of = [&](std::size_t i) -> const MeasurementNoise& {
+    return samples.samples[i].noise ? *samples.samples[i].noise : *samples.noise;
+  };
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const PoseSample &from = samples.samples[i], &to = samples.samples[i + 1];
+    A[i] = rig.robot_motion(from.T_base_effector, to.T_base_effector);
+    B[i] = to.T_camera_pattern * from.T_camera_pattern.inverse();
+    m.alpha[i] = so3::log(A[i].linear());
+    m.beta[i] = so3::log(B[i].linear());
+    if (!m.noise_given) continue;
+    const auto [J_from, J_to] = rig.robot_motion_jacobians(from.T_base_effector, to.T_base_effector);
+    const Matrix3d sigma_A = J_from.bottomRows<3>() * noise_of(i).robot.as_pose_covariance() * J_from.bottomRows<3>().transpose() +
+                             J_to.bottomRows<3>() * noise_of(i + 1).robot.as_pose_covariance() * J_to.bottomRows<3>().transpose();
+    const Matrix3d& R_B = B[i].linear();
+    const Matrix3d sigma_B = noise_of(i + 1).camera.rotation + R_B * noise_of(i).camera.rotation * R_B.transpose();
+    m.sigma[i] = std::hypot(angle_sigma(m.alpha[i], sigma_A), angle_sigma(m.beta[i], sigma_B));
+  }
+  m.label = [](std::size_t i) { return "samples[" + std::to_string(i) + "] -> samples[" + std::to_string(i + 1) + "]"; };
+  check_motion_rotations(m, options);
+  const Matrix3d R = park_martin_rotation(m.alpha, m.beta);
+  return se3::make_pose(R, unweighted_translation(R, A, B));
 }
 
 Calibration solve(const MotionSet& motions, const SolverOptions& options) {

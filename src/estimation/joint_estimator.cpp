@@ -1,10 +1,13 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
+#include "handeye_covariance/estimation/variance_components.h"
 
 namespace handeye {
 
@@ -13,42 +16,217 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 using Matrix12d = Eigen::Matrix<double, 12, 12>;
 using Vector12d = Eigen::Matrix<double, 12, 1>;
-
-JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Isometry3d& X, const Isometry3d& Y) {
-  const Isometry3d X_inverse = X.inverse();
-  const Isometry3d V = rig.robot_link(sample.T_base_effector);
-  const Isometry3d VY = V * Y;
-  const Isometry3d predicted = X_inverse * VY;  // P_hat = X^-1 V Y
-  JointResidual r;
-  const Vector3d phi = so3::log(sample.T_camera_pattern.linear() * predicted.linear().transpose());
-  r.error << sample.T_camera_pattern.translation() - predicted.translation(), phi;
-  // d P_hat / d xi_X through X^-1, d P_hat / d xi_Y; then e's sensitivity to
-  // P_hat: -I for t, and -J_r^-1(phi) for R (log(exp(phi) exp(-xi)) = phi - J_r^-1 xi).
-  const Matrix6d dP_dX = compose_jacobian_left(X_inverse, VY) * inverse_jacobian(X);
-  const Matrix6d dP_dY = compose_jacobian_right(X_inverse * V);
-  Matrix6d de_dP = -Matrix6d::Identity();
-  de_dP.bottomRightCorner<3, 3>() = -so3::left_jacobian_inverse(-phi);
-  r.jacobian << de_dP * dP_dX, de_dP * dP_dY;
-  r.d_effector = compose_jacobian_right(X_inverse) * compose_jacobian_left(V, Y) *
-                 rig.robot_link_jacobian(sample.T_base_effector);
-  return r;
-}
+using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
 
 namespace {
 
-/// The noise model of each sample, as in the pairs estimator: its own, else the
-/// global block; with neither anywhere, none (to be estimated).
-struct SampleNoise {
+/// One sample, as the solver needs it: the robot's link in the loop with its
+/// Jacobian, the view, and the stated noise (zero when none).
+struct Term {
+  Isometry3d V, P;
+  Matrix6d dV_dE;
   Matrix6d camera = Matrix6d::Zero(), robot = Matrix6d::Zero();
-  bool robot_is_zero = true;
+  Matrix6d camera_root = Matrix6d::Zero();  // camera = root root^T (the factor of its scale component)
+  bool has_robot = false;
 };
 
-std::vector<SampleNoise> sample_noise(const SampleSet& set, bool& given) {
+/// X and Y as the residuals use them.
+struct Frame {
+  Matrix3d RXt, RY;
+  Vector3d tX, tY;
+  explicit Frame(const Isometry3d& X, const Isometry3d& Y)
+      : RXt(X.linear().transpose()), RY(Y.linear()), tX(X.translation()), tY(Y.translation()) {}
+};
+
+struct Linear {
+  Vector6d e;
+  Matrix6x12 J;
+  Matrix6d D;  // d P_hat / d xi_E
+};
+
+/// e = (t_P - t_hat, log(R_P R_hat^T)) with P_hat = X^-1 V Y.
+Vector6d residual(const Term& t, const Frame& f) {
+  const Matrix3d RV = t.V.linear();
+  const Vector3d t_hat = f.RXt * (RV * f.tY + t.V.translation() - f.tX);
+  const Matrix3d R_hat = f.RXt * RV * f.RY;
+  Vector6d e;
+  e << t.P.translation() - t_hat, so3::log(t.P.linear() * R_hat.transpose());
+  return e;
+}
+
+/// The residual and its Jacobians, written out (left perturbations, ROS order):
+///   d P_hat / d xi_X = [[-RX^T, RX^T [t_VY - t_X]x], [0, -RX^T]],
+///   d P_hat / d xi_Y = diag(RX^T RV, RX^T RV),
+///   d P_hat / d xi_E = diag(RX^T, RX^T) [[I, -[RV t_Y]x], [0, I]] dV/dE,
+/// and e's sensitivity to P_hat is -I for t and -J_r^-1(phi) for R
+/// (log(exp(phi) exp(-d)) = phi - J_r^-1(phi) d). Checked numerically in test_joint_estimator.
+void linearize(const Term& t, const Frame& f, Linear& out) {
+  const Matrix3d RV = t.V.linear();
+  const Vector3d RV_tY = RV * f.tY;
+  const Vector3d t_VY = RV_tY + t.V.translation();
+  const Matrix3d RXt_RV = f.RXt * RV;
+  const Vector3d t_hat = f.RXt * (t_VY - f.tX);
+  const Matrix3d R_hat = RXt_RV * f.RY;
+  const Vector3d phi = so3::log(t.P.linear() * R_hat.transpose());
+  out.e << t.P.translation() - t_hat, phi;
+  const Matrix3d Jr_inverse = so3::left_jacobian_inverse(-phi);
+  out.J.setZero();
+  out.J.block<3, 3>(0, 0) = f.RXt;
+  out.J.block<3, 3>(0, 3) = -f.RXt * so3::hat(t_VY - f.tX);
+  out.J.block<3, 3>(3, 3) = Jr_inverse * f.RXt;
+  out.J.block<3, 3>(0, 6) = -RXt_RV;
+  out.J.block<3, 3>(3, 9) = -Jr_inverse * RXt_RV;
+  Matrix6d chain = Matrix6d::Zero();  // diag(RX^T, RX^T) [[I, -[RV tY]x], [0, I]]
+  chain.topLeftCorner<3, 3>() = f.RXt;
+  chain.topRightCorner<3, 3>() = -f.RXt * so3::hat(RV_tY);
+  chain.bottomRightCorner<3, 3>() = f.RXt;
+  out.D.noalias() = chain * t.dV_dE;
+}
+
+Isometry3d apply(const Isometry3d& T, const Vector6d& d) {
+  return se3::make_pose(so3::exp(d.tail<3>()) * T.linear(), T.translation() + d.head<3>());
+}
+
+/// The noise model: S_i = scale Sigma_P,i + camera + D_i (Sigma_E,i + robot) D_i^T.
+struct NoiseModel {
+  double camera_scale = 1.0;
+  Matrix6d camera = Matrix6d::Zero(), robot = Matrix6d::Zero();
+  bool robot_free_or_given = false;  // D_i enters S_i
+
+  Matrix6d covariance(const Term& t, const Matrix6d& D) const {
+    Matrix6d S = camera_scale * t.camera + camera;
+    if (robot_free_or_given) S.noalias() += D * (t.robot + robot) * D.transpose();
+    return S;
+  }
+};
+
+/// Huber's loss on a Mahalanobis distance d (s: the robust scale; k: threshold in
+/// units of s; k = 0 for the squared loss). Returns the IRLS weight; rho is the loss.
+double huber_weight(double d, double k_scaled) { return k_scaled <= 0.0 || d <= k_scaled ? 1.0 : k_scaled / d; }
+double huber_rho(double d, double k_scaled) {
+  return k_scaled <= 0.0 || d <= k_scaled ? 0.5 * d * d : k_scaled * d - 0.5 * k_scaled * k_scaled;
+}
+
+/// The state of a solve at (X, Y): every sample's linearisation and weight.
+struct Solution {
+  Isometry3d X, Y;
+  std::vector<Linear> lin;
+  std::vector<Eigen::LLT<Matrix6d>> S;  // each sample's residual covariance, factored
+  std::vector<double> weight;          // robust weights (1 for the squared loss)
+  Matrix12d information = Matrix12d::Zero();  // sum w J^T S^-1 J
+  Vector12d gradient = Vector12d::Zero();
+  double cost = 0.0;  // sum rho(d_i)
+  double chi2 = 0.0;  // sum d_i^2
+  StageDiagnostics diagnostics;
+};
+
+class JointProblem {
+ public:
+  JointProblem(std::vector<Term> terms, const JointOptions& o) : terms_(std::move(terms)), o_(o) {}
+
+  std::size_t size() const { return terms_.size(); }
+  const std::vector<Term>& terms() const { return terms_; }
+  std::vector<Term>& terms() { return terms_; }
+
+  /// Linearises every sample at (X, Y) under `model`, with Huber weights at
+  /// threshold k_scaled (0: squared loss). Throws InvalidNoise on a singular S_i.
+  void linearize_all(const NoiseModel& model, double k_scaled, Solution& s) const {
+    const Frame f(s.X, s.Y);
+    const std::size_t n = terms_.size();
+    s.lin.resize(n), s.S.resize(n), s.weight.assign(n, 1.0);
+    s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      linearize(terms_[i], f, s.lin[i]);
+      s.S[i].compute(model.covariance(terms_[i], s.lin[i].D));
+      if (s.S[i].info() != Eigen::Success || !(s.S[i].matrixLLT().diagonal().array() > 0.0).all()) {
+        throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
+                           "samples[" + std::to_string(i) + "]",
+                           "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
+                           "noise block to estimate it");
+      }
+      // Whitened: S = L L^T, r = L^-1 e, Jw = L^-1 J.
+      const auto L = s.S[i].matrixL();
+      const Vector6d r = L.solve(s.lin[i].e);
+      const Matrix6x12 Jw = L.solve(s.lin[i].J);
+      const double d2 = r.squaredNorm();
+      const double w = huber_weight(std::sqrt(d2), k_scaled);
+      s.weight[i] = w;
+      s.information.selfadjointView<Eigen::Lower>().rankUpdate(Jw.transpose(), w);
+      s.gradient.noalias() += w * Jw.transpose() * r;
+      s.cost += huber_rho(std::sqrt(d2), k_scaled);
+      s.chi2 += d2;
+    }
+    s.information = s.information.selfadjointView<Eigen::Lower>();
+  }
+
+  /// The robust cost at (X, Y) with the covariances of `at` held fixed.
+  double cost_at(const Isometry3d& X, const Isometry3d& Y, const Solution& at, double k_scaled) const {
+    const Frame f(X, Y);
+    double cost = 0.0;
+    for (std::size_t i = 0; i < terms_.size(); ++i) {
+      const Vector6d r = at.S[i].matrixL().solve(residual(terms_[i], f));
+      cost += huber_rho(r.norm(), k_scaled);
+    }
+    return cost;
+  }
+
+  /// Gauss-Newton (iteratively reweighted: the robot's term and the Huber
+  /// weights follow the estimate) with step halving, from s.X, s.Y. Each trial
+  /// point is linearised at once (its cost comes with it); a step whose cost
+  /// rose is checked again under the old weights before it is halved, since the
+  /// robot's term moves S_i with the estimate.
+  void gauss_newton(const NoiseModel& model, double k_scaled, Solution& s) const {
+    linearize_all(model, k_scaled, s);
+    Solution trial;
+    int iterations = 0;
+    s.diagnostics.stop_reason = StopReason::MaxIterations;
+    for (int iteration = 1; iteration <= o_.max_iterations; ++iteration) {
+      iterations = iteration;
+      const Eigen::LDLT<Matrix12d> ldlt(s.information);
+      Vector12d step = -ldlt.solve(s.gradient);
+      const double length = step.dot(s.information * step);
+      if (!std::isfinite(length)) break;  // a singular information: reported by the caller
+      if (length < o_.step_tolerance) {
+        // Below 1e-4 sigma: take it; the current linearisation is as good to first order.
+        s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
+        s.diagnostics.stop_reason = StopReason::StepBelowTolerance;
+        break;
+      }
+      bool moved = false;
+      for (int halving = 0; halving < 30 && !moved; ++halving, step *= 0.5) {
+        trial.X = apply(s.X, step.head<6>()), trial.Y = apply(s.Y, step.tail<6>());
+        linearize_all(model, k_scaled, trial);
+        moved = trial.cost <= s.cost * (1.0 + 1e-12) || cost_at(trial.X, trial.Y, s, k_scaled) <= s.cost * (1.0 + 1e-12);
+      }
+      if (!moved) {
+        s.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;  // no descent left at this precision
+        break;
+      }
+      const double previous = s.cost;
+      trial.diagnostics = s.diagnostics;
+      std::swap(s, trial);
+      if (std::abs(previous - s.cost) <= 1e-14 * std::max(previous, 1e-300)) {
+        s.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
+        break;
+      }
+    }
+    s.diagnostics.iterations += iterations;
+    s.diagnostics.chi2 = s.chi2;
+    s.diagnostics.dof = 6 * static_cast<int>(terms_.size()) - 12;
+  }
+
+ private:
+  std::vector<Term> terms_;
+  const JointOptions& o_;
+};
+
+std::vector<Term> make_terms(const SampleSet& set, bool& given) {
   given = set.noise.has_value();
   if (set.noise) check_covariance(set.noise->robot, "noise.effector"), check_covariance(set.noise->camera, "noise.pattern");
-  std::vector<SampleNoise> out(set.samples.size());
+  std::vector<Term> terms(set.samples.size());
   for (std::size_t i = 0; i < set.samples.size(); ++i) {
-    const std::optional<MeasurementNoise>& own = set.samples[i].noise;
+    const PoseSample& sample = set.samples[i];
+    const std::optional<MeasurementNoise>& own = sample.noise;
     if (own && !set.noise) {
       throw HandEyeError(ErrorCode::InvalidNoise, "a per-item noise is given but there is no global noise block",
                          "samples[" + std::to_string(i) + "]",
@@ -60,125 +238,295 @@ std::vector<SampleNoise> sample_noise(const SampleSet& set, bool& given) {
       check_covariance(own->robot, where + ".effector");
       check_covariance(own->camera, where + ".pattern");
     }
-    const MeasurementNoise& n = own ? *own : (set.noise ? *set.noise : MeasurementNoise{});
-    out[i].camera = n.camera.as_pose_covariance();
-    out[i].robot = n.robot.as_pose_covariance();
-    out[i].robot_is_zero = out[i].robot.isZero(0.0);
+    Term& t = terms[i];
+    t.V = set.rig.robot_link(sample.T_base_effector);
+    t.dV_dE = set.rig.robot_link_jacobian(sample.T_base_effector);
+    t.P = sample.T_camera_pattern;
+    const MeasurementNoise& noise = own ? *own : (set.noise ? *set.noise : MeasurementNoise{});
+    t.camera = noise.camera.as_pose_covariance();
+    t.robot = noise.robot.as_pose_covariance();
+    t.has_robot = !t.robot.isZero(0.0);
+  }
+  return terms;
+}
+
+/// The stated camera noise's square roots, for the fit of its scale.
+void set_camera_roots(std::vector<Term>& terms) {
+  for (Term& t : terms) {
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(t.camera);
+    t.camera_root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
+  }
+}
+
+/// The free noise numbers and how each enters S_i (variance_components.h).
+enum class Kind { CameraScale, CameraAxis, CameraTranslation, CameraRotation, CameraPair, RobotTranslation, RobotRotation };
+struct Free {
+  Kind kind;
+  int a = 0, b = 0;  // axes (CameraAxis: a; CameraPair: a, b)
+  VarianceComponent component;
+};
+
+const char* axis_name(int a) {
+  static const char* names[] = {"x", "y", "z", "rx", "ry", "rz"};
+  return names[a];
+}
+
+std::vector<Free> free_components(bool given, bool chi2_failed, bool any_camera_stated, int dof, const JointOptions& o) {
+  std::vector<Free> free;
+  const double floor = 1e-18;  // (1e-9 m or rad)^2: noise-free input stays solvable
+  if (given) {
+    if (!chi2_failed) return free;
+    if (any_camera_stated) {
+      free.push_back({Kind::CameraScale, 0, 0, {"stated camera noise scale", 1e-3}});
+    } else {
+      free.push_back({Kind::CameraTranslation, 0, 0, {"camera translation", floor}});
+      free.push_back({Kind::CameraRotation, 0, 0, {"camera rotation", floor}});
+    }
+    free.push_back({Kind::RobotTranslation, 0, 0, {"robot translation", 0.0}});
+    free.push_back({Kind::RobotRotation, 0, 0, {"robot rotation", 0.0}});
+    return free;
+  }
+  if (dof >= o.full_noise_min_dof) {
+    const double none = -std::numeric_limits<double>::infinity();  // kept positive definite by the fit
+    for (int a = 0; a < 6; ++a) free.push_back({Kind::CameraAxis, a, a, {std::string("camera ") + axis_name(a), none}});
+    for (int a = 0; a < 6; ++a) {
+      for (int b = a + 1; b < 6; ++b) {
+        free.push_back({Kind::CameraPair, a, b, {std::string("camera ") + axis_name(a) + "-" + axis_name(b), none}});
+      }
+    }
+  } else if (dof >= o.per_axis_noise_min_dof) {
+    for (int a = 0; a < 6; ++a) free.push_back({Kind::CameraAxis, a, a, {std::string("camera ") + axis_name(a), floor}});
+  } else {
+    free.push_back({Kind::CameraTranslation, 0, 0, {"camera translation", floor}});
+    free.push_back({Kind::CameraRotation, 0, 0, {"camera rotation", floor}});
+  }
+  // The robot's rotation only: an isotropic robot translation noise is isotropic
+  // in every frame, so it is the camera's translation noise under another name.
+  if (dof >= o.robot_noise_min_dof) free.push_back({Kind::RobotRotation, 0, 0, {"robot rotation", 0.0}});
+  return free;
+}
+
+/// The factor width of a component (0: a shared camera covariance entry).
+int rank_of(Kind kind) {
+  switch (kind) {
+    case Kind::CameraScale: return 6;
+    case Kind::CameraAxis: case Kind::CameraPair: return 0;
+    default: return 3;
+  }
+}
+
+/// The factor of component `c` for a sample (6 x rank).
+Eigen::Matrix<double, 6, Eigen::Dynamic> factor(const Free& c, const Term& t, const Matrix6d& D) {
+  switch (c.kind) {
+    case Kind::CameraScale: return t.camera_root;
+    case Kind::CameraTranslation: return Matrix6d::Identity().leftCols<3>();
+    case Kind::CameraRotation: return Matrix6d::Identity().rightCols<3>();
+    case Kind::RobotTranslation: return D.leftCols<3>();
+    case Kind::RobotRotation: return D.rightCols<3>();
+    default: return Eigen::Matrix<double, 6, Eigen::Dynamic>(6, 0);
+  }
+}
+
+/// theta into the model (the stated parts stay as they are).
+void apply_components(const std::vector<Free>& free, const Eigen::VectorXd& theta, NoiseModel& model) {
+  model.camera.setZero(), model.robot.setZero();
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const Free& c = free[k];
+    const double v = theta[static_cast<Eigen::Index>(k)];
+    switch (c.kind) {
+      case Kind::CameraScale: model.camera_scale = v; break;
+      case Kind::CameraAxis: model.camera(c.a, c.a) += v; break;
+      case Kind::CameraPair: model.camera(c.a, c.b) += v, model.camera(c.b, c.a) += v; break;
+      case Kind::CameraTranslation: model.camera.topLeftCorner<3, 3>() += v * Matrix3d::Identity(); break;
+      case Kind::CameraRotation: model.camera.bottomRightCorner<3, 3>() += v * Matrix3d::Identity(); break;
+      case Kind::RobotTranslation: model.robot.topLeftCorner<3, 3>() += v * Matrix3d::Identity(); break;
+      case Kind::RobotRotation: model.robot.bottomRightCorner<3, 3>() += v * Matrix3d::Identity(); break;
+    }
+  }
+}
+
+/// The fit's data at a solution: fixed part, REML-completed scatter, factors.
+VarianceComponentData component_data(const JointProblem& problem, const std::vector<Free>& free, const NoiseModel& model,
+                                     const Solution& s) {
+  VarianceComponentData data;
+  for (const Free& c : free) {
+    if (rank_of(c.kind) > 0) add_factor_component(data, rank_of(c.kind));
+    else add_entry_component(data, c.a, c.b);
+  }
+  int column = 0;
+  for (std::size_t k = 0; k < free.size(); ++k) column = std::max(column, data.columns[k] + data.ranks[k]);
+  // The part of S_i that no free component touches.
+  NoiseModel fixed_model;
+  fixed_model.robot_free_or_given = model.robot_free_or_given;
+  bool scale_free = false;
+  for (const Free& c : free) scale_free = scale_free || c.kind == Kind::CameraScale;
+  fixed_model.camera_scale = scale_free ? 0.0 : model.camera_scale;
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  const std::size_t n = problem.size();
+  data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Term& t = problem.terms()[i];
+    const Linear& l = s.lin[i];
+    data.fixed[i] = fixed_model.covariance(t, l.D);
+    data.scatter[i] = l.e * l.e.transpose() + l.J * covariance * l.J.transpose();
+    data.factors[i].resize(6, column);
+    for (std::size_t k = 0; k < free.size(); ++k) {
+      if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], t, l.D);
+    }
+  }
+  return data;
+}
+
+/// The starting values of the free components from the residual scatter.
+Eigen::VectorXd initial_components(const std::vector<Free>& free, const Solution& s, const NoiseModel& model, int dof) {
+  Matrix6d scatter = Matrix6d::Zero();
+  for (const Linear& l : s.lin) scatter.noalias() += l.e * l.e.transpose();
+  scatter /= std::max(dof, 1);
+  const double t_var = scatter.diagonal().head<3>().mean(), r_var = scatter.diagonal().tail<3>().mean();
+  Eigen::VectorXd theta(free.size());
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const Free& c = free[k];
+    double v = 0.0;
+    switch (c.kind) {
+      case Kind::CameraScale: v = std::max(1.0, model.camera_scale); break;
+      case Kind::CameraAxis: v = 0.7 * scatter(c.a, c.a); break;
+      case Kind::CameraPair: v = 0.0; break;
+      case Kind::CameraTranslation: v = 0.7 * t_var; break;
+      case Kind::CameraRotation: v = 0.7 * r_var; break;
+      case Kind::RobotTranslation: v = 0.1 * t_var; break;
+      case Kind::RobotRotation: v = 0.1 * r_var; break;
+    }
+    theta[static_cast<Eigen::Index>(k)] = std::max(v, c.component.lower == -std::numeric_limits<double>::infinity()
+                                                          ? v : c.component.lower);
+  }
+  return theta;
+}
+
+/// 1 / (1 - q): the mean NEES of X over the noise estimate's error, per 6 (joint_estimator.h).
+double noise_inflation(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
+                       const Solution& s) {
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  const Matrix6d Sx_inverse = covariance.topLeftCorner<6, 6>().ldlt().solve(Matrix6d::Identity());
+  std::vector<int> active;
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    if (!fit.at_bound[k] && fit.covariance(k, k) > 0.0) active.push_back(static_cast<int>(k));
+  }
+  std::vector<Matrix6d> dSx(active.size(), Matrix6d::Zero());
+  std::vector<Matrix12d> sums(active.size(), Matrix12d::Zero());
+  for (std::size_t i = 0; i < problem.size(); ++i) {
+    const Matrix6x12 AJ = s.S[i].solve(s.lin[i].J);
+    for (std::size_t a = 0; a < active.size(); ++a) {
+      const Free& c = free[active[a]];
+      if (rank_of(c.kind) > 0) {
+        const auto F = factor(c, problem.terms()[i], s.lin[i].D);
+        const Eigen::Matrix<double, Eigen::Dynamic, 12> Q = F.transpose() * AJ;
+        sums[a].noalias() += s.weight[i] * Q.transpose() * Q;
+      } else {  // J^T A G_ab A J with G_ab = e_a e_b^T + e_b e_a^T (or e_a e_a^T)
+        const Eigen::Matrix<double, 12, 1> qa = AJ.row(c.a).transpose(), qb = AJ.row(c.b).transpose();
+        sums[a].noalias() += s.weight[i] * (c.a == c.b ? Matrix12d(qa * qa.transpose()) : Matrix12d(qa * qb.transpose() + qb * qa.transpose()));
+      }
+    }
+  }
+  for (std::size_t a = 0; a < active.size(); ++a) dSx[a] = (covariance * sums[a] * covariance).topLeftCorner<6, 6>();
+  double q = 0.0;
+  for (std::size_t a = 0; a < active.size(); ++a) {
+    for (std::size_t b = 0; b < active.size(); ++b) {
+      q += fit.covariance(active[a], active[b]) * (Sx_inverse * dSx[a] * Sx_inverse * dSx[b]).trace() / 6.0;
+    }
+  }
+  q = std::clamp(q, 0.0, 0.5);
+  return 1.0 / (1.0 - q);
+}
+
+/// Leverage-corrected squared Mahalanobis distances r^T (I - H_ii)^-1 r, r = L^-1 e_i,
+/// each chi2(6) under the model (H_ii: the sample's leverage in the whitened fit).
+std::vector<double> corrected_distances(const Solution& s) {
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  std::vector<double> out(s.lin.size());
+  for (std::size_t i = 0; i < s.lin.size(); ++i) {
+    const auto L = s.S[i].matrixL();
+    const Vector6d r = L.solve(s.lin[i].e);
+    const Matrix6x12 Jw = L.solve(s.lin[i].J);
+    const Matrix6d H = s.weight[i] * Jw * covariance * Jw.transpose();
+    const Eigen::LDLT<Matrix6d> ldlt(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
+    out[i] = std::max(0.0, r.dot(ldlt.solve(r)));
   }
   return out;
 }
 
-/// Each sample's weight S_i^-1 at (X, Y). S_i depends on X and Y only through
-/// the robot's term D_i Sigma_E D_i^T; the weights are held fixed while
-/// Gauss-Newton runs (so the cost it halves on is one function) and refreshed
-/// between runs until they no longer move the solution.
-std::vector<Matrix6d> weights(const SampleSet& set, const std::vector<SampleNoise>& noise, const Matrix6d* shared_camera,
-                              const Isometry3d& X, const Isometry3d& Y) {
-  std::vector<Matrix6d> W(set.samples.size());
-  for (std::size_t i = 0; i < set.samples.size(); ++i) {
-    Matrix6d S = shared_camera ? *shared_camera : noise[i].camera;
-    if (!noise[i].robot_is_zero) {
-      const JointResidual r = joint_residual(set.rig, set.samples[i], X, Y);
-      S.noalias() += r.d_effector * noise[i].robot * r.d_effector.transpose();
-    }
-    const Eigen::LLT<Matrix6d> llt(S);
-    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) {
-      throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
-                         "samples[" + std::to_string(i) + "]",
-                         "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
-                         "noise block to estimate it");
-    }
-    W[i] = llt.solve(Matrix6d::Identity());
-    W[i] = 0.5 * (W[i] + W[i].transpose());
+/// The same residuals as vectors, r~_i = (I - H_ii)^-1/2 r (HC2's symmetric root),
+/// each N(0, I) under the model: for the sandwich.
+std::vector<Vector6d> corrected_residuals(const Solution& s) {
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  std::vector<Vector6d> out(s.lin.size());
+  for (std::size_t i = 0; i < s.lin.size(); ++i) {
+    const auto L = s.S[i].matrixL();
+    const Vector6d r = L.solve(s.lin[i].e);
+    const Matrix6x12 Jw = L.solve(s.lin[i].J);
+    const Matrix6d H = s.weight[i] * Jw * covariance * Jw.transpose();
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
+    const Vector6d scale = eig.eigenvalues().cwiseMax(1e-6).cwiseSqrt().cwiseInverse();
+    out[i] = eig.eigenvectors() * scale.asDiagonal() * eig.eigenvectors().transpose() * r;
   }
-  return W;
+  return out;
 }
 
-/// The normal equations at (X, Y) under fixed weights.
-struct Linearization {
-  Matrix12d information = Matrix12d::Zero();
-  Vector12d gradient = Vector12d::Zero();
-  double cost = 0.0;
-  Matrix6d residual_scatter = Matrix6d::Zero();  // sum e e^T, for noise estimation
-};
-
-Linearization linearize(const SampleSet& set, const std::vector<Matrix6d>& W, const Isometry3d& X, const Isometry3d& Y) {
-  Linearization lin;
-  for (std::size_t i = 0; i < set.samples.size(); ++i) {
-    const JointResidual r = joint_residual(set.rig, set.samples[i], X, Y);
-    const Eigen::Matrix<double, 6, 12> WH = W[i] * r.jacobian;
-    const Vector6d We = W[i] * r.error;
-    lin.information.noalias() += r.jacobian.transpose() * WH;
-    lin.gradient.noalias() += r.jacobian.transpose() * We;
-    lin.cost += r.error.dot(We);
-    lin.residual_scatter.noalias() += r.error * r.error.transpose();
-  }
-  lin.information = 0.5 * (lin.information + lin.information.transpose());
-  return lin;
+/// Mardia's multivariate kurtosis of the corrected residuals as a z score
+/// (b2 = mean d^4 scaled to mean d^2 = 6; under the model E b2 = 48, var 384 / n).
+double kurtosis_z(const std::vector<double>& d2) {
+  double m2 = 0.0, m4 = 0.0;
+  for (double v : d2) m2 += v, m4 += v * v;
+  const double n = static_cast<double>(d2.size());
+  m2 /= n, m4 /= n;
+  if (!(m2 > 0.0)) return 0.0;
+  const double b2 = m4 / (m2 * m2) * 36.0;
+  return (b2 - 48.0) / std::sqrt(384.0 / n);
 }
 
-Isometry3d apply(const Isometry3d& T, const Vector6d& d) {
-  return se3::make_pose(so3::exp(d.tail<3>()) * T.linear(), T.translation() + d.head<3>());
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
 }
 
-struct JointSolution {
-  Isometry3d X, Y;
-  Linearization linearization;  // at the solution: its information gives the covariance
-  StageDiagnostics diagnostics;
-};
-
-/// Gauss-Newton with step halving from (X0, Y0) under fixed weights.
-JointSolution gauss_newton(const SampleSet& set, const std::vector<Matrix6d>& W, const Isometry3d& X0,
-                           const Isometry3d& Y0, const JointOptions& o) {
-  JointSolution s{X0, Y0, linearize(set, W, X0, Y0), {}};
-  for (int iteration = 1; iteration <= o.max_iterations; ++iteration) {
-    s.diagnostics.iterations = iteration;
-    const Eigen::LDLT<Matrix12d> ldlt(s.linearization.information);
-    Vector12d step = -ldlt.solve(s.linearization.gradient);
-    const double length = step.dot(s.linearization.information * step);
-    if (!std::isfinite(length)) break;  // a singular information: reported by the caller
-    Isometry3d X = apply(s.X, step.head<6>()), Y = apply(s.Y, step.tail<6>());
-    if (length < o.step_tolerance) {
-      // Below 1e-4 sigma: take it; the current linearisation is as good to first order.
-      s.X = X, s.Y = Y;
-      s.diagnostics.stop_reason = StopReason::StepBelowTolerance;
-      break;
+/// The sandwich A^-1 B A^-1 of the Huber M-estimate (joint_estimator.h).
+Matrix12d sandwich(const Solution& s, double k_scaled) {
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  Matrix12d A = Matrix12d::Zero(), B = Matrix12d::Zero();
+  const std::vector<Vector6d> corrected = corrected_residuals(s);
+  for (std::size_t i = 0; i < s.lin.size(); ++i) {
+    const auto L = s.S[i].matrixL();
+    const Vector6d r = L.solve(s.lin[i].e);
+    const Matrix6x12 Jw = L.solve(s.lin[i].J);
+    const double d = r.norm(), w = s.weight[i];
+    A.noalias() += w * Jw.transpose() * Jw;
+    if (w < 1.0) {  // d/dx of (k/d) Jw^T r: the weight's own change
+      const Vector12d g = Jw.transpose() * r;
+      A.noalias() -= (k_scaled / (d * d * d)) * g * g.transpose();
     }
-    Linearization next = linearize(set, W, X, Y);
-    for (int halving = 0; halving < 30 && next.cost > s.linearization.cost * (1.0 + 1e-12); ++halving) {
-      step *= 0.5;
-      X = apply(s.X, step.head<6>()), Y = apply(s.Y, step.tail<6>());
-      next = linearize(set, W, X, Y);
-    }
-    const double previous = s.linearization.cost;
-    if (next.cost <= previous * (1.0 + 1e-12)) s.X = X, s.Y = Y, s.linearization = std::move(next);
-    if (std::abs(previous - s.linearization.cost) <= 1e-14 * std::max(previous, 1e-300)) {
-      s.diagnostics.stop_reason = StopReason::CostChangeBelowTolerance;
-      break;
-    }
+    const Vector12d psi = w * Jw.transpose() * corrected[i];
+    B.noalias() += psi * psi.transpose();
   }
-  s.diagnostics.chi2 = s.linearization.cost;
-  s.diagnostics.dof = 6 * static_cast<int>(set.samples.size()) - 12;
-  return s;
-}
-
-/// Gauss-Newton, refreshing the weights (the robot's term) until a run starts converged.
-JointSolution solve_weighted(const SampleSet& set, const std::vector<SampleNoise>& noise, const Matrix6d* shared_camera,
-                             const Isometry3d& X0, const Isometry3d& Y0, const JointOptions& o) {
-  bool robot = false;
-  for (const SampleNoise& n : noise) robot = robot || !n.robot_is_zero;
-  JointSolution s = gauss_newton(set, weights(set, noise, shared_camera, X0, Y0), X0, Y0, o);
-  int iterations = s.diagnostics.iterations;
-  for (int round = 0; robot && round < 10; ++round) {
-    s = gauss_newton(set, weights(set, noise, shared_camera, s.X, s.Y), s.X, s.Y, o);
-    iterations += s.diagnostics.iterations;
-    if (s.diagnostics.iterations <= 1 && s.diagnostics.converged()) break;
-  }
-  s.diagnostics.iterations = iterations;
-  return s;
+  (void)covariance;
+  const Eigen::LDLT<Matrix12d> ldlt(0.5 * (A + A.transpose()));
+  const Matrix12d A_inverse = ldlt.solve(Matrix12d::Identity());
+  return A_inverse * B * A_inverse;
 }
 
 }  // namespace
+
+JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Isometry3d& X, const Isometry3d& Y) {
+  Term t;
+  t.V = rig.robot_link(sample.T_base_effector);
+  t.dV_dE = rig.robot_link_jacobian(sample.T_base_effector);
+  t.P = sample.T_camera_pattern;
+  Linear l;
+  linearize(t, Frame(X, Y), l);
+  JointResidual r;
+  r.error = l.e;
+  r.jacobian = l.J;
+  r.d_effector = l.D;
+  return r;
+}
 
 Calibration estimate(const SampleSet& samples, Method method) {
   return method == Method::Joint ? solve_joint(samples) : solve(samples);
@@ -192,67 +540,199 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     check_pose(samples.samples[i].T_camera_pattern, where + ".pattern");
   }
   bool given = false;
-  const std::vector<SampleNoise> noise = sample_noise(samples, given);
+  std::vector<Term> terms = make_terms(samples, given);
+  bool any_camera_stated = false, any_robot_stated = false;
+  for (const Term& t : terms) any_camera_stated = any_camera_stated || !t.camera.isZero(0.0), any_robot_stated = any_robot_stated || t.has_robot;
   const Isometry3d X0 = checked_initial_guess(samples, options.checks);  // throws the degeneracy errors
   std::vector<Isometry3d> loops;
   loops.reserve(samples.samples.size());
   for (const PoseSample& s : samples.samples) loops.push_back(samples.rig.pattern_pose(s.T_base_effector, X0, s.T_camera_pattern));
   const Isometry3d Y0 = mean_pose(loops);
+  JointProblem problem(std::move(terms), options);
 
   Calibration result;
   result.method = Method::Joint;
   result.initial_guess = X0;
   result.samples_used = n;
-  JointSolution s;
-  Matrix6d camera = Matrix6d::Zero();
-  double inflation = 1.0;  // estimated noise: see joint_estimator.h
+  result.motions_used = 0;
+  const int dof = n - 2;  // samples' worth of residuals left by the 12 parameters
+
+  NoiseModel model;
+  model.robot_free_or_given = any_robot_stated;
+  Solution s;
+  s.X = X0, s.Y = Y0;
+  bool chi2_failed = false;
   if (given) {
-    s = solve_weighted(samples, noise, nullptr, X0, Y0, options);
-    result.noise = samples.noise ? *samples.noise : MeasurementNoise{};
+    problem.gauss_newton(model, 0.0, s);
+    const int residual_dof = 6 * n - 12;
+    if (residual_dof >= 6) {
+      // chi2 against its 99.9% bound (Wilson-Hilferty).
+      const double v = 2.0 / (9.0 * residual_dof);
+      const double bound = residual_dof * std::pow(1.0 - v + options.chi2_test_z * std::sqrt(v), 3);
+      chi2_failed = s.chi2 > bound;
+      result.residual_checks.push_back({"chi2/dof of the stated noise", s.chi2 / residual_dof, bound / residual_dof, !chi2_failed});
+    }
+  } else if (n < 4) {
+    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                       "no noise was given and " + std::to_string(n) +
+                           " samples are too few to estimate the noise from the residuals (need >= 4)",
+                       "input", "add a `noise` block with the pose covariances, or record more samples");
   } else {
-    if (n < 4) {
-      throw HandEyeError(ErrorCode::NoiseUnidentifiable,
-                         "no noise was given and " + std::to_string(n) +
-                             " samples are too few to estimate a 6x6 noise from the residuals (need >= 4)",
-                         "input", "add a `noise` block with the pose covariances, or record more samples");
-    }
-    // A start of 1 mm and 0.1 deg per axis; then the residuals' own 6x6, iterated with the solve.
-    camera.diagonal() << Vector3d::Constant(1e-6), Vector3d::Constant(std::pow(0.1 * M_PI / 180.0, 2));
-    s = solve_weighted(samples, noise, &camera, X0, Y0, options);
-    // As many noise parameters as the residuals' dof support (joint_estimator.h).
-    const int dof = n - 2;
-    const auto model = [&](const Matrix6d& scatter) {
-      Matrix6d C = scatter / static_cast<double>(dof);
-      if (dof < options.full_noise_min_dof) C = Matrix6d(C.diagonal().asDiagonal());
-      if (dof < options.per_axis_noise_min_dof) {
-        C.diagonal() << Vector3d::Constant(C.diagonal().head<3>().mean()), Vector3d::Constant(C.diagonal().tail<3>().mean());
-      }
-      C.diagonal() = C.diagonal().cwiseMax(1e-18);  // (1e-9 m or rad)^2: noise-free input stays solvable
-      return C;
-    };
-    const bool full = dof >= options.full_noise_min_dof, per_axis = dof >= options.per_axis_noise_min_dof;
-    inflation = full ? dof / (dof - 7.0) : per_axis ? dof / (dof - 2.0) : 3.0 * dof / (3.0 * dof - 2.0);
-    result.noise_model = full ? "a full 6x6 camera noise" : per_axis ? "per-axis camera variances" : "one camera variance for translation and one for rotation";
-    result.noise_model += " from " + std::to_string(dof) + " samples' worth of residuals, robot taken as exact; covariance x" +
-                          number_text(inflation, 3) + " for the noise estimate's own uncertainty";
-    for (int round = 0; round < options.max_noise_rounds; ++round) {
-      const Matrix6d next = model(s.linearization.residual_scatter);
-      const double change = (next - camera).norm() / std::max(camera.norm(), 1e-300);
-      camera = next;
-      s = solve_weighted(samples, noise, &camera, s.X, s.Y, options);
-      if (change < options.noise_tolerance) break;
-    }
-    result.noise_origin = NoiseOrigin::EstimatedFromResiduals;
-    result.noise.camera = PoseNoise::from_pose_covariance(camera);
+    // A start of 1 mm and 0.1 deg per axis for the first solve.
+    model.camera.diagonal() << Vector3d::Constant(1e-6), Vector3d::Constant(std::pow(0.1 * M_PI / 180.0, 2));
+    problem.gauss_newton(model, 0.0, s);
   }
 
-  const Eigen::LDLT<Matrix12d> ldlt(s.linearization.information);
-  const Matrix12d covariance = ldlt.solve(Matrix12d::Identity());
-  if (ldlt.info() != Eigen::Success || !covariance.allFinite() || !(covariance.diagonal().array() > 0.0).all()) {
+  std::vector<Free> free = free_components(given, chi2_failed, any_camera_stated, dof, options);
+  std::vector<std::string> inseparable;  // robot components the camera's can mimic
+  double inflation = 1.0;
+  if (!free.empty()) {
+    std::vector<VarianceComponent> components;
+    if (std::any_of(free.begin(), free.end(), [](const Free& c) { return c.kind == Kind::CameraScale; })) {
+      set_camera_roots(problem.terms());
+    }
+    for (const Free& c : free) {
+      components.push_back(c.component);
+      model.robot_free_or_given = model.robot_free_or_given || c.kind == Kind::RobotTranslation || c.kind == Kind::RobotRotation;
+    }
+    Eigen::VectorXd theta = initial_components(free, s, model, dof);
+    VarianceComponentFit fit;
+    for (int round = 0; round < options.max_noise_rounds; ++round) {
+      apply_components(free, theta, model);
+      problem.gauss_newton(model, 0.0, s);
+      fit = fit_variance_components(components, component_data(problem, free, model, s), theta);
+      // A robot component the camera's can mimic (its sigma inflated 10x by the
+      // others) is not separable: held at 0, the camera's numbers take its share.
+      int confounded = -1;
+      for (std::size_t k = 0; k < free.size(); ++k) {
+        const bool robot_kind = free[k].kind == Kind::RobotTranslation || free[k].kind == Kind::RobotRotation;
+        const Eigen::Index i = static_cast<Eigen::Index>(k);
+        if (robot_kind && !fit.at_bound[k] && fit.information(i, i) * fit.covariance(i, i) > 100.0) confounded = static_cast<int>(k);
+      }
+      if (confounded >= 0) {
+        inseparable.push_back(free[confounded].component.name);
+        free.erase(free.begin() + confounded);
+        components.erase(components.begin() + confounded);
+        Eigen::VectorXd kept(theta.size() - 1);
+        for (Eigen::Index k = 0, j = 0; k < theta.size(); ++k) {
+          if (k != confounded) kept[j++] = theta[k];
+        }
+        theta = kept;
+        if (free.empty()) break;
+        continue;
+      }
+      double change = 0.0;
+      for (Eigen::Index k = 0; k < theta.size(); ++k) {
+        const double scale = fit.covariance(k, k) > 0.0 ? std::sqrt(fit.covariance(k, k)) : std::max(std::abs(theta[k]), 1e-300);
+        change = std::max(change, std::abs(fit.theta[k] - theta[k]) / scale);
+      }
+      theta = fit.theta;
+      if (change < 1e-2) break;
+    }
+    if (fit.theta.size() != theta.size() && !free.empty()) {  // the last round dropped a component
+      fit = fit_variance_components(components, component_data(problem, free, model, s), theta);
+      theta = fit.theta;
+    }
+    apply_components(free, theta, model);
+    if (!model.camera.isZero(0.0)) {  // a full 6x6 may come out indefinite where S_i is not: keep it a covariance
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(model.camera);
+      model.camera = eig.eigenvectors() * eig.eigenvalues().cwiseMax(1e-18).asDiagonal() * eig.eigenvectors().transpose();
+    }
+    problem.gauss_newton(model, 0.0, s);
+    inflation = noise_inflation(problem, free, fit, s);
+
+    result.noise_origin = given ? NoiseOrigin::Given : NoiseOrigin::EstimatedFromResiduals;
+    std::string text;
+    for (std::size_t k = 0; k < free.size(); ++k) {
+      const Free& c = free[k];
+      const double v = theta[static_cast<Eigen::Index>(k)], var = fit.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
+      Calibration::NoiseComponent out;
+      out.name = c.component.name;
+      out.at_bound = fit.at_bound[k];
+      if (c.kind == Kind::CameraScale) {
+        out.value = v, out.sigma = std::sqrt(std::max(var, 0.0));
+      } else if (c.kind == Kind::CameraPair) {  // as a correlation coefficient
+        const double norm = std::sqrt(std::max(model.camera(c.a, c.a) * model.camera(c.b, c.b), 1e-300));
+        out.name += " correlation";
+        out.value = v / norm, out.sigma = std::sqrt(std::max(var, 0.0)) / norm;
+      } else {  // a variance: report the sigma, and its uncertainty by the delta method
+        out.unit = c.kind == Kind::CameraRotation || c.kind == Kind::RobotRotation || (c.kind == Kind::CameraAxis && c.a >= 3) ? "rad" : "m";
+        out.value = std::sqrt(std::max(v, 0.0));
+        out.sigma = out.value > 0.0 ? std::sqrt(std::max(var, 0.0)) / (2.0 * out.value) : 0.0;
+      }
+      result.noise_components.push_back(out);
+    }
+    if (given) {
+      text = "the stated noise is too small for the residuals (chi2/dof " +
+             number_text(result.residual_checks.back().statistic, 3) + "); estimated the missing part: ";
+    } else {
+      const bool full = dof >= options.full_noise_min_dof, per_axis = dof >= options.per_axis_noise_min_dof;
+      text = full ? "a full 6x6 camera noise" : per_axis ? "per-axis camera variances" : "one camera variance for translation and one for rotation";
+      text += dof >= options.robot_noise_min_dof ? " and the robot's rotation noise" : ", robot taken as exact";
+      text += " from " + std::to_string(dof) + " samples' worth of residuals: ";
+    }
+    text += free.empty() ? "nothing separable" : "";
+    for (std::size_t k = 0; k < result.noise_components.size(); ++k) {
+      const Calibration::NoiseComponent& c = result.noise_components[k];
+      if (free[k].kind == Kind::CameraPair) continue;  // in the result file; the text names the variances
+      const double unit = c.unit == "m" ? 1e3 : c.unit == "rad" ? 180.0 / M_PI : 1.0;
+      text += (k ? ", " : "") + c.name + " " + number_text(c.value * unit, 3) +
+              (c.unit == "m" ? " mm" : c.unit == "rad" ? " deg" : "") +
+              (c.at_bound ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));
+    }
+    if (!given) text += "; the robot's translation noise cannot be told from the camera's and is part of it";
+    for (const std::string& name : inseparable) text += "; " + name + " not separable from the camera's: part of it";
+    result.noise_model = text + "; covariance x" + number_text(inflation, 3) + " for the noise estimate's own uncertainty";
+    if (given) {
+      result.warnings.push_back("the stated noise is too small: residuals are " +
+                                number_text(std::sqrt(result.residual_checks.back().statistic), 2) +
+                                "x what it predicts; the covariance uses the estimated missing noise (see noise_model)");
+    }
+  } else if (given) {
+    result.noise = samples.noise ? *samples.noise : MeasurementNoise{};
+  }
+  if (!free.empty()) {
+    Matrix6d camera_mean = Matrix6d::Zero(), robot_mean = Matrix6d::Zero();
+    for (const Term& t : problem.terms()) camera_mean += t.camera / n, robot_mean += t.robot / n;
+    result.noise.camera = PoseNoise::from_pose_covariance(model.camera_scale * camera_mean + model.camera);
+    result.noise.robot = PoseNoise::from_pose_covariance(robot_mean + model.robot);
+  }
+
+  // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
+  Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity()) * inflation;
+  bool robust = options.robust == JointOptions::Robust::On;
+  if (n >= 8 && options.robust != JointOptions::Robust::Off) {
+    const double z = kurtosis_z(corrected_distances(s));
+    const bool passed = z <= options.kurtosis_test_z;
+    result.residual_checks.push_back({"kurtosis z of the Mahalanobis residuals", z, options.kurtosis_test_z, passed});
+    robust = robust || !passed;
+  }
+  if (robust && n > 12) {
+    const std::vector<double> d2 = corrected_distances(s);
+    const double scale = std::sqrt(std::max(median(d2) / 5.348, 1e-12));
+    const double k_scaled = std::sqrt(options.huber_threshold_squared) * scale;
+    for (int round = 0; round < options.max_robust_rounds; ++round) {
+      const std::vector<double> before = s.weight;
+      problem.gauss_newton(model, k_scaled, s);
+      double change = 0.0;
+      for (std::size_t i = 0; i < before.size(); ++i) change = std::max(change, std::abs(before[i] - s.weight[i]));
+      if (round > 0 && change < 1e-6) break;
+    }
+    const double nu = n - 12.0;
+    const double small_sample = nu > 8.0 ? nu / (nu - 7.0) : 8.0;
+    covariance = sandwich(s, k_scaled) * small_sample;
+    inflation = small_sample;
+    result.loss = "huber";
+    result.covariance_kind = "sandwich";
+    result.downweighted = static_cast<int>(std::count_if(s.weight.begin(), s.weight.end(), [](double w) { return w < 1.0; }));
+  }
+  result.covariance_inflation = inflation;
+
+  if (!covariance.allFinite() || !(covariance.diagonal().array() > 0.0).all()) {
     throw HandEyeError(ErrorCode::PoorlyConstrained, "the samples do not determine X and the pattern pose together",
                        "input", "add samples that rotate the flange about different axes");
   }
-  const Eigen::Matrix<double, 12, 12> symmetric = 0.5 * inflation * (covariance + covariance.transpose());
+  const Matrix12d symmetric = 0.5 * (covariance + covariance.transpose());
   result.T_parent_camera = s.X;
   result.pose_covariance = symmetric.topLeftCorner<6, 6>();
   result.translation_covariance = result.pose_covariance.topLeftCorner<3, 3>();
@@ -260,7 +740,6 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   result.pattern = PoseWithCovariance{s.Y, symmetric.bottomRightCorner<6, 6>()};
   result.cross_covariance = symmetric.topRightCorner<6, 6>();
   result.rotation_stage = result.translation_stage = s.diagnostics;
-  result.motions_used = 0;
 
   const double rotation_sigma = max_sigma(result.rotation_covariance);
   if (!(rotation_sigma <= options.checks.max_rotation_sigma)) {
@@ -268,15 +747,6 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
                        "the samples constrain the rotation only to " + number_text(rotation_sigma * 180.0 / M_PI) +
                            " deg (1 sigma); a first-order covariance is not valid there",
                        "input", "add samples with larger rotations about different axes, or reduce the noise");
-  }
-  if (given && s.diagnostics.dof >= 12) {
-    const double ratio = s.diagnostics.chi2 / s.diagnostics.dof;
-    if (ratio > 3.0) {
-      result.warnings.push_back("residuals are " + number_text(std::sqrt(ratio), 2) +
-                                "x larger than the stated noise predicts (chi2/dof = " + number_text(ratio, 3) +
-                                "); the covariance is likely optimistic. Check the noise block or estimate it "
-                                "(omit it, or use `handeye noise`).");
-    }
   }
   return result;
 }

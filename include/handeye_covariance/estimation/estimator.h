@@ -19,6 +19,7 @@
 //     block. Its cost is O(k): each input noise touches at most two motions.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -118,6 +119,27 @@ struct Calibration {
   /// camera noise, robot taken as exact) when none was given.
   MeasurementNoise noise;
   std::string noise_model;  // when estimated: which model the residuals supported, e.g. "a full 6x6 camera noise ..."
+  /// Joint: each noise number the residuals estimated (joint_estimator.h).
+  struct NoiseComponent {
+    std::string name;      // e.g. "camera z", "robot rotation", "stated camera noise scale"
+    std::string unit;      // "m", "rad" (value is a sigma) or "" (a scale of variances)
+    double value = 0.0;    // sigma (m, rad) or the scale
+    double sigma = 0.0;    // 1 sigma of that value, from the residuals (0 when at its bound)
+    bool at_bound = false; // the residuals do not support it: held at 0 (or its lowest value)
+  };
+  std::vector<NoiseComponent> noise_components;
+  /// Joint: the check of the residuals against the noise model and what followed.
+  struct ResidualCheck {
+    std::string test;        // e.g. "chi2 of the stated noise", "kurtosis of the Mahalanobis residuals"
+    double statistic = 0.0;  // chi2/dof, or the kurtosis z score
+    double bound = 0.0;      // the statistic's 99.9% bound under the model
+    bool passed = true;
+  };
+  std::vector<ResidualCheck> residual_checks;
+  std::string loss = "squared";              // or "huber": samples far out weigh less (robust mode)
+  std::string covariance_kind = "information";  // or "sandwich": model-robust (robust mode)
+  int downweighted = 0;                      // robust mode: samples the Huber loss weighed below 1
+  double covariance_inflation = 1.0;         // the factor for the noise estimate's (or the sandwich's) own uncertainty
   std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
 
   /// Samples left out by solve_robust (outliers.h), indices into its input.
@@ -131,6 +153,19 @@ struct Calibration {
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of
 /// sum beta_i alpha_i^T, then t by linear least squares. Throws on < 2 motions.
 Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions);
+
+/// What the degeneracy checks of both estimators read: each motion's rotation
+/// vectors log R_A, log R_B, and the 1 sigma of their angle difference.
+struct MotionRotations {
+  std::vector<Eigen::Vector3d> alpha, beta;
+  std::vector<double> sigma;  // 0 when the noise is not given
+  bool noise_given = true;
+  std::function<std::string(std::size_t)> label;  // where motion i came from, for messages
+};
+/// Throws the named degeneracy errors: TooFewMotions, AngleMismatch (far beyond
+/// the noise and the other motions), PureTranslation, RotationTooSmallForNoise,
+/// ParallelRotationAxes.
+void check_motion_rotations(const MotionRotations& motions, const SolverOptions& options);
 
 /// The closed-form start for pose input in O(n): the degeneracy checks of
 /// solve() (it throws the same named errors) on consecutive motions, then

@@ -19,18 +19,37 @@
 // Start: the degeneracy checks and Park-Martin of estimator.h on consecutive
 // motions (O(n)), then Y from the mean of the loop closures.
 //
-// Noise: as given (per sample, else the global block). With none given, the
-// camera noise is estimated as one full 6x6 in the camera frame (where depth
-// dominates), iterated with the solve: Sigma_c = sum e e^T / (n - 2) (12
-// parameters absorb 2 samples' worth of the 6n residuals); the robot is taken
-// as exact, its noise then part of the camera's. The model has as many numbers as
-// the residuals' dof nu = n - 2 support: the full 6x6 from nu >= 60, the 6
-// per-axis variances from nu >= 12 (depth stays apart from lateral), else one
-// translation and one rotation variance. A noise estimated from nu dof is itself
-// uncertain: the covariance of (X, Y) is the expected one over that uncertainty,
-// the point value times nu / (nu - 7) (full: the inverse-Wishart mean), nu / (nu - 2)
-// (per axis: the inverse-gamma mean), or 3 nu / (3 nu - 2) (pooled), so that the
-// NEES of X stays about 6 (Monte-Carlo in test_joint_estimator).
+// Noise (joint_estimator.cpp, variance_components.h). Each sample's residual
+// covariance is
+//     S_i = c Sigma_P,i + C + D_i (Sigma_E,i + R) D_i^T,
+// the stated detector noise Sigma_P,i (scaled by c, 1 when trusted), an estimated
+// camera noise C (camera frame, where depth dominates), the stated robot noise
+// Sigma_E,i and an estimated robot noise R (isotropic: one translation and one
+// rotation variance), carried into the camera by D_i. What is estimated:
+//   - no noise given: C with as many numbers as the residuals' dof nu = n - 2
+//     support (the full 6x6 from nu >= 60, the 6 per-axis variances from 12, else
+//     one for translation and one for rotation), and R from nu >= 6: the robot's
+//     share is told from the camera's by how D_i turns it from pose to pose;
+//   - noise given, and the residuals pass chi2 at 99.9%: nothing;
+//   - noise given, and they fail: the missing part, c and R (C when no camera
+//     noise was stated). A warning says so.
+// The numbers are fitted by REML, alternating with the solve, and reported with
+// their uncertainty (Calibration::noise_components); one at its bound (0) is one
+// the residuals do not support. A noise estimated from few residuals is itself
+// uncertain: the covariance is multiplied by 1 / (1 - q), q = (1/6) sum_kl
+// Cov(theta)_kl tr(Sx^-1 dSx/dtheta_k Sx^-1 dSx/dtheta_l), the second-order mean
+// of the NEES of X over the noise estimate's error (it is nu / (nu - 2) for one
+// scale from nu dof), so the NEES of X stays about 6.
+//
+// Robust mode. The Mahalanobis residuals d_i (leverage-corrected, so each is
+// chi2(6) under the model) are tested for heavy tails (Mardia's kurtosis, z
+// beyond 3.09). When they fail (or robust mode is on): Huber's loss by iteratively
+// reweighted least squares (weight min(1, k s / d_i), k^2 the chi2(6) 90% quantile,
+// s^2 the robust scale median(d^2) / 5.348), and the model-robust sandwich
+// covariance A^-1 B A^-1 (A the Hessian of the robust cost, B the sum of the
+// samples' score outer products, each residual leverage-corrected, HC2), times
+// nu / (nu - 7), nu = n - 12, Hotelling's mean for a 6x6 estimated from nu dof.
+// The result says which test ran, its figure and what was used.
 #pragma once
 
 #include "handeye_covariance/estimation/estimator.h"
@@ -48,6 +67,16 @@ struct JointOptions {
   /// else per-axis variances from 6, else one translation and one rotation variance.
   int full_noise_min_dof = 60;
   int per_axis_noise_min_dof = 12;
+  /// Robot noise estimated (no noise given) from this many samples' worth of residuals.
+  int robot_noise_min_dof = 6;
+  /// The stated noise is refused beyond this many sigma of chi2 (about the 99.9% quantile).
+  double chi2_test_z = 3.09;
+  enum class Robust { Auto, Off, On };
+  /// Auto: the Huber loss and the sandwich covariance when the kurtosis test fails.
+  Robust robust = Robust::Auto;
+  double kurtosis_test_z = 3.09;
+  double huber_threshold_squared = 10.645;  // chi2(6) 90% quantile
+  int max_robust_rounds = 30;
   SolverOptions checks;  // the degeneracy checks of the start
 };
 

@@ -1,0 +1,79 @@
+// Noise from the residuals: variance components of 6-vector residuals, by REML
+// Fisher scoring (Harville 1977; the "variance components" of linear mixed models).
+//
+// Each sample i has a residual e_i (6) whose covariance is modelled as
+//     S_i(theta) = S0_i + sum_k theta_k F_ik F_ik^T,
+// with S0_i known (a stated noise, or zero) and each component k given per
+// sample by a factor F_ik (6 x r_k): a camera axis (e_j), a robot block mapped
+// into the residual (D_i's columns), a stated covariance to be scaled (its
+// square root), ... The fit is restricted maximum likelihood: the residuals come
+// from a fit that absorbed some of them, so each sample's scatter e e^T is
+// completed by what the fit took, M_i = e_i e_i^T + J_i Sigma J_i^T (J_i the
+// residual's Jacobian to the fitted parameters, Sigma their covariance). The
+// REML score and expected information are then, per component,
+//     g_k  = 1/2 sum_i tr(A_i F_k F_k^T A_i (M_i - S_i)),      A_i = S_i^-1,
+//     F_kl = 1/2 sum_i ||F_ik^T A_i F_il||_F^2,
+// and theta <- theta + F^-1 g, halved while the likelihood does not rise or a
+// bound is crossed. F^-1 at the solution is the covariance of theta_hat: how
+// well the residuals determine each component, and whether two of them can be
+// told apart (their correlation).
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/lie.h"
+
+namespace handeye {
+
+struct VarianceComponent {
+  std::string name;
+  /// theta_k >= lower (a variance: 0; a scale of a stated noise: > 0). Components
+  /// with lower = -infinity (covariances between axes) are kept by checking that
+  /// every S_i stays positive definite instead.
+  double lower = 0.0;
+};
+
+struct VarianceComponentData {
+  std::vector<Matrix6d> fixed;     // S0_i
+  std::vector<Matrix6d> scatter;   // M_i = e e^T + J Sigma J^T
+  /// factors[i] holds the factors of every component side by side (6 x sum r_k);
+  /// columns[k] is where component k's factor starts, ranks[k] its width.
+  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> factors;
+  std::vector<int> columns, ranks;
+  /// A component with rank 0 is one entry of a covariance shared by every sample:
+  /// entries[k] = (a, b) adds theta_k (e_a e_b^T + e_b e_a^T), or theta_k e_a e_a^T
+  /// when a == b. Its score and information come from S_i^-1's own entries.
+  std::vector<std::pair<int, int>> entries;
+};
+
+struct VarianceComponentFit {
+  Eigen::VectorXd theta;
+  Eigen::MatrixXd covariance;   // of theta_hat: the inverse expected information (0 for components at a bound)
+  Eigen::MatrixXd information;  // the expected information at theta_hat
+  double log_likelihood = 0.0;  // the REML criterion at theta (up to a constant)
+  int iterations = 0;
+  bool converged = false;
+  std::vector<bool> at_bound;  // theta_k at its lower bound: the residuals do not support it
+};
+
+struct VarianceComponentOptions {
+  int max_iterations = 30;
+  double tolerance = 1e-3;  // stop when every |step_k| < tolerance * sqrt(covariance_kk)
+};
+
+/// Fisher scoring from theta0 (within the bounds). Throws nothing; a component
+/// whose information is zero stays where it started and is reported at_bound.
+VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent>& components,
+                                             const VarianceComponentData& data, const Eigen::VectorXd& theta0,
+                                             const VarianceComponentOptions& options = {});
+
+/// Adds a component to `data` (factor columns, or a shared covariance entry).
+void add_factor_component(VarianceComponentData& data, int rank);
+void add_entry_component(VarianceComponentData& data, int a, int b);
+
+/// S_i at theta.
+Matrix6d component_covariance(const VarianceComponentData& data, std::size_t i, const Eigen::VectorXd& theta);
+
+}  // namespace handeye

@@ -1,0 +1,224 @@
+#include "handeye_covariance/estimation/variance_components.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <limits>
+
+namespace handeye {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+namespace {
+
+/// theta expanded to one weight per factor column, and the shared entries' matrix.
+VectorXd column_weights(const VarianceComponentData& data, const VectorXd& theta) {
+  int width = 0;
+  for (std::size_t k = 0; k < data.columns.size(); ++k) width = std::max(width, data.columns[k] + data.ranks[k]);
+  VectorXd w(width);
+  for (std::size_t k = 0; k < data.columns.size(); ++k) {
+    if (data.ranks[k] > 0) w.segment(data.columns[k], data.ranks[k]).setConstant(theta[k]);
+  }
+  return w;
+}
+
+Matrix6d shared_entries(const VarianceComponentData& data, const VectorXd& theta) {
+  Matrix6d C = Matrix6d::Zero();
+  for (std::size_t k = 0; k < data.entries.size(); ++k) {
+    const auto [a, b] = data.entries[k];
+    if (a < 0) continue;
+    C(a, b) += theta[k];
+    if (a != b) C(b, a) += theta[k];
+  }
+  return C;
+}
+
+struct Evaluation {
+  double log_likelihood = -std::numeric_limits<double>::infinity();  // -inf: some S_i not positive definite
+  VectorXd score;
+  MatrixXd information;          // expected: 1/2 tr(A G_k A G_l), for the covariance of theta
+  MatrixXd average_information;  // AI-REML: 1/2 tr(A G_k A G_l A M), for the steps (near Newton's)
+};
+
+Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bool derivatives) {
+  const int K = static_cast<int>(data.columns.size());
+  const VectorXd w = column_weights(data, theta);
+  const Matrix6d shared = shared_entries(data, theta);
+  std::vector<int> factor_components, entry_components;
+  for (int k = 0; k < K; ++k) (data.ranks[k] > 0 ? factor_components : entry_components).push_back(k);
+  Evaluation ev;
+  double log_likelihood = 0.0;
+  if (derivatives) {
+    ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
+  }
+  for (std::size_t i = 0; i < data.fixed.size(); ++i) {
+    const auto& F = data.factors[i];
+    const Matrix6d S = data.fixed[i] + shared + F * w.asDiagonal() * F.transpose();
+    const Eigen::LLT<Matrix6d> llt(S);
+    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) return ev;
+    const Matrix6d A = llt.solve(Matrix6d::Identity());
+    log_likelihood -= 0.5 * (2.0 * llt.matrixLLT().diagonal().array().log().sum() + (A * data.scatter[i]).trace());
+    if (!derivatives) continue;
+    const Matrix6d Q = A * data.scatter[i] * A;  // A M A; the score's kernel is Q - A
+    const Matrix6d B = Q - A;
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> AF = A * F, QF = Q * F;
+    const MatrixXd Z = F.transpose() * AF, W = F.transpose() * QF;  // F^T A F, F^T Q F
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> BF = QF - AF;
+    // Score 1/2 tr(B G_k), information 1/2 tr(A G_k A G_l), average information
+    // 1/2 tr(A G_k A G_l Q), by the kind of G. G_ab = e_a e_b^T + e_b e_a^T, or
+    // e_a e_a^T when a == b (each diagonal counts half).
+    for (int k : factor_components) {
+      const int ck = data.columns[k], rk = data.ranks[k];
+      ev.score[k] += 0.5 * F.middleCols(ck, rk).cwiseProduct(BF.middleCols(ck, rk)).sum();
+      for (int l : factor_components) {
+        if (l > k) continue;
+        const auto z = Z.block(ck, data.columns[l], rk, data.ranks[l]);
+        ev.information(k, l) += 0.5 * z.squaredNorm();
+        ev.average_information(k, l) += 0.5 * z.cwiseProduct(W.block(ck, data.columns[l], rk, data.ranks[l])).sum();
+      }
+    }
+    for (int k : entry_components) {
+      const auto [a, b] = data.entries[k];
+      ev.score[k] += a == b ? 0.5 * B(a, a) : B(a, b);
+      for (int l : entry_components) {
+        if (l > k) continue;
+        const auto [c, d] = data.entries[l];
+        const double half = (a == b ? 0.5 : 1.0) * (c == d ? 0.5 : 1.0);
+        ev.information(k, l) += half * (A(a, c) * A(b, d) + A(a, d) * A(b, c));
+        ev.average_information(k, l) +=
+            0.5 * half * (A(b, c) * Q(d, a) + A(b, d) * Q(c, a) + A(a, c) * Q(d, b) + A(a, d) * Q(c, b));
+      }
+      for (int l : factor_components) {
+        const int cl = data.columns[l], rl = data.ranks[l];
+        const double half = a == b ? 0.5 : 1.0;
+        const double e = half * 2.0 * 0.5 * AF.row(a).segment(cl, rl).dot(AF.row(b).segment(cl, rl));
+        const double ai = half * 0.5 * (AF.row(b).segment(cl, rl).dot(QF.row(a).segment(cl, rl)) +
+                                        AF.row(a).segment(cl, rl).dot(QF.row(b).segment(cl, rl)));
+        const int r = std::max(k, l), c = std::min(k, l);
+        ev.information(r, c) += e;
+        ev.average_information(r, c) += ai;
+      }
+    }
+  }
+  if (derivatives) {
+    ev.information = ev.information.selfadjointView<Eigen::Lower>();
+    ev.average_information = ev.average_information.selfadjointView<Eigen::Lower>();
+  }
+  ev.log_likelihood = log_likelihood;
+  return ev;
+}
+
+}  // namespace
+
+void add_factor_component(VarianceComponentData& data, int rank) {
+  int column = 0;
+  for (std::size_t k = 0; k < data.columns.size(); ++k) column = std::max(column, data.columns[k] + data.ranks[k]);
+  data.columns.push_back(column), data.ranks.push_back(rank), data.entries.emplace_back(-1, -1);
+}
+
+void add_entry_component(VarianceComponentData& data, int a, int b) {
+  int column = 0;
+  for (std::size_t k = 0; k < data.columns.size(); ++k) column = std::max(column, data.columns[k] + data.ranks[k]);
+  data.columns.push_back(column), data.ranks.push_back(0), data.entries.emplace_back(a, b);
+}
+
+Matrix6d component_covariance(const VarianceComponentData& data, std::size_t i, const VectorXd& theta) {
+  const VectorXd w = column_weights(data, theta);
+  return data.fixed[i] + shared_entries(data, theta) + data.factors[i] * w.asDiagonal() * data.factors[i].transpose();
+}
+
+VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent>& components,
+                                             const VarianceComponentData& data, const VectorXd& theta0,
+                                             const VarianceComponentOptions& options) {
+  const int K = static_cast<int>(components.size());
+  VarianceComponentFit fit;
+  fit.theta = theta0;
+  Evaluation current = evaluate(data, fit.theta, true);
+  for (int iteration = 1; iteration <= options.max_iterations && std::isfinite(current.log_likelihood); ++iteration) {
+    fit.iterations = iteration;
+    // Active set: a component at its bound stays there when its score, or its
+    // Newton step given the others, points outwards; the step is then re-solved.
+    std::vector<int> free;
+    for (int k = 0; k < K; ++k) {
+      const bool held = fit.theta[k] <= components[k].lower && current.score[k] <= 0.0;
+      if (!held && current.average_information(k, k) > 0.0) free.push_back(k);
+    }
+    VectorXd step, variance;
+    for (;;) {
+      MatrixXd information(free.size(), free.size());
+      VectorXd score(free.size());
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        score[a] = current.score[free[a]];
+        for (std::size_t b = 0; b < free.size(); ++b) information(a, b) = current.average_information(free[a], free[b]);
+      }
+      // Jacobi-scaled: translation and rotation variances differ by ~1e10.
+      const VectorXd scale = information.diagonal().cwiseSqrt().cwiseInverse();
+      const Eigen::LDLT<MatrixXd> ldlt(scale.asDiagonal() * information * scale.asDiagonal());
+      step = scale.asDiagonal() * ldlt.solve(scale.asDiagonal() * score);
+      variance = (scale.asDiagonal() * ldlt.solve(MatrixXd::Identity(free.size(), free.size())) * scale.asDiagonal()).diagonal();
+      int outward = -1;
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        if (fit.theta[free[a]] <= components[free[a]].lower && step[a] < 0.0) outward = static_cast<int>(a);
+      }
+      if (outward < 0) break;
+      free.erase(free.begin() + outward);
+    }
+    if (free.empty()) {
+      fit.converged = true;
+      break;
+    }
+    if (!step.allFinite()) break;
+    bool small = true;
+    for (std::size_t a = 0; a < free.size(); ++a) {
+      small = small && std::abs(step[a]) <= options.tolerance * std::sqrt(std::max(variance[a], 0.0));
+    }
+    double alpha = 1.0;
+    bool moved = false;
+    for (int halving = 0; halving < 30; ++halving, alpha *= 0.5) {
+      VectorXd theta = fit.theta;
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        const int k = free[a];
+        theta[k] = std::max(components[k].lower, theta[k] + alpha * step[a]);
+      }
+      const Evaluation next = evaluate(data, theta, false);
+      if (next.log_likelihood >= current.log_likelihood - 1e-12 * std::abs(current.log_likelihood)) {
+        // A rise of 1e-6 in log-likelihood is nothing statistically: converged.
+        small = small || next.log_likelihood - current.log_likelihood < 1e-6;
+        fit.theta = theta;
+        current = evaluate(data, theta, true);
+        moved = true;
+        break;
+      }
+    }
+    if (small || !moved) {
+      fit.converged = true;
+      break;
+    }
+  }
+  fit.log_likelihood = current.log_likelihood;
+  fit.information = current.information;
+  fit.at_bound.assign(K, false);
+  for (int k = 0; k < K; ++k) fit.at_bound[k] = fit.theta[k] <= components[k].lower;
+  // The covariance of the components that are not at a bound (those at one are held).
+  fit.covariance = MatrixXd::Zero(K, K);
+  if (std::isfinite(current.log_likelihood)) {
+    std::vector<int> free;
+    for (int k = 0; k < K; ++k) {
+      if (!fit.at_bound[k] && current.information(k, k) > 0.0) free.push_back(k);
+    }
+    MatrixXd information(free.size(), free.size());
+    for (std::size_t a = 0; a < free.size(); ++a) {
+      for (std::size_t b = 0; b < free.size(); ++b) information(a, b) = current.information(free[a], free[b]);
+    }
+    const VectorXd scale = information.diagonal().cwiseSqrt().cwiseInverse();
+    const MatrixXd inverse = scale.asDiagonal() *
+                             (scale.asDiagonal() * information * scale.asDiagonal()).ldlt().solve(MatrixXd::Identity(free.size(), free.size())) *
+                             scale.asDiagonal();
+    for (std::size_t a = 0; a < free.size(); ++a) {
+      for (std::size_t b = 0; b < free.size(); ++b) fit.covariance(free[a], free[b]) = inverse(a, b);
+    }
+  }
+  return fit;
+}
+
+}  // namespace handeye
