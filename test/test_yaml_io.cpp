@@ -191,6 +191,52 @@ TEST(YamlIo, PoseAsAMatrixIsTheSamePoseAndBadRotationsAreRefused) {
   expect_parse_error(with_effector_matrix("1, 0, 0,  0, 1, 0,  0, 0, 1"), ErrorCode::WrongLength, "expected 16");
 }
 
+TEST(YamlIo, ARobotPoseFileIsReadInEveryFormatUsersKeep) {
+  const Isometry3d pose = se3::make_pose(so3::exp(Eigen::Vector3d(0.3, -1.2, 2.0)), Eigen::Vector3d(0.72, -0.03, 0.41));
+  const Eigen::Quaterniond q(pose.linear());
+  const Eigen::Vector3d tu = so3::log(pose.linear());
+  const Eigen::Matrix4d m = pose.matrix();
+  std::string yaml_matrix = "matrix: [", plain, csv;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      const std::string v = number_text(m(r, c), 17);
+      yaml_matrix += v + (r == 3 && c == 3 ? "]" : ", ");
+      plain += v + (c == 3 ? "\n" : " ");
+      csv += v + (c == 3 ? "\n" : ",");
+    }
+  }
+  const std::string t = number_text(pose.translation().x(), 17) + ", " + number_text(pose.translation().y(), 17) + ", " +
+                        number_text(pose.translation().z(), 17);
+  const std::string quaternion = "translation: [" + t + "]\nrotation: [" + number_text(q.x(), 17) + ", " +
+                                 number_text(q.y(), 17) + ", " + number_text(q.z(), 17) + ", " + number_text(q.w(), 17) + "]\n";
+  const std::string json = "{\"translation\": [" + t + "], \"rotation\": [" + number_text(q.x(), 17) + ", " +
+                           number_text(q.y(), 17) + ", " + number_text(q.z(), 17) + ", " + number_text(q.w(), 17) + "]}";
+  // ViSP's vpPoseVector, as franka_pose_rPe_<i>.yaml holds it.
+  const std::string visp = "rows: 6\ncols: 1\ndata:\n  - [" + number_text(pose.translation().x(), 17) + "]\n  - [" +
+                           number_text(pose.translation().y(), 17) + "]\n  - [" + number_text(pose.translation().z(), 17) +
+                           "]\n  - [" + number_text(tu.x(), 17) + "]\n  - [" + number_text(tu.y(), 17) + "]\n  - [" +
+                           number_text(tu.z(), 17) + "]\n";
+  for (const std::string& text : {yaml_matrix, plain, csv, quaternion, json, visp}) {
+    EXPECT_LE((io::parse_robot_pose(text, "pose.txt").matrix() - m).norm(), 1e-12) << text;
+  }
+  const auto refused = [](const std::string& text, ErrorCode code, const std::string& what) {
+    try {
+      io::parse_robot_pose(text, "pose.yaml");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const HandEyeError& e) {
+      EXPECT_EQ(e.code(), code) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("pose.yaml"), std::string::npos) << e.what();
+    }
+  };
+  refused("1 0 0 0.1\n0 1 0 0.2\n0 0 1 0.3\n", ErrorCode::WrongLength, "16 numbers");
+  refused("1 0 0 0.1\n0 1 0 0.2\n0 0 2 0.3\n0 0 0 1\n", ErrorCode::RotationNotOrthonormal, "not a rotation");
+  refused("rows: 6\ncols: 1\ndata: [[0.1], [0.2], [0.3], [0.0], [0.1]]\n", ErrorCode::WrongLength, "6 rows");
+  refused("data: [[0.1], [0.2], [.nan], [0.0], [0.1], [0.2]]\n", ErrorCode::NonFinite, "NaN");
+  refused("data: [[0.1], [0.2], [x], [0.0], [0.1], [0.2]]\n", ErrorCode::MalformedFile, "number");
+  refused("[1, 2, 3]", ErrorCode::MalformedFile, "not a YAML mapping");
+}
+
 TEST(YamlIo, ReadInputTellsSamplesFromMotions) {
   const std::string dir = ::testing::TempDir();
   io::write_file_atomically(dir + "/s.yaml", kValid);

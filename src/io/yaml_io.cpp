@@ -590,6 +590,68 @@ PoseFile parse_pose_file(const std::string& text, const std::string& source) {
 
 PoseFile read_pose_file(const std::string& path) { return parse_pose_file(read_file(path), path); }
 
+namespace {
+
+/// Numbers separated by white space, commas or semicolons; nullopt when the text
+/// holds anything else (so it is not a plain-text matrix).
+std::optional<std::vector<double>> plain_numbers(const std::string& text) {
+  std::string spaced = text;
+  for (char& c : spaced) {
+    if (c == ',' || c == ';') c = ' ';
+  }
+  std::istringstream in(spaced);
+  std::vector<double> values;
+  std::string word;
+  while (in >> word) {
+    char* end = nullptr;
+    const double v = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0') return std::nullopt;
+    values.push_back(v);
+  }
+  return values;
+}
+
+}  // namespace
+
+Eigen::Isometry3d parse_robot_pose(const std::string& text, const std::string& source) {
+  const Location at{source, ""};
+  const std::string hint =
+      "a robot pose file holds T_base_effector (m) as {matrix: [16 numbers, row-major]}, {translation: [x, y, z], "
+      "rotation: [qx, qy, qz, qw]}, ViSP's {data: [[tx], [ty], [tz], [tux], [tuy], [tuz]]} or 16 plain numbers";
+  if (const auto numbers = plain_numbers(text); numbers && !numbers->empty()) {
+    if (numbers->size() != 16) {
+      throw HandEyeError(ErrorCode::WrongLength,
+                         "a plain-text pose needs 16 numbers (a 4x4 matrix), got " + std::to_string(numbers->size()),
+                         at.str(), hint);
+    }
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (double v : *numbers) list.push_back(v);
+    return read_pose_matrix(list, at);
+  }
+  const YAML::Node root = load(text, source);
+  if (root.IsMap() && root["data"]) {  // ViSP's vpPoseVector: 6 rows of one number
+    const YAML::Node data = root["data"];
+    const Location where = at / "data";
+    if (!data.IsSequence() || data.size() != 6) {
+      throw HandEyeError(data.IsSequence() ? ErrorCode::WrongLength : ErrorCode::MalformedFile,
+                         "ViSP's pose vector needs 6 rows [tx], [ty], [tz], [tux], [tuy], [tuz]", where.str(), hint);
+    }
+    Vector6d v;
+    for (std::size_t i = 0; i < 6; ++i) {
+      const YAML::Node row = data[i];
+      v[static_cast<Eigen::Index>(i)] = (row.IsSequence() ? as_numbers<1>(row, where[i], "one number")[0] : as_double(row, where[i]));
+      if (!std::isfinite(v[static_cast<Eigen::Index>(i)])) {
+        throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in the pose vector", where[i].str(), hint);
+      }
+    }
+    return se3::make_pose(so3::exp(v.tail<3>()), v.head<3>());
+  }
+  if (!root.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a pose", at.str(), hint);
+  return read_pose(root, at);
+}
+
+Eigen::Isometry3d read_robot_pose(const std::string& path) { return parse_robot_pose(read_file(path), path); }
+
 CalibrationFile parse_result(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);
   const Location top{source, ""};

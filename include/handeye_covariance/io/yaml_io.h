@@ -102,6 +102,16 @@ struct PoseFile {
 PoseFile parse_pose_file(const std::string& text, const std::string& source);
 PoseFile read_pose_file(const std::string& path);
 
+/// A robot pose file, one per image (T_base_effector in m), in any format users
+/// keep next to their images:
+///   YAML or JSON {matrix: [16 numbers, row-major]} or {translation: [x, y, z], rotation: [qx, qy, qz, qw]};
+///   ViSP's vpPoseVector YAML {rows: 6, cols: 1, data: [[tx], [ty], [tz], [tux], [tuy], [tuz]]}
+///     (theta-u: the rotation axis times its angle, rad);
+///   a plain-text 4x4 matrix (16 numbers; whitespace, commas or semicolons between them).
+/// Throws HandEyeError naming the file and what is wrong.
+Eigen::Isometry3d parse_robot_pose(const std::string& text, const std::string& source);
+Eigen::Isometry3d read_robot_pose(const std::string& path);
+
 /// Session settings from a YAML file with the node's parameter names (the
 /// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
 /// from the file keep their value in `config`. Unknown keys are refused (typos).
