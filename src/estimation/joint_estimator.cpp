@@ -571,6 +571,11 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       const double bound = residual_dof * std::pow(1.0 - v + options.chi2_test_z * std::sqrt(v), 3);
       chi2_failed = s.chi2 > bound;
       result.residual_checks.push_back({"chi2/dof of the stated noise", s.chi2 / residual_dof, bound / residual_dof, !chi2_failed});
+      if (chi2_failed && !options.estimate_missing_noise) {
+        chi2_failed = false;
+        result.warnings.push_back("residuals are " + number_text(std::sqrt(s.chi2 / residual_dof), 2) +
+                                  "x larger than the stated noise predicts; the covariance is likely optimistic");
+      }
     }
   } else if (n < 4) {
     throw HandEyeError(ErrorCode::NoiseUnidentifiable,
@@ -718,8 +723,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       for (std::size_t i = 0; i < before.size(); ++i) change = std::max(change, std::abs(before[i] - s.weight[i]));
       if (round > 0 && change < 1e-6) break;
     }
-    const double nu = n - 12.0;
-    const double small_sample = nu > 8.0 ? nu / (nu - 7.0) : 8.0;
+    const double small_sample = n / (n - 7.0);  // n > 12 here
     covariance = sandwich(s, k_scaled) * small_sample;
     inflation = small_sample;
     result.loss = "huber";

@@ -48,7 +48,8 @@
 // s^2 the robust scale median(d^2) / 5.348), and the model-robust sandwich
 // covariance A^-1 B A^-1 (A the Hessian of the robust cost, B the sum of the
 // samples' score outer products, each residual leverage-corrected, HC2), times
-// nu / (nu - 7), nu = n - 12, Hotelling's mean for a 6x6 estimated from nu dof.
+// n / (n - 7): Hotelling's mean for a 6x6 estimated from n samples' scores (HC2
+// leaves them about n dof; Monte-Carlo in test_systematic).
 // The result says which test ran, its figure and what was used.
 #pragma once
 
@@ -69,8 +70,11 @@ struct JointOptions {
   int per_axis_noise_min_dof = 12;
   /// Robot noise estimated (no noise given) from this many samples' worth of residuals.
   int robot_noise_min_dof = 6;
-  /// The stated noise is refused beyond this many sigma of chi2 (about the 99.9% quantile).
+  /// The stated noise is refused beyond this many sigma of chi2 (about the 99.9% quantile) ...
   double chi2_test_z = 3.09;
+  /// ... and then its missing part is estimated (false: only a warning, the
+  /// stated noise taken as true; for comparisons).
+  bool estimate_missing_noise = true;
   enum class Robust { Auto, Off, On };
   /// Auto: the Huber loss and the sandwich covariance when the kurtosis test fails.
   Robust robust = Robust::Auto;
