@@ -402,7 +402,15 @@ Eigen::VectorXd initial_components(const std::vector<Free>& free, const Solution
   return theta;
 }
 
-/// 1 / (1 - q): the mean NEES of X over the noise estimate's error, per 6 (joint_estimator.h).
+/// 1 / (1 - q): the mean NEES of X over the noise estimate's error, per 6, to
+/// second order (joint_estimator.h). With Sigma = I(theta)^-1, K_k = dI/dtheta_k
+/// (up to sign) and C = Cov(theta_hat):
+///   E NEES ~ 6 + sum_kl C_kl tr(Sx^-1 dSx_k Sx^-1 dSx_l) - tr(Sx^-1 E[Delta]),
+///   dSigma_k = Sigma K_k Sigma,   K_k = sum_i J^T A G_k A J,
+///   E[Delta] = 1/2 sum_kl C_kl d2Sigma_kl = Sigma (sum_kl C_kl K_k Sigma K_l) Sigma - 1/2 Sigma M Sigma,
+///   M = sum_kl C_kl sum_i J^T (A G_l A G_k A + A G_k A G_l A) J,
+/// the second term being the bias of Sigma(theta_hat), which is not linear in theta
+/// (for one scale of every variance it is, and q = 2 / nu exactly).
 double noise_inflation(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
                        const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
@@ -411,30 +419,49 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   for (std::size_t k = 0; k < free.size(); ++k) {
     if (!fit.at_bound[k] && fit.covariance(k, k) > 0.0) active.push_back(static_cast<int>(k));
   }
-  std::vector<Matrix6d> dSx(active.size(), Matrix6d::Zero());
-  std::vector<Matrix12d> sums(active.size(), Matrix12d::Zero());
+  const std::size_t K = active.size();
+  Eigen::MatrixXd C(K, K);
+  for (std::size_t a = 0; a < K; ++a) {
+    for (std::size_t b = 0; b < K; ++b) C(a, b) = fit.covariance(active[a], active[b]);
+  }
+  std::vector<Matrix12d> K_sum(K, Matrix12d::Zero());
+  Matrix12d M = Matrix12d::Zero();
+  std::vector<Matrix6x12> V(K), W(K);
   for (std::size_t i = 0; i < problem.size(); ++i) {
-    const Matrix6x12 AJ = s.S[i].solve(s.lin[i].J);
-    for (std::size_t a = 0; a < active.size(); ++a) {
+    const Matrix6d A = s.S[i].solve(Matrix6d::Identity());
+    const Matrix6x12 AJ = A * s.lin[i].J;
+    for (std::size_t a = 0; a < K; ++a) {
       const Free& c = free[active[a]];
+      Matrix6d G = Matrix6d::Zero();
       if (rank_of(c.kind) > 0) {
         const auto F = factor(c, problem.terms()[i], s.lin[i].D);
-        const Eigen::Matrix<double, Eigen::Dynamic, 12> Q = F.transpose() * AJ;
-        sums[a].noalias() += s.weight[i] * Q.transpose() * Q;
-      } else {  // J^T A G_ab A J with G_ab = e_a e_b^T + e_b e_a^T (or e_a e_a^T)
-        const Eigen::Matrix<double, 12, 1> qa = AJ.row(c.a).transpose(), qb = AJ.row(c.b).transpose();
-        sums[a].noalias() += s.weight[i] * (c.a == c.b ? Matrix12d(qa * qa.transpose()) : Matrix12d(qa * qb.transpose() + qb * qa.transpose()));
+        G = F * F.transpose();
+      } else {
+        G(c.a, c.b) = 1.0, G(c.b, c.a) = 1.0;
       }
+      V[a] = G * AJ;   // G_k A J
+      W[a] = A * V[a];  // A G_k A J
+      K_sum[a].noalias() += s.weight[i] * AJ.transpose() * V[a];
+    }
+    for (std::size_t a = 0; a < K; ++a) {
+      Matrix6x12 mixed = Matrix6x12::Zero();
+      for (std::size_t b = 0; b < K; ++b) mixed += C(a, b) * V[b];
+      M.noalias() += 2.0 * s.weight[i] * mixed.transpose() * W[a];
     }
   }
-  for (std::size_t a = 0; a < active.size(); ++a) dSx[a] = (covariance * sums[a] * covariance).topLeftCorner<6, 6>();
-  double q = 0.0;
-  for (std::size_t a = 0; a < active.size(); ++a) {
-    for (std::size_t b = 0; b < active.size(); ++b) {
-      q += fit.covariance(active[a], active[b]) * (Sx_inverse * dSx[a] * Sx_inverse * dSx[b]).trace() / 6.0;
+  M = 0.5 * (M + M.transpose());
+  std::vector<Matrix6d> dSx(K);
+  for (std::size_t a = 0; a < K; ++a) dSx[a] = (covariance * K_sum[a] * covariance).topLeftCorner<6, 6>();
+  Matrix12d mixed = Matrix12d::Zero();
+  double spread = 0.0;
+  for (std::size_t a = 0; a < K; ++a) {
+    for (std::size_t b = 0; b < K; ++b) {
+      spread += C(a, b) * (Sx_inverse * dSx[a] * Sx_inverse * dSx[b]).trace();
+      mixed.noalias() += C(a, b) * K_sum[a] * covariance * K_sum[b];
     }
   }
-  q = std::clamp(q, 0.0, 0.5);
+  const Matrix12d bias = covariance * mixed * covariance - 0.5 * covariance * M * covariance;
+  const double q = std::clamp((spread - (Sx_inverse * bias.topLeftCorner<6, 6>()).trace()) / 6.0, 0.0, 0.5);
   return 1.0 / (1.0 - q);
 }
 
@@ -528,8 +555,8 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Iso
   return r;
 }
 
-Calibration estimate(const SampleSet& samples, Method method) {
-  return method == Method::Joint ? solve_joint(samples) : solve(samples);
+Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options) {
+  return method == Method::Joint ? solve_joint(samples, options) : solve(samples);
 }
 
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {

@@ -83,8 +83,8 @@ SampleSet without(const SampleSet& samples, const std::vector<int>& dropped) {
 
 }  // namespace
 
-Calibration solve_samples(const SampleSet& samples, bool reject, Method method) {
-  return reject ? solve_robust(samples, method) : estimate(samples, method);
+Calibration solve_samples(const SampleSet& samples, bool reject, Method method, const JointOptions& joint) {
+  return reject ? solve_robust(samples, method, {}, joint) : estimate(samples, method, joint);
 }
 
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration) {
@@ -93,7 +93,7 @@ SampleSet without_rejected(const SampleSet& samples, const Calibration& calibrat
   return without(samples, dropped);
 }
 
-Calibration solve_robust(const SampleSet& samples, Method method, const OutlierOptions& o) {
+Calibration solve_robust(const SampleSet& samples, Method method, const OutlierOptions& o, const JointOptions& joint) {
   const int n = static_cast<int>(samples.samples.size());
   const int max_rejected = static_cast<int>(std::floor(o.max_rejected_fraction * n));
   const auto too_many = [&](int count) {
@@ -116,7 +116,7 @@ Calibration solve_robust(const SampleSet& samples, Method method, const OutlierO
       if (std::find(dropped.begin(), dropped.end(), i) == dropped.end()) kept_index.push_back(i);
     }
     const SampleSet kept = without(samples, dropped);
-    Calibration c = estimate(kept, method);
+    Calibration c = estimate(kept, method, joint);
     const Isometry3d pattern = pattern_pose(kept, c.T_parent_camera);
     // Squared Mahalanobis distance of each sample's residual (eq. 64-65) under its
     // predicted covariance: its camera noise, its robot noise mapped through the

@@ -100,6 +100,7 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Eig
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options = {});
 
 /// Pose samples by either estimator: solve_joint, or solve (the paper's pairs).
-Calibration estimate(const SampleSet& samples, Method method);
+/// (options: the joint estimator's; the pairs estimator takes its defaults.)
+Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options = {});
 
 }  // namespace handeye

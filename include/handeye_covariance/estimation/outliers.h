@@ -39,10 +39,12 @@ struct OutlierOptions {
 /// Solves (by `method`) with outlier rejection; Calibration::rejected lists what
 /// was dropped (indices into `samples`) and why. Throws like the estimator, and
 /// TooManyOutliers when more than max_rejected_fraction would be rejected.
-Calibration solve_robust(const SampleSet& samples, Method method = Method::Joint, const OutlierOptions& options = {});
+Calibration solve_robust(const SampleSet& samples, Method method = Method::Joint, const OutlierOptions& options = {},
+                         const JointOptions& joint = {});
 
 /// solve_robust, or the plain estimator when `reject` is false: one switch for every tool.
-Calibration solve_samples(const SampleSet& samples, bool reject, Method method = Method::Joint);
+Calibration solve_samples(const SampleSet& samples, bool reject, Method method = Method::Joint,
+                          const JointOptions& joint = {});
 
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);
