@@ -60,6 +60,32 @@ TEST(Cli, EstimatedNoiseIsAnnounced) {
   EXPECT_NE(handeye::io::read_file(result).find("estimated_from_residuals"), std::string::npos);
 }
 
+// The split-half check a user runs on a session: about 6 on an honest
+// simulated one; a few samples, a motions file and an unknown robust mode are refused.
+TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
+  const std::string samples = temp("split.yaml"), result = temp("split_result.yaml");
+  ASSERT_EQ(run("sim --output " + samples + " --omit-noise-block --samples 60 --seed 3").exit_code, 0);
+  const CliRun r = run("solve --input " + samples + " --output " + result + " --split-check 40");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t at = r.out.find("mean NEES of X_a - X_b ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const double nees = std::stod(r.out.substr(at + std::string("mean NEES of X_a - X_b ").size()));
+  EXPECT_GT(nees, 4.5) << r.out;
+  EXPECT_LT(nees, 7.5) << r.out;
+  EXPECT_NE(r.out.find("40 random splits into halves of 30 samples"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("consistent with an honest covariance"), std::string::npos) << r.out;
+
+  const std::string few = temp("split_few.yaml");
+  ASSERT_EQ(run("sim --output " + few + " --samples 6").exit_code, 0);
+  const CliRun too_few = run("solve --input " + few + " --output " + temp("split_few_result.yaml") + " --split-check");
+  EXPECT_EQ(too_few.exit_code, 2);
+  EXPECT_NE(too_few.err.find("at least 8 samples"), std::string::npos) << too_few.err;
+  const CliRun bad_mode = run("solve --input " + samples + " --output " + temp("split_bad.yaml") + " --robust sometimes");
+  EXPECT_EQ(bad_mode.exit_code, 2);
+  EXPECT_NE(bad_mode.err.find("unknown robust mode `sometimes`"), std::string::npos) << bad_mode.err;
+  EXPECT_FALSE(std::filesystem::exists(temp("split_bad.yaml")));
+}
+
 TEST(Cli, DegenerateInputExits2WithReasonAndWritesNothing) {
   const std::string input = temp("degenerate.yaml"), result = temp("degenerate_result.yaml");
   // Three samples of a robot that only translates.

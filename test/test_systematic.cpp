@@ -18,6 +18,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/systematic.h"
 
@@ -138,6 +139,37 @@ TEST(Systematic, TheDefaultPathIsHonestWhereTheStatedNoiseIsNot) {
     }
   }
   check(scenarios().front(), Setup::EyeToHand, true, 20, 10, ++seed);
+}
+
+// The split-half check needs no truth (so users can run it on real sessions):
+// on 60-pose sessions with each systematic error, robust mode on, the mean NEES
+// of the halves' difference stays in [5, 7.5].
+TEST(Systematic, TheSplitHalfCheckStaysHonestWithRobustModeOn) {
+  unsigned seed = 200;
+  for (const Scenario& scenario : scenarios()) {
+    Rng rng(++seed);
+    const SerialArm nominal = SerialArm::ur10();
+    double sum = 0.0;
+    const int sessions = 12;
+    for (int k = 0; k < sessions; ++k) {
+      const SerialArm truth = scenario.errors.dh_length_sigma > 0.0
+                                  ? nominal.perturbed(rng, scenario.errors.dh_length_sigma, scenario.errors.dh_angle_sigma)
+                                  : nominal;
+      const SimulatedSession s = simulate_systematic_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 60,
+                                                             stated_noise(), scenario.errors, nominal, truth);
+      SessionSettings settings = session_settings(s.samples);
+      settings.robust = JointOptions::Robust::On;
+      CalibrationSession session(settings);
+      session.replace(s.samples.samples, "simulated");
+      const SplitCheck check = session.split_check(session.snapshot(), 20, static_cast<unsigned>(k + 1));
+      EXPECT_GE(check.splits, 18) << scenario.name << ": " << check.first_failure;
+      sum += check.mean_nees;
+    }
+    std::printf("[split-half check, %s, %d sessions of 60, robust on] mean NEES %.2f\n", scenario.name, sessions,
+                sum / sessions);
+    EXPECT_GE(sum / sessions, 5.0) << scenario.name;
+    EXPECT_LE(sum / sessions, 7.5) << scenario.name;
+  }
 }
 
 TEST(Systematic, TheArmsInverseKinematicsReturnsTheJointsOfAPose) {

@@ -124,5 +124,25 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
   return out;
 }
 
+std::string split_check_summary(const SplitCheck& check) {
+  std::string out = "  split-half check      " + std::to_string(check.splits) + " random splits into halves of " +
+                    std::to_string(check.half_size) + " samples";
+  if (check.failed > 0) out += " (" + std::to_string(check.failed) + " more could not be solved: " + check.first_failure + ")";
+  out += "\n";
+  if (check.splits == 0) return out + "    no split could be solved; the check says nothing\n";
+  out += "    mean NEES of X_a - X_b " + number_text(check.mean_nees, 3) + " (6 dof; translation " +
+         number_text(check.mean_nees_translation, 3) + ", rotation " + number_text(check.mean_nees_rotation, 3) +
+         "; honest: 6, 3, 3)\n";
+  if (check.mean_nees > 7.5) {
+    out += "    the covariance is overconfident for sessions of this kind: try --robust on, or look for a bad sample or a "
+           "systematic error (camera intrinsics, robot kinematics)\n";
+  } else if (check.mean_nees < 5.0) {
+    out += "    the covariance is cautious for sessions of this kind (the stated noise may be too large)\n";
+  } else {
+    out += "    consistent with an honest covariance\n";
+  }
+  return out;
+}
+
 }  // namespace io
 }  // namespace handeye

@@ -18,6 +18,14 @@ std::string expand_home(const std::string& path) {
 
 }  // namespace
 
+JointOptions::Robust robust_from_string(const std::string& name) {
+  if (name == "auto") return JointOptions::Robust::Auto;
+  if (name == "on") return JointOptions::Robust::On;
+  if (name == "off") return JointOptions::Robust::Off;
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown robust mode `" + name + "`", "robust",
+                     "use auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed), on or off");
+}
+
 SessionSettings session_settings(const SessionConfig& config) {
   SessionSettings s;
   s.rig = config.rig;
@@ -25,6 +33,7 @@ SessionSettings session_settings(const SessionConfig& config) {
   if (!config.noise_config.empty()) s.noise = io::read_noise_file(expand_home(config.noise_config));
   s.reject_outliers = config.reject_outliers;
   s.method = method_from_string(config.method);
+  s.robust = robust_from_string(config.robust);
   s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
   s.suggest.working_distance = config.working_distance;
   s.suggest.candidates = config.suggest_candidates;
@@ -165,7 +174,15 @@ SampleSet CalibrationSession::sample_set() const {
 // ------------------------------------------------------------------ computations
 
 Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const {
-  return solve_samples(snapshot.samples, settings_.reject_outliers, settings_.method);
+  JointOptions joint;
+  joint.robust = settings_.robust;
+  return solve_samples(snapshot.samples, settings_.reject_outliers, settings_.method, joint);
+}
+
+SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {
+  return handeye::split_check(
+      snapshot.samples, [this, &snapshot](const SampleSet& half) { return calibrate({snapshot.generation, half}); }, splits,
+      seed);
 }
 
 SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {

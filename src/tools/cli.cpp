@@ -53,8 +53,9 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  std::string input, output, noise_path, method = "joint";
+  std::string input, output, noise_path, method = "joint", robust = "auto";
   bool keep_outliers = false;
+  int split_check = 0;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
@@ -62,10 +63,14 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
       "keep-outliers", po::bool_switch(&keep_outliers), "samples: do not reject wrong detections (they are by default)")(
       "method", po::value(&method),
       "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
+      "robust", po::value(&robust),
+      "joint: auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed; default), on, off")(
+      "split-check", po::value(&split_check)->implicit_value(40),
+      "samples: also solve N random halves (default 40) and print the mean NEES of their difference (honest: 6)")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
   po::variables_map vm;
-  if (!parse("solve", "--input FILE [--noise FILE] [--output FILE]", options, args, vm, out)) return kOk;
+  if (!parse("solve", "--input FILE [--noise FILE] [--output FILE] [--split-check [N]]", options, args, vm, out)) return kOk;
   if (output.empty()) output = default_result_path(input);
 
   io::Input data = io::read_input(input);
@@ -75,23 +80,31 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   }
   Calibration calibration;
   io::ResultContext context;
+  std::string split_report;
   if (const SampleSet* samples = std::get_if<SampleSet>(&data)) {
     // Samples go through the session the node and the bag replay use.
     SessionSettings settings = session_settings(*samples);
     if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
     settings.reject_outliers = !keep_outliers;
     settings.method = method_from_string(method);
+    settings.robust = robust_from_string(robust);
     CalibrationSession session(settings);
     session.replace(samples->samples, "read " + input);
     const SessionSnapshot snapshot = session.snapshot();
     calibration = session.calibrate(snapshot);
     context = io::context_of(snapshot.samples);
+    if (split_check > 0) split_report = io::split_check_summary(session.split_check(snapshot, split_check));
   } else {
+    if (split_check > 0) {
+      throw HandEyeError(ErrorCode::MalformedFile, "--split-check applies to samples files", input,
+                         "record absolute poses (a samples file): motion pairs cannot be split into independent halves");
+    }
     calibration = solve(std::get<MotionSet>(data));
     context = io::context_of(std::get<MotionSet>(data));
   }
   io::write_file_atomically(output, io::format_result(calibration, context));
   out << io::human_summary(calibration, context);
+  out << split_report;
   out << "  result written to     " << output << "\n";
   (void)err;
   return kOk;

@@ -7,12 +7,17 @@
 #include <vector>
 
 #include "handeye_covariance/core/object_pose.h"
+#include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
 namespace io {
 
 std::string human_summary(const Calibration& calibration, const ResultContext& context);
+
+/// The split-half check's lines: the mean NEES of the halves' difference and
+/// what it means (honest about 6; above 7.5 overconfident; below 5 cautious).
+std::string split_check_summary(const SplitCheck& check);
 
 /// T_base_object with 1 sigma per axis, each term's share of the position
 /// variance, and each point's worst-axis 1 sigma (`handeye compose`).

@@ -17,7 +17,9 @@
 #include <vector>
 
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/session/sampler.h"
 #include "handeye_covariance/session/session_config.h"
 
@@ -34,6 +36,7 @@ struct SessionSettings {
   std::optional<MeasurementNoise> noise;
   bool reject_outliers = true;
   Method method = Method::Joint;  // the estimator (joint_estimator.h, or the paper's pairs)
+  JointOptions::Robust robust = JointOptions::Robust::Auto;  // the joint estimator's robust mode
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
   /// suggest.seed + the number of samples, so each new sample brings fresh ones.
@@ -45,8 +48,10 @@ struct SessionSettings {
 };
 
 /// The settings of a SessionConfig: reads noise_config and candidate_poses_file
-/// and checks suggest_criterion (HandEyeError naming the setting).
+/// and checks method, robust and suggest_criterion (HandEyeError naming the setting).
 SessionSettings session_settings(const SessionConfig& config);
+/// "auto" / "on" / "off"; throws HandEyeError(MalformedFile) naming the valid values.
+JointOptions::Robust robust_from_string(const std::string& name);
 /// A session over a samples file: the file's setup, frames and noise block, the
 /// other settings from `config` (by default the node's defaults); nothing persisted.
 SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config = {});
@@ -131,6 +136,9 @@ class CalibrationSession {
   Analysis analyse(const SessionSnapshot& snapshot) const;
   /// X with its covariance, outliers rejected when configured. Throws HandEyeError.
   Calibration calibrate(const SessionSnapshot& snapshot) const;
+  /// The split-half check (split_check.h) of this session's calibration: `splits`
+  /// random halves, each calibrated as calibrate() does.
+  SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;
   /// Ranked next poses and the plan to the target. Throws HandEyeError (no
   /// estimate, every candidate refused, unknown criterion).
   SuggestResult suggest(const SessionSnapshot& snapshot, const SuggestRequest& request) const;

@@ -27,6 +27,7 @@ struct SessionConfig {
   double target_tolerance_mm = 1.0;
   bool reject_outliers = true;  // outliers.h: consensus + residual gating before the covariance
   std::string method = "joint";  // joint (X and the pattern pose from the poses) | pairs (the paper's AX = XB)
+  std::string robust = "auto";   // joint: Huber + sandwich when the residuals are heavy-tailed (auto) | on | off
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
@@ -68,6 +69,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("target_tolerance_mm", c.target_tolerance_mm, 1.0);
   visit("reject_outliers", c.reject_outliers, 1.0);
   visit("method", c.method, 1.0);
+  visit("robust", c.robust, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
   visit("reach_translation_mm", c.reach_translation, mm);
