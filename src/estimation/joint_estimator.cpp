@@ -41,7 +41,7 @@ struct Frame {
 struct Linear {
   Vector6d e;
   Matrix6x12 J;
-  Matrix6d D;  // d P_hat / d xi_E
+  Matrix6d D = Matrix6d::Zero();  // d P_hat / d xi_E (only when a robot noise enters)
 };
 
 /// e = (t_P - t_hat, log(R_P R_hat^T)) with P_hat = X^-1 V Y.
@@ -60,7 +60,7 @@ Vector6d residual(const Term& t, const Frame& f) {
 ///   d P_hat / d xi_E = diag(RX^T, RX^T) [[I, -[RV t_Y]x], [0, I]] dV/dE,
 /// and e's sensitivity to P_hat is -I for t and -J_r^-1(phi) for R
 /// (log(exp(phi) exp(-d)) = phi - J_r^-1(phi) d). Checked numerically in test_joint_estimator.
-void linearize(const Term& t, const Frame& f, Linear& out) {
+void linearize(const Term& t, const Frame& f, Linear& out, bool with_robot = true) {
   const Matrix3d RV = t.V.linear();
   const Vector3d RV_tY = RV * f.tY;
   const Vector3d t_VY = RV_tY + t.V.translation();
@@ -76,11 +76,12 @@ void linearize(const Term& t, const Frame& f, Linear& out) {
   out.J.block<3, 3>(3, 3) = Jr_inverse * f.RXt;
   out.J.block<3, 3>(0, 6) = -RXt_RV;
   out.J.block<3, 3>(3, 9) = -Jr_inverse * RXt_RV;
+  if (!with_robot) return;
   Matrix6d chain = Matrix6d::Zero();  // diag(RX^T, RX^T) [[I, -[RV tY]x], [0, I]]
   chain.topLeftCorner<3, 3>() = f.RXt;
   chain.topRightCorner<3, 3>() = -f.RXt * so3::hat(RV_tY);
   chain.bottomRightCorner<3, 3>() = f.RXt;
-  out.D.noalias() = chain * t.dV_dE;
+  out.D.noalias() = chain.lazyProduct(t.dV_dE);
 }
 
 Isometry3d apply(const Isometry3d& T, const Vector6d& d) {
@@ -95,7 +96,7 @@ struct NoiseModel {
 
   Matrix6d covariance(const Term& t, const Matrix6d& D) const {
     Matrix6d S = camera_scale * t.camera + camera;
-    if (robot_free_or_given) S.noalias() += D * (t.robot + robot) * D.transpose();
+    if (robot_free_or_given) S.noalias() += D.lazyProduct(t.robot + robot).lazyProduct(D.transpose());
     return S;
   }
 };
@@ -111,7 +112,9 @@ double huber_rho(double d, double k_scaled) {
 struct Solution {
   Isometry3d X, Y;
   std::vector<Linear> lin;
-  std::vector<Eigen::LLT<Matrix6d>> S;  // each sample's residual covariance, factored
+  std::vector<Matrix6d> L_inverse;  // each sample's residual covariance S = L L^T: L^-1 whitens
+  /// S_i^-1 = L^-T L^-1.
+  Matrix6d weight_matrix(std::size_t i) const { return L_inverse[i].transpose().lazyProduct(L_inverse[i]); }
   std::vector<double> weight;          // robust weights (1 for the squared loss)
   Matrix12d information = Matrix12d::Zero();  // sum w J^T S^-1 J
   Vector12d gradient = Vector12d::Zero();
@@ -133,30 +136,27 @@ class JointProblem {
   void linearize_all(const NoiseModel& model, double k_scaled, Solution& s) const {
     const Frame f(s.X, s.Y);
     const std::size_t n = terms_.size();
-    s.lin.resize(n), s.S.resize(n), s.weight.assign(n, 1.0);
+    s.lin.resize(n), s.L_inverse.resize(n), s.weight.assign(n, 1.0);
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
-      linearize(terms_[i], f, s.lin[i]);
-      s.S[i].compute(model.covariance(terms_[i], s.lin[i].D));
-      if (s.S[i].info() != Eigen::Success || !(s.S[i].matrixLLT().diagonal().array() > 0.0).all()) {
+      linearize(terms_[i], f, s.lin[i], model.robot_free_or_given);
+      if (!inverse_cholesky(model.covariance(terms_[i], s.lin[i].D), s.L_inverse[i])) {
         throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
                            "samples[" + std::to_string(i) + "]",
                            "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
                            "noise block to estimate it");
       }
-      // Whitened: S = L L^T, r = L^-1 e, Jw = L^-1 J.
-      const auto L = s.S[i].matrixL();
-      const Vector6d r = L.solve(s.lin[i].e);
-      const Matrix6x12 Jw = L.solve(s.lin[i].J);
+      // Whitened: r = L^-1 e, Jw = L^-1 J.
+      const Vector6d r = s.L_inverse[i] * s.lin[i].e;
+      const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
       const double d2 = r.squaredNorm();
       const double w = huber_weight(std::sqrt(d2), k_scaled);
       s.weight[i] = w;
-      s.information.selfadjointView<Eigen::Lower>().rankUpdate(Jw.transpose(), w);
+      s.information.noalias() += w * Jw.transpose().lazyProduct(Jw);
       s.gradient.noalias() += w * Jw.transpose() * r;
       s.cost += huber_rho(std::sqrt(d2), k_scaled);
       s.chi2 += d2;
     }
-    s.information = s.information.selfadjointView<Eigen::Lower>();
   }
 
   /// The robust cost at (X, Y) with the covariances of `at` held fixed.
@@ -164,7 +164,7 @@ class JointProblem {
     const Frame f(X, Y);
     double cost = 0.0;
     for (std::size_t i = 0; i < terms_.size(); ++i) {
-      const Vector6d r = at.S[i].matrixL().solve(residual(terms_[i], f));
+      const Vector6d r = at.L_inverse[i] * residual(terms_[i], f);
       cost += huber_rho(r.norm(), k_scaled);
     }
     return cost;
@@ -316,14 +316,14 @@ int rank_of(Kind kind) {
 }
 
 /// The factor of component `c` for a sample (6 x rank).
-Eigen::Matrix<double, 6, Eigen::Dynamic> factor(const Free& c, const Term& t, const Matrix6d& D) {
+ComponentFactors factor(const Free& c, const Term& t, const Matrix6d& D) {
   switch (c.kind) {
     case Kind::CameraScale: return t.camera_root;
     case Kind::CameraTranslation: return Matrix6d::Identity().leftCols<3>();
     case Kind::CameraRotation: return Matrix6d::Identity().rightCols<3>();
     case Kind::RobotTranslation: return D.leftCols<3>();
     case Kind::RobotRotation: return D.rightCols<3>();
-    default: return Eigen::Matrix<double, 6, Eigen::Dynamic>(6, 0);
+    default: return ComponentFactors(6, 0);
   }
 }
 
@@ -368,7 +368,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
     const Term& t = problem.terms()[i];
     const Linear& l = s.lin[i];
     data.fixed[i] = fixed_model.covariance(t, l.D);
-    data.scatter[i] = l.e * l.e.transpose() + l.J * covariance * l.J.transpose();
+    data.scatter[i] = l.e * l.e.transpose() + l.J.lazyProduct(covariance).lazyProduct(l.J.transpose());
     data.factors[i].resize(6, column);
     for (std::size_t k = 0; k < free.size(); ++k) {
       if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], t, l.D);
@@ -428,8 +428,8 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   Matrix12d M = Matrix12d::Zero();
   std::vector<Matrix6x12> V(K), W(K);
   for (std::size_t i = 0; i < problem.size(); ++i) {
-    const Matrix6d A = s.S[i].solve(Matrix6d::Identity());
-    const Matrix6x12 AJ = A * s.lin[i].J;
+    const Matrix6d A = s.weight_matrix(i);
+    const Matrix6x12 AJ = A.lazyProduct(s.lin[i].J);
     for (std::size_t a = 0; a < K; ++a) {
       const Free& c = free[active[a]];
       Matrix6d G = Matrix6d::Zero();
@@ -439,14 +439,14 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
       } else {
         G(c.a, c.b) = 1.0, G(c.b, c.a) = 1.0;
       }
-      V[a] = G * AJ;   // G_k A J
-      W[a] = A * V[a];  // A G_k A J
-      K_sum[a].noalias() += s.weight[i] * AJ.transpose() * V[a];
+      V[a] = G.lazyProduct(AJ);  // G_k A J
+      W[a] = A.lazyProduct(V[a]);  // A G_k A J
+      K_sum[a].noalias() += s.weight[i] * AJ.transpose().lazyProduct(V[a]);
     }
     for (std::size_t a = 0; a < K; ++a) {
       Matrix6x12 mixed = Matrix6x12::Zero();
       for (std::size_t b = 0; b < K; ++b) mixed += C(a, b) * V[b];
-      M.noalias() += 2.0 * s.weight[i] * mixed.transpose() * W[a];
+      M.noalias() += 2.0 * s.weight[i] * mixed.transpose().lazyProduct(W[a]);
     }
   }
   M = 0.5 * (M + M.transpose());
@@ -465,18 +465,18 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   return 1.0 / (1.0 - q);
 }
 
-/// Leverage-corrected squared Mahalanobis distances r^T (I - H_ii)^-1 r, r = L^-1 e_i,
-/// each chi2(6) under the model (H_ii: the sample's leverage in the whitened fit).
+/// Leverage-corrected squared Mahalanobis distances, each about chi2(6) under the
+/// model: d_i^2 = |L^-1 e_i|^2 shrinks by the share of the sample's residual the
+/// fit absorbed, E d_i^2 = 6 - tr H_ii (H_ii = Jw Sigma Jw^T, its leverage; the
+/// traces add up to the 12 parameters), so d~_i^2 = 6 d_i^2 / (6 - tr H_ii).
 std::vector<double> corrected_distances(const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
   std::vector<double> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto L = s.S[i].matrixL();
-    const Vector6d r = L.solve(s.lin[i].e);
-    const Matrix6x12 Jw = L.solve(s.lin[i].J);
-    const Matrix6d H = s.weight[i] * Jw * covariance * Jw.transpose();
-    const Eigen::LDLT<Matrix6d> ldlt(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
-    out[i] = std::max(0.0, r.dot(ldlt.solve(r)));
+    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
+    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+    const double leverage = s.weight[i] * covariance.cwiseProduct(Jw.transpose().lazyProduct(Jw)).sum();
+    out[i] = r.squaredNorm() * 6.0 / std::max(6.0 - leverage, 0.5);
   }
   return out;
 }
@@ -487,10 +487,9 @@ std::vector<Vector6d> corrected_residuals(const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
   std::vector<Vector6d> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto L = s.S[i].matrixL();
-    const Vector6d r = L.solve(s.lin[i].e);
-    const Matrix6x12 Jw = L.solve(s.lin[i].J);
-    const Matrix6d H = s.weight[i] * Jw * covariance * Jw.transpose();
+    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
+    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+    const Matrix6d H = s.weight[i] * Jw.lazyProduct(covariance).lazyProduct(Jw.transpose());
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
     const Vector6d scale = eig.eigenvalues().cwiseMax(1e-6).cwiseSqrt().cwiseInverse();
     out[i] = eig.eigenvectors() * scale.asDiagonal() * eig.eigenvectors().transpose() * r;
@@ -521,9 +520,8 @@ Matrix12d sandwich(const Solution& s, double k_scaled) {
   Matrix12d A = Matrix12d::Zero(), B = Matrix12d::Zero();
   const std::vector<Vector6d> corrected = corrected_residuals(s);
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto L = s.S[i].matrixL();
-    const Vector6d r = L.solve(s.lin[i].e);
-    const Matrix6x12 Jw = L.solve(s.lin[i].J);
+    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
+    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
     const double d = r.norm(), w = s.weight[i];
     A.noalias() += w * Jw.transpose() * Jw;
     if (w < 1.0) {  // d/dx of (k/d) Jw^T r: the weight's own change
@@ -659,7 +657,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
         change = std::max(change, std::abs(fit.theta[k] - theta[k]) / scale);
       }
       theta = fit.theta;
-      if (change < 1e-2) break;
+      if (change < 0.1) break;  // a tenth of each number's own sigma: X no longer moves
     }
     if (fit.theta.size() != theta.size() && !free.empty()) {  // the last round dropped a component
       fit = fit_variance_components(components, component_data(problem, free, model, s), theta);

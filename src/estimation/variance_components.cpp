@@ -52,18 +52,20 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
     ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
   }
   for (std::size_t i = 0; i < data.fixed.size(); ++i) {
-    const auto& F = data.factors[i];
-    const Matrix6d S = data.fixed[i] + shared + F * w.asDiagonal() * F.transpose();
-    const Eigen::LLT<Matrix6d> llt(S);
-    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().array() > 0.0).all()) return ev;
-    const Matrix6d A = llt.solve(Matrix6d::Identity());
-    log_likelihood -= 0.5 * (2.0 * llt.matrixLLT().diagonal().array().log().sum() + (A * data.scatter[i]).trace());
+    const ComponentFactors& F = data.factors[i];
+    const ComponentFactors Fw = F * w.head(F.cols()).asDiagonal();
+    const Matrix6d S = data.fixed[i] + shared + Fw.lazyProduct(F.transpose());
+    Matrix6d L_inverse;
+    if (!inverse_cholesky(S, L_inverse)) return ev;
+    const Matrix6d A = L_inverse.transpose().lazyProduct(L_inverse);
+    log_likelihood -= 0.5 * (-2.0 * L_inverse.diagonal().array().log().sum() + A.cwiseProduct(data.scatter[i]).sum());
     if (!derivatives) continue;
-    const Matrix6d Q = A * data.scatter[i] * A;  // A M A; the score's kernel is Q - A
+    const Matrix6d Q = A.lazyProduct(data.scatter[i]).lazyProduct(A);  // A M A; the score's kernel is Q - A
     const Matrix6d B = Q - A;
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> AF = A * F, QF = Q * F;
-    const MatrixXd Z = F.transpose() * AF, W = F.transpose() * QF;  // F^T A F, F^T Q F
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> BF = QF - AF;
+    using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12>;
+    const ComponentFactors AF = A.lazyProduct(F), QF = Q.lazyProduct(F);
+    const Square Z = F.transpose().lazyProduct(AF), W = F.transpose().lazyProduct(QF);  // F^T A F, F^T Q F
+    const ComponentFactors BF = QF - AF;
     // Score 1/2 tr(B G_k), information 1/2 tr(A G_k A G_l), average information
     // 1/2 tr(A G_k A G_l Q), by the kind of G. G_ab = e_a e_b^T + e_b e_a^T, or
     // e_a e_a^T when a == b (each diagonal counts half).
@@ -110,6 +112,31 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
 
 }  // namespace
 
+bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse) {
+  Matrix6d L = Matrix6d::Zero();
+  for (int j = 0; j < 6; ++j) {
+    double diagonal = S(j, j);
+    for (int k = 0; k < j; ++k) diagonal -= L(j, k) * L(j, k);
+    if (!(diagonal > 0.0)) return false;
+    L(j, j) = std::sqrt(diagonal);
+    for (int i = j + 1; i < 6; ++i) {
+      double v = S(i, j);
+      for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
+      L(i, j) = v / L(j, j);
+    }
+  }
+  L_inverse.setZero();
+  for (int j = 0; j < 6; ++j) {
+    L_inverse(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < 6; ++i) {
+      double v = 0.0;
+      for (int k = j; k < i; ++k) v += L(i, k) * L_inverse(k, j);
+      L_inverse(i, j) = -v / L(i, i);
+    }
+  }
+  return true;
+}
+
 void add_factor_component(VarianceComponentData& data, int rank) {
   int column = 0;
   for (std::size_t k = 0; k < data.columns.size(); ++k) column = std::max(column, data.columns[k] + data.ranks[k]);
@@ -124,7 +151,8 @@ void add_entry_component(VarianceComponentData& data, int a, int b) {
 
 Matrix6d component_covariance(const VarianceComponentData& data, std::size_t i, const VectorXd& theta) {
   const VectorXd w = column_weights(data, theta);
-  return data.fixed[i] + shared_entries(data, theta) + data.factors[i] * w.asDiagonal() * data.factors[i].transpose();
+  const ComponentFactors Fw = data.factors[i] * w.head(data.factors[i].cols()).asDiagonal();
+  return data.fixed[i] + shared_entries(data, theta) + Fw.lazyProduct(data.factors[i].transpose());
 }
 
 VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent>& components,

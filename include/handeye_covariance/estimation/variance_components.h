@@ -35,12 +35,15 @@ struct VarianceComponent {
   double lower = 0.0;
 };
 
+/// Every component's factor side by side: at most 12 columns (no heap).
+using ComponentFactors = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 12>;
+
 struct VarianceComponentData {
   std::vector<Matrix6d> fixed;     // S0_i
   std::vector<Matrix6d> scatter;   // M_i = e e^T + J Sigma J^T
   /// factors[i] holds the factors of every component side by side (6 x sum r_k);
   /// columns[k] is where component k's factor starts, ranks[k] its width.
-  std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> factors;
+  std::vector<ComponentFactors> factors;
   std::vector<int> columns, ranks;
   /// A component with rank 0 is one entry of a covariance shared by every sample:
   /// entries[k] = (a, b) adds theta_k (e_a e_b^T + e_b e_a^T), or theta_k e_a e_a^T
@@ -68,6 +71,12 @@ struct VarianceComponentOptions {
 VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent>& components,
                                              const VarianceComponentData& data, const Eigen::VectorXd& theta0,
                                              const VarianceComponentOptions& options = {});
+
+/// S = L L^T (Cholesky, written out for 6x6) and L^-1 (lower triangular); false
+/// when S is not positive definite. Eigen's LLT solves route fixed 6x12 and 6x6
+/// right-hand sides through its large-matrix kernels, which cost more than the
+/// arithmetic at this size; the estimators call this for every sample.
+bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse);
 
 /// Adds a component to `data` (factor columns, or a shared covariance entry).
 void add_factor_component(VarianceComponentData& data, int rank);
