@@ -10,6 +10,7 @@
 #include <opencv2/core/eigen.hpp>
 
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/simulation/monte_carlo_study.h"
 #include "handeye_covariance/simulation/simulation.h"
 
@@ -106,10 +107,22 @@ void BM_MonteCarlo1000(benchmark::State& state) {
 }
 BENCHMARK(BM_MonteCarlo1000)->Unit(benchmark::kMillisecond)->Iterations(3);
 
+/// The Cramer-Rao bound of one dataset: the inverse Fisher information at the
+/// truth, i.e. the joint estimator's covariance on the same views without noise
+/// (simulate_session draws the same views whatever the noise), with the true noise stated.
+Matrix6d cramer_rao(int n, unsigned seed) {
+  Rng rng(seed);
+  SampleSet exact = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), n, MeasurementNoise{}).samples;
+  exact.noise = anisotropic_noise();
+  return solve_joint(exact).pose_covariance;
+}
+
 int accuracy(int M) {
   const int n = 30;
-  std::vector<double> rot(6, 0.0), trans(6, 0.0);  // 0 ours, 1..5 OpenCV
-  std::vector<int> ok(6, 0), failed(6, 0);
+  // 0 joint, 1 pairs (ours), 2..6 OpenCV
+  std::vector<double> rot(7, 0.0), trans(7, 0.0);
+  std::vector<int> ok(7, 0), failed(7, 0);
+  double bound_rot = 0.0, bound_trans = 0.0;
   for (int m = 0; m < M; ++m) {
     const SampleSet set = session(n, 1000 + m);
     const Eigen::Isometry3d truth = typical_X(Setup::EyeInHand);
@@ -119,27 +132,36 @@ int accuracy(int M) {
       rot[i] += e.tail<3>().squaredNorm();
       ++ok[i];
     };
-    add(0, solve(set).T_parent_camera);
+    add(0, solve_joint(set).T_parent_camera);
+    add(1, solve(set).T_parent_camera);
+    const Matrix6d bound = cramer_rao(n, 1000 + m);
+    bound_trans += bound.topLeftCorner<3, 3>().trace() / M;
+    bound_rot += bound.bottomRightCorner<3, 3>().trace() / M;
     const OpenCvInput in = to_opencv(set);
     for (int i = 0; i < 5; ++i) {
       try {
-        add(1 + i, opencv_solve(in, kMethods[i].first));
+        add(2 + i, opencv_solve(in, kMethods[i].first));
       } catch (const cv::Exception&) {
-        ++failed[1 + i];  // e.g. "Rotation normalization issue: determinant(R) is null"
+        ++failed[2 + i];  // e.g. "Rotation normalization issue: determinant(R) is null"
       }
     }
   }
+  const auto rms_rot = [&](int i) { return std::sqrt(rot[i] / std::max(1, ok[i])) * 180 / M_PI; };
+  const auto rms_trans = [&](int i) { return std::sqrt(trans[i] / std::max(1, ok[i])) * 1e3; };
   std::printf("| method | RMS rotation error [deg] | RMS translation error [mm] | datasets failed |\n|---|---:|---:|---:|\n");
   double best_rot = 1e9, best_trans = 1e9;
-  for (int i = 0; i < 6; ++i) {
-    const double r = std::sqrt(rot[i] / std::max(1, ok[i])) * 180 / M_PI, t = std::sqrt(trans[i] / std::max(1, ok[i])) * 1e3;
-    if (i > 0 && ok[i] > 0) best_rot = std::min(best_rot, r), best_trans = std::min(best_trans, t);
-    std::printf("| %s | %.4f | %.3f | %d |\n", i == 0 ? "handeye_covariance (noise given)" : kMethods[i - 1].second, r, t,
-                failed[i]);
+  for (int i = 0; i < 7; ++i) {
+    if (i > 1 && ok[i] > 0) best_rot = std::min(best_rot, rms_rot(i)), best_trans = std::min(best_trans, rms_trans(i));
+    std::printf("| %s | %.4f | %.3f | %d |\n",
+                i == 0 ? "handeye_covariance joint (noise given)" : i == 1 ? "handeye_covariance pairs (noise given)" : kMethods[i - 2].second,
+                rms_rot(i), rms_trans(i), failed[i]);
   }
-  const double our_rot = std::sqrt(rot[0] / ok[0]) * 180 / M_PI, our_trans = std::sqrt(trans[0] / ok[0]) * 1e3;
-  std::printf("\nOurs / best OpenCV: rotation %.2f, translation %.2f (n = %d poses, M = %d datasets)\n",
-              our_rot / best_rot, our_trans / best_trans, n, M);
+  const double crb_rot = std::sqrt(bound_rot) * 180 / M_PI, crb_trans = std::sqrt(bound_trans) * 1e3;
+  std::printf("| Cramer-Rao bound (the true noise) | %.4f | %.3f | |\n", crb_rot, crb_trans);
+  std::printf("\nJoint / best OpenCV: rotation %.2f, translation %.2f; pairs / best OpenCV: rotation %.2f, translation %.2f\n",
+              rms_rot(0) / best_rot, rms_trans(0) / best_trans, rms_rot(1) / best_rot, rms_trans(1) / best_trans);
+  std::printf("Joint / Cramer-Rao bound: rotation %.3f, translation %.3f (n = %d poses, M = %d datasets)\n",
+              rms_rot(0) / crb_rot, rms_trans(0) / crb_trans, n, M);
   return 0;
 }
 

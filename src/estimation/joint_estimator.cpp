@@ -731,13 +731,16 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
   Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity()) * inflation;
   bool robust = options.robust == JointOptions::Robust::On;
-  if (n >= 8 && options.robust != JointOptions::Robust::Off) {
+  // Residuals at round-off (noise-free input) have no tails to judge.
+  double largest_residual = 0.0;
+  for (const Linear& l : s.lin) largest_residual = std::max(largest_residual, l.e.cwiseAbs().maxCoeff());
+  if (n >= 8 && options.robust != JointOptions::Robust::Off && largest_residual > 1e-10) {
     const double z = kurtosis_z(corrected_distances(s));
     const bool passed = z <= options.kurtosis_test_z;
     result.residual_checks.push_back({"kurtosis z of the Mahalanobis residuals", z, options.kurtosis_test_z, passed});
     robust = robust || !passed;
   }
-  if (robust && n > 12) {
+  if (robust && n > 12 && largest_residual > 1e-10) {
     const std::vector<double> d2 = corrected_distances(s);
     const double scale = std::sqrt(std::max(median(d2) / 5.348, 1e-12));
     const double k_scaled = std::sqrt(options.huber_threshold_squared) * scale;

@@ -163,7 +163,9 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
   options.M = 10000;
   po::options_description description("validate: the Monte-Carlo study of the paper, section IV-A");
   description.add_options()("help,h", "show this help")(
-      "protocol", po::value(&protocols), "paper | published | rotation-dominated | pose-stream | all, or a comma list")(
+      "protocol", po::value(&protocols),
+      "paper | published | rotation-dominated | pose-stream | joint-eye-in-hand | joint-eye-to-hand | "
+      "joint-estimated-noise | all, or a comma list")(
       "lambda", po::value(&lambdas), "noise levels, comma-separated (default 1e-6,1e-5,1e-4,1e-3)")(
       "k", po::value(&options.k), "motions per dataset (default 30)")(
       "M", po::value(&options.M), "datasets per noise level (default 10000)")(
@@ -178,7 +180,8 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
   }
   std::vector<Protocol> list;
   if (protocols == "all") {
-    list = {Protocol::Paper, Protocol::Published, Protocol::RotationDominated, Protocol::PoseStream};
+    list = {Protocol::Paper, Protocol::Published, Protocol::RotationDominated, Protocol::PoseStream,
+            Protocol::JointEyeInHand, Protocol::JointEyeToHand, Protocol::JointEstimatedNoise};
   } else {
     std::stringstream in(protocols);
     for (std::string name; std::getline(in, name, ',');) list.push_back(protocol_from_string(name));
@@ -189,6 +192,38 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
   covariances.precision(17);
   char line[512];
   for (Protocol protocol : list) {
+    if (is_joint(protocol)) {
+      out << "protocol " << to_string(protocol) << ", " << options.k + 1 << " poses, M = " << options.M
+          << ": the joint estimator's X and Y, the pairs estimator's X on the same data\n";
+      out << "  lambda    X: NEES R    t     6dof  eps_t (floor)   Y: NEES R    t     6dof   pairs X: NEES 6dof"
+             "  RMS t joint / pairs [mm]  nonconv  us/solve\n";
+      for (double lambda : parse_list(lambdas, "--lambda")) {
+        options.protocol = protocol;
+        options.lambda = lambda;
+        const StudyResult r = run_study(options);
+        const MonteCarloSummary &x = r.ours, &y = r.pattern;
+        std::snprintf(line, sizeof line,
+                      "  %-8.0e     %.2f  %.2f  %.2f  %.3f (%.3f)      %.2f  %.2f  %.2f        %.2f          %.4f / %.4f"
+                      "       %6d  %8.1f\n",
+                      lambda, x.rotation.nees_mean, x.translation.nees_mean, x.pose.nees_mean, x.translation.epsilon,
+                      x.translation.floor, y.rotation.nees_mean, y.translation.nees_mean, y.pose.nees_mean,
+                      r.pairs.pose.nees_mean, r.rms_translation * 1e3, r.pairs_rms_translation * 1e3, r.not_converged,
+                      r.seconds_per_solve * 1e6);
+        out << line << std::flush;
+        csv << to_string(protocol) << "," << lambda << "," << options.k << "," << options.M << "," << x.rotation.epsilon
+            << "," << x.rotation.floor << "," << x.translation.epsilon << "," << x.translation.floor << ","
+            << x.rotation.nees_mean << "," << x.translation.nees_mean << "," << x.pose.nees_mean << ","
+            << x.rotation.coverage_95 << "," << x.translation.coverage_95 << "," << x.pose.coverage_95 << ",,,"
+            << r.not_converged << "," << r.seconds_per_solve * 1e6 << "\n";
+        for (const auto& [kind, matrix] : {std::pair<const char*, const Matrix6d*>{"predicted", &x.mean_predicted_covariance},
+                                           {"monte_carlo", &x.monte_carlo_covariance}}) {
+          covariances << to_string(protocol) << "," << lambda << "," << kind;
+          for (double v : to_row_major_6x6(*matrix)) covariances << "," << v;
+          covariances << "\n";
+        }
+      }
+      continue;
+    }
     out << "protocol " << to_string(protocol) << ", k = " << options.k << ", M = " << options.M << "\n";
     out << "  lambda    eps_R (floor)    eps_t (floor)    NEES R    t     6dof   cov95 R    t     6dof  eq.35/56 NEES R  t"
            "   nonconv  us/solve\n";
