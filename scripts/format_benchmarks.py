@@ -62,6 +62,7 @@ _, no_trim = medians(f"{run}/no_trim.json")
 _, compare = medians(f"{run}/compare.json")
 accuracy = open(f"{run}/accuracy.md").read()
 validation = open(f"{run}/validation.txt").read()
+systematic = open(f"{run}/systematic.txt").read()
 next_best_pose = open(f"{run}/next_best_pose.md").read()
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 
@@ -104,6 +105,42 @@ lines += [
     f"| pose stream: time(10 000) / time(1 000) in 8-12 | {ratio(default, 'BM_SolveSamples', 10000, 1000):.1f} | {ratio(no_trim, 'BM_SolveSamples', 10000, 1000):.1f} |",
     "",
     "The reference Python implementation takes about 25 ms at k = 30.",
+    "",
+    "### The joint estimator (X and the pattern pose from the absolute poses)",
+    "",
+    "`BM_SolveJoint/k`: k+1 poses, noise given (the paper's noise at lambda = 1e-5, robot noise included, so",
+    "the weights follow the estimate); `BM_SolveJointEstimatedNoise/30`: no noise block, the camera and",
+    "robot noise estimated (REML) with the solve; `BM_SuggestNextPoseJoint/n`: 150 candidates ranked for a",
+    "session of n samples, each by a rank-6 update of the 12x12 information.",
+    "",
+    "| goal (issue 16) | default allocator | heap trimming off | met |",
+    "|---|---:|---:|:---:|",
+]
+def goal(label, d, t, ok):
+    return f"| {label} | {d} | {t} | {'yes' if ok else 'no'} |"
+joint_ratio = (ratio(default, 'BM_SolveJoint', 10000, 1000), ratio(no_trim, 'BM_SolveJoint', 10000, 1000))
+estimated = (default['BM_SolveJointEstimatedNoise/30'] / default['BM_SolveJoint/30'],
+             no_trim['BM_SolveJointEstimatedNoise/30'] / no_trim['BM_SolveJoint/30'])
+lines += [
+    goal("31 poses, solve + covariance <= 60 us", f"{default['BM_SolveJoint/30']:.1f} us", f"{no_trim['BM_SolveJoint/30']:.1f} us",
+         min(default['BM_SolveJoint/30'], no_trim['BM_SolveJoint/30']) <= 60),
+    goal("1 000 poses <= 3 ms", f"{default['BM_SolveJoint/1000'] / 1e3:.2f} ms", f"{no_trim['BM_SolveJoint/1000'] / 1e3:.2f} ms",
+         min(default['BM_SolveJoint/1000'], no_trim['BM_SolveJoint/1000']) <= 3000),
+    goal("10 000 poses <= 30 ms", f"{default['BM_SolveJoint/10000'] / 1e3:.1f} ms", f"{no_trim['BM_SolveJoint/10000'] / 1e3:.1f} ms",
+         min(default['BM_SolveJoint/10000'], no_trim['BM_SolveJoint/10000']) <= 30000),
+    goal("time(10 000) / time(1 000) in 8-12", f"{joint_ratio[0]:.1f}", f"{joint_ratio[1]:.1f}", any(8 <= r <= 12 for r in joint_ratio)),
+    goal("estimated noise <= 3x given noise (31 poses)", f"{estimated[0]:.1f}x", f"{estimated[1]:.1f}x", min(estimated) <= 3),
+    goal("ranking 150 candidates at 30 samples <= 5 ms", f"{default['BM_SuggestNextPoseJoint/30'] / 1e3:.2f} ms",
+         f"{no_trim['BM_SuggestNextPoseJoint/30'] / 1e3:.2f} ms", default['BM_SuggestNextPoseJoint/30'] <= 5000),
+    goal("ranking 150 candidates at 300 samples <= 20 ms", f"{default['BM_SuggestNextPoseJoint/300'] / 1e3:.2f} ms",
+         f"{no_trim['BM_SuggestNextPoseJoint/300'] / 1e3:.2f} ms", default['BM_SuggestNextPoseJoint/300'] <= 20000),
+]
+lines += [
+    "",
+    "Where the time goes at 31 poses (perf): three linearisations of 31 samples (the residual's log,",
+    "each sample's 6x6 Cholesky inverse, the 12x12 information), the O(n) start with its degeneracy",
+    "checks (16 us) and the kurtosis test. The estimated-noise mode adds REML rounds, each a",
+    "Gauss-Newton run and a variance-component fit.",
     "",
     "### Why two columns",
     "",
@@ -167,17 +204,37 @@ lines += [
     "",
     next_best_pose.strip(),
     "",
-    "Time for one suggestion (150 sampled candidates ranked; `BM_SuggestNextPose/n`, n samples so far):",
+    "Time for one suggestion (150 sampled candidates ranked; n samples so far): `BM_SuggestNextPose/n` ranks",
+    "with the pairs estimator (a re-solve per candidate), `BM_SuggestNextPoseJoint/n` with the joint one",
+    "(a rank-6 update of the information per candidate):",
     "",
-    "| samples so far | default allocator [ms] | heap trimming off [ms] |",
-    "|---:|---:|---:|",
-] + [f"| {name.split('/')[1]} | {default[name] / 1e3:,.1f} | {no_trim[name] / 1e3:,.1f} |" for name in sorted(suggest, key=lambda n: int(n.split('/')[1]))] + [
+    "| benchmark | default allocator [ms] | heap trimming off [ms] |",
+    "|---|---:|---:|",
+] + [f"| `{name}` | {default[name] / 1e3:,.2f} | {no_trim[name] / 1e3:,.2f} |" for name in sorted(suggest, key=lambda n: (n.split('/')[0], int(n.split('/')[1])))] + [
+    "",
+    "## Honesty under systematic errors and on real data",
+    "",
+    "`test_systematic` (simulation/systematic.h): 200 sessions of 30 poses per case, the NEES of X for the",
+    "plain covariance (the Gaussian model with the stated detector noise taken as true) and for the default",
+    "path (outlier stage, the missing noise estimated when the stated noise fails chi2, Huber and the sandwich",
+    "when the residuals are heavy-tailed). Each is judged against its own pseudo-true X, the limit of the same",
+    "procedure on 2 000 poses of the same robot (the true X for heavy tails); 20 robots for the kinematic case.",
+    "Then the split-half check on 60-pose sessions with robust mode on. `test_real_data`: the real eye-to-hand",
+    "AprilTag session of `../shared/realdata` run the node's way, against ViSP's published X with the",
+    "combined uncertainty (ours and the jackknife spread for theirs).",
+    "",
+    "```",
+    systematic.strip(),
+    "```",
     "",
     "## Monte-Carlo validation (`handeye validate --protocol all --M 10000`)",
     "",
     "epsilon is eq. (63), with its sampling floor in brackets. NEES is expected to be 3 (R, t) and",
     "6 (6 dof). Coverage is the share inside the predicted 95% ellipsoid. The last two columns are",
-    "eq. (35)/(56) as printed. The time column covers solve and covariance.",
+    "eq. (35)/(56) as printed. The time column covers solve and covariance. The joint-* protocols run",
+    "the joint estimator on pose streams of k+1 poses and give the NEES of X and of Y, with the pairs",
+    "estimator's X on the same data beside it; with the noise estimated, the NEES of X is bounded by",
+    "Hotelling's F mean 6 nu / (nu - 2) = 6.43 for nu = 29 (one variance per axis from the residuals).",
     "",
     "```",
     validation.strip(),
