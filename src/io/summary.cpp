@@ -105,8 +105,23 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     estimated.pop_back();
     out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDeg);
     if (!c.noise_model.empty()) out += "                        (" + c.noise_model + ")\n";
+  } else if (!c.noise_components.empty()) {
+    out += line("  noise                 given, too small for the residuals: the missing part ESTIMATED");
+    out += "                        (" + c.noise_model + ")\n";
   } else {
     out += line("  noise                 given (the noise block, or the detections' covariances)");
+  }
+  if (c.method == Method::Joint) {
+    std::string checks;
+    for (const Calibration::ResidualCheck& check : c.residual_checks) {
+      checks += (checks.empty() ? "" : "; ") + check.test + " " + number_text(check.statistic, 3) + " (bound " +
+                number_text(check.bound, 3) + (check.passed ? ", passed)" : ", FAILED)");
+    }
+    if (!checks.empty()) out += "  residual checks       " + checks + "\n";
+    out += c.covariance_kind == "sandwich"
+               ? line("  covariance            ROBUST: Huber loss (%d sample(s) down-weighted), sandwich x%.2f", c.downweighted,
+                      c.covariance_inflation)
+               : line("  covariance            inverse information x%.3f", c.covariance_inflation);
   }
   if (c.method == Method::Joint) {
     out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,

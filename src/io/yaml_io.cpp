@@ -531,7 +531,32 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       << (calibration.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals");
   out << YAML::Key << "model" << YAML::Value;
   emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
+  if (!calibration.noise_model.empty()) out << YAML::Key << "how" << YAML::Value << calibration.noise_model;
+  if (!calibration.noise_components.empty()) {  // joint: each number the residuals estimated, with its 1 sigma
+    out << YAML::Key << "estimated" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::NoiseComponent& c : calibration.noise_components) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "value"
+          << YAML::Value << c.value << YAML::Key << "sigma" << YAML::Value << c.sigma << YAML::Key << "unit" << YAML::Value
+          << c.unit << YAML::Key << "supported" << YAML::Value << !c.at_bound << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
   out << YAML::EndMap;
+  if (calibration.method == Method::Joint) {  // which tests ran on the residuals, and what they chose
+    out << YAML::Key << "residual_checks" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::ResidualCheck& c : calibration.residual_checks) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "test" << YAML::Value << c.test << YAML::Key << "statistic"
+          << YAML::Value << c.statistic << YAML::Key << "bound" << YAML::Value << c.bound << YAML::Key << "passed"
+          << YAML::Value << c.passed << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+    out << YAML::Key << "robust" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "loss" << YAML::Value << calibration.loss;
+    out << YAML::Key << "covariance" << YAML::Value << calibration.covariance_kind;
+    out << YAML::Key << "downweighted" << YAML::Value << calibration.downweighted;
+    out << YAML::Key << "covariance_inflation" << YAML::Value << calibration.covariance_inflation;
+    out << YAML::EndMap;
+  }
 
   out << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
   for (const auto& [name, stage] : {std::pair<const char*, const StageDiagnostics*>{"rotation", &calibration.rotation_stage},

@@ -28,18 +28,21 @@
 // rotation variance), carried into the camera by D_i. What is estimated:
 //   - no noise given: C with as many numbers as the residuals' dof nu = n - 2
 //     support (the full 6x6 from nu >= 60, the 6 per-axis variances from 12, else
-//     one for translation and one for rotation), and R from nu >= 6: the robot's
-//     share is told from the camera's by how D_i turns it from pose to pose;
+//     one for translation and one for rotation), and the robot's rotation noise
+//     from nu >= 6, told from the camera's by the lever arms D_i that change from
+//     pose to pose. An isotropic robot translation noise is isotropic in every
+//     frame, so it is the camera's under another name: it is not fitted;
 //   - noise given, and the residuals pass chi2 at 99.9%: nothing;
 //   - noise given, and they fail: the missing part, c and R (C when no camera
 //     noise was stated). A warning says so.
 // The numbers are fitted by REML, alternating with the solve, and reported with
 // their uncertainty (Calibration::noise_components); one at its bound (0) is one
-// the residuals do not support. A noise estimated from few residuals is itself
-// uncertain: the covariance is multiplied by 1 / (1 - q), q = (1/6) sum_kl
-// Cov(theta)_kl tr(Sx^-1 dSx/dtheta_k Sx^-1 dSx/dtheta_l), the second-order mean
-// of the NEES of X over the noise estimate's error (it is nu / (nu - 2) for one
-// scale from nu dof), so the NEES of X stays about 6.
+// the residuals do not support, and a robot number whose sigma the camera's
+// numbers inflate tenfold is dropped as not separable. A noise estimated from
+// few residuals is itself uncertain: the covariance is multiplied by 1 / (1 - q),
+// q the second-order excess of the NEES of X over the noise estimate's error (its
+// spread and the bias of Sigma_X(theta_hat); noise_inflation), exactly 2 / nu
+// for one scale from nu dof, so the NEES of X stays about 6.
 //
 // Robust mode. The Mahalanobis residuals d_i (leverage-corrected, so each is
 // chi2(6) under the model) are tested for heavy tails (Mardia's kurtosis, z
