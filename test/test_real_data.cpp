@@ -27,10 +27,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The real data: $HANDEYE_REALDATA, else ../shared/realdata beside the repository.
+/// The real data: $HANDEYE_REALDATA, else shared/realdata beside the repository or
+/// beside one of its parents (a clone may sit deeper than the working copy), else
+/// this workplace's /work/shared/realdata.
 fs::path realdata() {
   if (const char* env = std::getenv("HANDEYE_REALDATA")) return env;
-  return fs::path(HANDEYE_REPOSITORY_DIR) / ".." / "shared" / "realdata";
+  for (fs::path dir = fs::path(HANDEYE_REPOSITORY_DIR).parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    if (fs::exists(dir / "shared" / "realdata")) return dir / "shared" / "realdata";
+    if (dir == dir.root_path()) break;
+  }
+  return "/work/shared/realdata";
 }
 
 Eigen::Isometry3d theta_u_pose(const Eigen::Vector3d& t, const Eigen::Vector3d& theta_u) {
@@ -95,7 +101,7 @@ Calibration calibrate_like_the_node(const SampleSet& samples) {
 TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithin3SigmaOfThePublishedX) {
   const fs::path dir = realdata() / "visp-franka" / "data-eye-to-hand";
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir
-                               << ": put ../shared/realdata beside the repository or set HANDEYE_REALDATA";
+                               << ": put shared/realdata beside the repository (or a parent of it), or set HANDEYE_REALDATA";
   std::printf("[real eye-to-hand, AprilTag, the node's path] %s\n", dir.c_str());
   const RealSession session = eye_to_hand_session(dir);
   EXPECT_EQ(session.detected, 8) << "every image shows the tag";

@@ -133,14 +133,18 @@ class JointProblem {
 
   /// Linearises every sample at (X, Y) under `model`, with Huber weights at
   /// threshold k_scaled (0: squared loss). Throws InvalidNoise on a singular S_i.
-  void linearize_all(const NoiseModel& model, double k_scaled, Solution& s) const {
+  /// `weights` (S_i^-1 = L^-T L^-1) from `reuse` when given: the robot's term moves
+  /// S_i with X and Y, but within a sigma of the solution it moves it negligibly.
+  void linearize_all(const NoiseModel& model, double k_scaled, Solution& s, const Solution* reuse = nullptr) const {
     const Frame f(s.X, s.Y);
     const std::size_t n = terms_.size();
     s.lin.resize(n), s.L_inverse.resize(n), s.weight.assign(n, 1.0);
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       linearize(terms_[i], f, s.lin[i], model.robot_free_or_given);
-      if (!inverse_cholesky(model.covariance(terms_[i], s.lin[i].D), s.L_inverse[i])) {
+      if (reuse) {
+        s.L_inverse[i] = reuse->L_inverse[i];
+      } else if (!inverse_cholesky(model.covariance(terms_[i], s.lin[i].D), s.L_inverse[i])) {
         throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
                            "samples[" + std::to_string(i) + "]",
                            "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
@@ -195,7 +199,9 @@ class JointProblem {
       bool moved = false;
       for (int halving = 0; halving < 30 && !moved; ++halving, step *= 0.5) {
         trial.X = apply(s.X, step.head<6>()), trial.Y = apply(s.Y, step.tail<6>());
-        linearize_all(model, k_scaled, trial);
+        // The weights follow the estimate through its first step (the start may be
+        // far); after that they are kept, and the steps compare one cost function.
+        linearize_all(model, k_scaled, trial, iteration == 1 ? nullptr : &s);
         moved = trial.cost <= s.cost * (1.0 + 1e-12) || cost_at(trial.X, trial.Y, s, k_scaled) <= s.cost * (1.0 + 1e-12);
       }
       if (!moved) {
@@ -432,14 +438,14 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
     const Matrix6x12 AJ = A.lazyProduct(s.lin[i].J);
     for (std::size_t a = 0; a < K; ++a) {
       const Free& c = free[active[a]];
-      Matrix6d G = Matrix6d::Zero();
       if (rank_of(c.kind) > 0) {
-        const auto F = factor(c, problem.terms()[i], s.lin[i].D);
-        G = F * F.transpose();
-      } else {
-        G(c.a, c.b) = 1.0, G(c.b, c.a) = 1.0;
+        const ComponentFactors F = factor(c, problem.terms()[i], s.lin[i].D);
+        V[a] = F.lazyProduct(F.transpose().lazyProduct(AJ));  // G_k A J
+      } else {  // G = e_a e_b^T + e_b e_a^T (or e_a e_a^T): two rows of A J
+        V[a].setZero();
+        V[a].row(c.a) = AJ.row(c.b);
+        V[a].row(c.b) = AJ.row(c.a);
       }
-      V[a] = G.lazyProduct(AJ);  // G_k A J
       W[a] = A.lazyProduct(V[a]);  // A G_k A J
       K_sum[a].noalias() += s.weight[i] * AJ.transpose().lazyProduct(V[a]);
     }
@@ -568,11 +574,19 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   std::vector<Term> terms = make_terms(samples, given);
   bool any_camera_stated = false, any_robot_stated = false;
   for (const Term& t : terms) any_camera_stated = any_camera_stated || !t.camera.isZero(0.0), any_robot_stated = any_robot_stated || t.has_robot;
-  const Isometry3d X0 = checked_initial_guess(samples, options.checks);  // throws the degeneracy errors
+  // The start throws the degeneracy errors. With a robust stage behind it, only a
+  // gross angle mismatch (a flipped tag, a wrong pairing) is refused there: smaller
+  // ones are what Huber's loss is for.
+  SolverOptions checks = options.checks;
+  if (options.robust != JointOptions::Robust::Off) {
+    checks.angle_mismatch_sigmas = std::max(checks.angle_mismatch_sigmas, 20.0);
+    checks.min_angle_mismatch_without_noise = std::max(checks.min_angle_mismatch_without_noise, 5.0 * M_PI / 180.0);
+  }
+  const Isometry3d X0 = checked_initial_guess(samples, checks);
   std::vector<Isometry3d> loops;
   loops.reserve(samples.samples.size());
   for (const PoseSample& s : samples.samples) loops.push_back(samples.rig.pattern_pose(s.T_base_effector, X0, s.T_camera_pattern));
-  const Isometry3d Y0 = mean_pose(loops);
+  const Isometry3d Y0 = mean_pose(loops, 3);  // a start: Gauss-Newton refines it
   JointProblem problem(std::move(terms), options);
 
   Calibration result;
@@ -630,7 +644,11 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     for (int round = 0; round < options.max_noise_rounds; ++round) {
       apply_components(free, theta, model);
       problem.gauss_newton(model, 0.0, s);
-      fit = fit_variance_components(components, component_data(problem, free, model, s), theta);
+      // A few AI-REML steps per round: the residuals move with the next solve
+      // anyway, and the rounds stop when the numbers no longer move.
+      VarianceComponentOptions per_round;
+      per_round.max_iterations = 3;
+      fit = fit_variance_components(components, component_data(problem, free, model, s), theta, per_round);
       // A robot component the camera's can mimic (its sigma inflated 10x by the
       // others) is not separable: held at 0, the camera's numbers take its share.
       int confounded = -1;

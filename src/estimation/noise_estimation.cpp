@@ -16,12 +16,12 @@ const char* to_string(NoiseSource source) {
   return source == NoiseSource::RepeatedObservations ? "repeated_observations" : "residuals";
 }
 
-Isometry3d mean_pose(const std::vector<Isometry3d>& poses) {
+Isometry3d mean_pose(const std::vector<Isometry3d>& poses, int max_iterations) {
   if (poses.empty()) throw std::invalid_argument("mean_pose of no poses");
   Matrix3d R = poses.front().linear();
   Vector3d t = Vector3d::Zero();
   for (const Isometry3d& p : poses) t += p.translation();
-  for (int iteration = 0; iteration < 20; ++iteration) {
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
     Vector3d step = Vector3d::Zero();
     for (const Isometry3d& p : poses) step += so3::log(p.linear() * R.transpose());
     step /= static_cast<double>(poses.size());

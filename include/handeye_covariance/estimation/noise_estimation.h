@@ -58,7 +58,7 @@ NoiseEstimate noise_from_residuals(const SampleSet& samples, const Eigen::Isomet
 
 /// The mean pose of eq. (66-67): the rotation mean on SO(3) (iterated about
 /// the current mean so it holds near pi too) and the arithmetic mean of t.
-Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses);
+Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses, int max_iterations = 20);
 
 /// One sample's pattern pose against the pattern's fixed pose `pattern`
 /// (eq. 64-65 about P_bar = X^-1 E^-1 pattern, or X^-1 E pattern eye-to-hand),
