@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <cstdio>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/vision/chessboard.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
 #include "handeye_covariance/simulation/tag_renderer.h"
@@ -295,6 +298,87 @@ TEST(PatternPose, WithoutRectificationOrEdgeModelTheCovarianceIsWrong) {
               conservative.nees_rotation, conservative.nees_translation);
   EXPECT_GT(biased.nees_translation, 4.5);  // lines fitted to curved edges: a depth bias
   EXPECT_LT(conservative.nees_translation, 2.0);  // covariance too large
+}
+
+/// A chessboard of `t` seen at T_camera_pattern by `camera` (no distortion): the
+/// board drawn at 4 px per mm, warped by the plane's homography, a little blur.
+cv::Mat render_chessboard(const ChessboardTarget& t, const CameraModel& camera, const Eigen::Isometry3d& T_camera_pattern) {
+  const double px_per_m = 4000.0;
+  const int margin = 2;  // squares of white around the board
+  const int w = static_cast<int>((t.columns + 1 + 2 * margin) * t.square * px_per_m);
+  const int h = static_cast<int>((t.rows + 1 + 2 * margin) * t.square * px_per_m);
+  cv::Mat board(h, w, CV_8UC1, cv::Scalar(255));
+  for (int r = 0; r < t.rows + 1; ++r) {
+    for (int c = 0; c < t.columns + 1; ++c) {
+      if ((r + c) % 2 == 0) continue;  // the square outside the first inner corner is white (OpenCV's origin)
+      const cv::Point a(static_cast<int>((margin + c) * t.square * px_per_m), static_cast<int>((margin + r) * t.square * px_per_m));
+      const cv::Point b(static_cast<int>((margin + c + 1) * t.square * px_per_m) - 1,
+                        static_cast<int>((margin + r + 1) * t.square * px_per_m) - 1);
+      cv::rectangle(board, a, b, cv::Scalar(0), cv::FILLED);
+    }
+  }
+  // Board pixel (u, v) -> pattern point: x = u / s - (margin + 1) square, likewise y
+  // (the first inner corner is one square in from the board's corner).
+  Eigen::Matrix3d board_to_pattern;
+  board_to_pattern << 1.0 / px_per_m, 0, -(margin + 1) * t.square, 0, 1.0 / px_per_m, -(margin + 1) * t.square, 0, 0, 1;
+  Eigen::Matrix3d plane;  // pattern (x, y, 1) -> camera: [r1 r2 t]
+  plane << T_camera_pattern.linear().col(0), T_camera_pattern.linear().col(1), T_camera_pattern.translation();
+  const Eigen::Matrix3d H = camera.K * plane * board_to_pattern;
+  cv::Mat Hcv(3, 3, CV_64F);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) Hcv.at<double>(r, c) = H(r, c);
+  }
+  cv::Mat image;
+  cv::warpPerspective(board, image, Hcv, cv::Size(camera.width, camera.height), cv::INTER_AREA, cv::BORDER_CONSTANT,
+                      cv::Scalar(255));
+  cv::GaussianBlur(image, image, cv::Size(3, 3), 0.6);
+  return image;
+}
+
+TEST(Chessboard, FindsTheBoardInItsFrameAndRefusesBadTargets) {
+  CameraModel camera;
+  camera.K << 607.6, 0, 323.5, 0, 607.6, 243.3, 0, 0, 1;
+  camera.width = 640, camera.height = 480;
+  const ChessboardTarget board{9, 6, 0.0236};
+  // The board turned in its plane by 0 and 90 degrees: the corner order follows the board, not the image.
+  for (double roll : {0.0, M_PI / 2}) {
+    // The board's centre 0.42 m in front of the camera, the board turned about it.
+    const Eigen::Vector3d centre(0.5 * (board.columns - 1) * board.square, 0.5 * (board.rows - 1) * board.square, 0.0);
+    const Eigen::Isometry3d about_centre = se3::make_pose(so3::exp(Eigen::Vector3d(0.0, 0.0, roll)), Eigen::Vector3d::Zero()) *
+                                           se3::make_pose(Eigen::Matrix3d::Identity(), -centre);
+    const Eigen::Isometry3d truth =
+        se3::make_pose(so3::exp(Eigen::Vector3d(0.25, -0.2, 0.1)), Eigen::Vector3d(0.01, -0.01, 0.42)) * about_centre;
+    const cv::Mat image = render_chessboard(board, camera, truth);
+    const ChessboardDetection found = detect_chessboard(image, board);
+    if (!found.points) cv::imwrite(::testing::TempDir() + "/chessboard_not_found.png", image);
+    ASSERT_TRUE(found.points) << found.refusal << " (the image: " << ::testing::TempDir() << "/chessboard_not_found.png)";
+    EXPECT_EQ(found.points->image.size(), 54u);
+    PixelNoise noise;
+    const PatternPoseResult pose = estimate_pose(camera, *found.points, noise);
+    ASSERT_TRUE(pose.pose) << pose.refusal;
+    const Vector6d error = test::pose_perturbation(pose.pose->T_camera_pattern, truth);
+    std::printf("rendered chessboard (in-plane turn %.0f deg): %d corners, RMS %.3f px, error %.3f mm / %.4f deg\n",
+                roll * 180 / M_PI, pose.pose->points, pose.pose->rms_px, error.head<3>().norm() * 1e3,
+                error.tail<3>().norm() * 180 / M_PI);
+    EXPECT_LT(error.head<3>().norm(), 1e-3);  // the frame convention (chessboard.h)
+    EXPECT_LT(error.tail<3>().norm(), 0.3 * M_PI / 180.0);
+    EXPECT_LT(pose.pose->rms_px, 0.5);
+  }
+
+  EXPECT_FALSE(detect_chessboard(cv::Mat(480, 640, CV_8UC1, cv::Scalar(255)), board).points);
+  const auto refused = [](const ChessboardTarget& t, const std::string& what) {
+    try {
+      check_chessboard(t, "target.yaml");
+      ADD_FAILURE() << "accepted " << t.columns << " x " << t.rows;
+    } catch (const HandEyeError& e) {
+      EXPECT_EQ(e.code(), ErrorCode::InvalidLayout);
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused({8, 6, 0.02}, "turned by 180 degrees");
+  refused({2, 5, 0.02}, "at least 3 x 3");
+  refused({9, 6, -0.02}, "positive length");
+  EXPECT_NO_THROW(check_chessboard(board, "target.yaml"));
 }
 
 TEST(PatternPose, EdgeFitCovarianceOfASquare) {

@@ -172,31 +172,67 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel
   return J;
 }
 
-PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
-                                        const std::vector<TagCorners>& detections, PixelNoise& noise,
-                                        const PatternPoseOptions& options) {
-  PatternPoseResult result;
-  std::vector<Vector3d> object;
-  std::vector<cv::Point2d> image;
-  std::vector<int> ids;
+TagCorrespondences tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
+                                       const PatternPoseOptions& options) {
+  TagCorrespondences result;
+  PointCorrespondences points;
   for (const TagCorners& detection : detections) {
     const TagPlacement* tag = layout.find(detection.id);
     if (!tag) continue;
-    if (std::find(ids.begin(), ids.end(), detection.id) != ids.end()) {
+    if (std::find(points.ids.begin(), points.ids.end(), detection.id) != points.ids.end()) {
       result.refusal = "tag " + std::to_string(detection.id) +
                        " is seen twice; two printed copies of one id make the pose ambiguous, remove one";
       return result;
     }
-    ids.push_back(detection.id);
+    points.ids.push_back(detection.id);
     const auto corners = tag->corners();
     for (int c = 0; c < 4; ++c) {
-      object.push_back(corners[c]);
-      image.emplace_back(detection.corners[c].x(), detection.corners[c].y());
+      points.object.push_back(corners[c]);
+      points.image.push_back(detection.corners[c]);
     }
   }
-  if (static_cast<int>(ids.size()) < std::max(1, options.min_tags)) {
-    result.refusal = "saw " + std::to_string(ids.size()) + " of the pattern's tags, need " +
+  if (static_cast<int>(points.ids.size()) < std::max(1, options.min_tags)) {
+    result.refusal = "saw " + std::to_string(points.ids.size()) + " of the pattern's tags, need " +
                      std::to_string(std::max(1, options.min_tags)) + "; bring the pattern fully into view";
+    return result;
+  }
+  // The corner noise model, one 8 x 8 block per tag (per unit sigma^2).
+  const int n = static_cast<int>(points.object.size());
+  points.corner_covariance = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  if (options.corner_noise == CornerNoiseModel::EdgeFit) {
+    for (int t = 0; t < n / 4; ++t) {
+      std::array<Eigen::Vector2d, 4> corners;
+      for (int c = 0; c < 4; ++c) corners[c] = points.image[static_cast<std::size_t>(4 * t + c)];
+      points.corner_covariance.block<8, 8>(8 * t, 8 * t) = edge_fit_corner_covariance(corners);
+      const Eigen::LLT<Eigen::Matrix<double, 8, 8>> llt(points.corner_covariance.block<8, 8>(8 * t, 8 * t));
+      if (llt.info() != Eigen::Success) {
+        result.refusal = "tag " + std::to_string(points.ids[static_cast<std::size_t>(t)]) +
+                         " is seen edge-on (its corners are nearly collinear)";
+        return result;
+      }
+    }
+  }
+  points.blocks = 8;
+  result.points = points;
+  return result;
+}
+
+PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
+                                        const std::vector<TagCorners>& detections, PixelNoise& noise,
+                                        const PatternPoseOptions& options) {
+  const TagCorrespondences found = tag_correspondences(layout, detections, options);
+  if (!found.points) return {std::nullopt, found.refusal};
+  return estimate_pose(camera, *found.points, noise, options);
+}
+
+PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespondences& points, PixelNoise& noise,
+                                const PatternPoseOptions& options) {
+  PatternPoseResult result;
+  const std::vector<Vector3d>& object = points.object;
+  std::vector<cv::Point2d> image;
+  for (const Eigen::Vector2d& p : points.image) image.emplace_back(p.x(), p.y());
+  if (object.size() < 4 || object.size() != image.size()) {
+    result.refusal = "PnP needs at least 4 points, got " + std::to_string(object.size());
     return result;
   }
 
@@ -206,8 +242,8 @@ PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraMod
   cv::Mat rvec, tvec;
   const int method = coplanar(object) ? cv::SOLVEPNP_IPPE : (object.size() >= 6 ? cv::SOLVEPNP_SQPNP : -1);
   if (method < 0 || !cv::solvePnP(object_cv, image, K, D, rvec, tvec, false, method)) {
-    result.refusal = "PnP found no pose for tags " + std::to_string(ids.size()) +
-                     " (a non-planar layout needs at least 2 tags in view)";
+    result.refusal = "PnP found no pose for " + std::to_string(object.size()) +
+                     " points (a non-planar target needs at least 6 in view)";
     return result;
   }
   cv::solvePnPRefineLM(object_cv, image, K, D, rvec, tvec);
@@ -224,38 +260,33 @@ PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraMod
   pose.points = static_cast<int>(object.size());
   pose.degrees_of_freedom = 2 * pose.points - 6;
   pose.rms_px = std::sqrt(unweighted / (2.0 * pose.points));
-  pose.ids = ids;
+  pose.ids = points.ids;
   for (const Vector3d& p : object) {
     if ((pose.T_camera_pattern * p).z() <= 0.0) {
-      result.refusal = "the PnP solution puts the pattern behind the camera; check the tag layout's sizes and ids";
+      result.refusal = "the PnP solution puts the pattern behind the camera; check the target's sizes and ids";
       return result;
     }
   }
   if (!(pose.rms_px <= options.max_rms_px)) {
     result.refusal = "reprojection RMS " + number_text(pose.rms_px) + " px exceeds " + number_text(options.max_rms_px) +
-                     " px; a tag is misdetected or the layout (sizes, positions) does not match the printed pattern";
+                     " px; a point is misdetected or the target file (sizes, positions) does not match the printed target";
     return result;
   }
 
-  // The corner noise model's weights, one 8 x 8 block per tag.
+  // The weights: the inverse of the detector's corner covariance, block by block.
   const int n = pose.points;
   Eigen::MatrixXd weight = Eigen::MatrixXd::Identity(2 * n, 2 * n);
-  if (options.corner_noise == CornerNoiseModel::EdgeFit) {
-    for (int t = 0; t < n / 4; ++t) {
-      std::array<Eigen::Vector2d, 4> corners;
-      for (int c = 0; c < 4; ++c) corners[c] = Eigen::Vector2d(image[4 * t + c].x, image[4 * t + c].y);
-      const Eigen::Matrix<double, 8, 8> C = edge_fit_corner_covariance(corners);
-      const Eigen::LLT<Eigen::Matrix<double, 8, 8>> llt(C);
-      if (llt.info() != Eigen::Success) {
-        result.refusal = "tag " + std::to_string(ids[t]) + " is seen edge-on (its corners are nearly collinear)";
-        return result;
-      }
-      weight.block<8, 8>(8 * t, 8 * t) = llt.solve(Eigen::Matrix<double, 8, 8>::Identity());
+  if (points.corner_covariance.rows() == 2 * n) {
+    const int b = std::max(2, points.blocks);
+    for (int start = 0; start < 2 * n; start += b) {
+      const int size = std::min(b, 2 * n - start);
+      weight.block(start, start, size, size) =
+          points.corner_covariance.block(start, start, size, size).ldlt().solve(Eigen::MatrixXd::Identity(size, size));
     }
   }
   const auto residuals = [&](const Isometry3d& T) {
     Eigen::VectorXd r(2 * n);
-    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = Eigen::Vector2d(image[i].x, image[i].y) - camera.project(T * object[i]);
+    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = points.image[static_cast<std::size_t>(i)] - camera.project(T * object[i]);
     return r;
   };
   // Gauss-Newton on the weighted residuals, from the unweighted PnP solution
@@ -277,7 +308,7 @@ PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraMod
   pose.residual_sum_of_squares = r.dot(weight * r);
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(information);
   if (!(eig.eigenvalues()(0) > 1e-12 * eig.eigenvalues()(5)) || !pose.T_camera_pattern.matrix().allFinite()) {
-    result.refusal = "the corners do not constrain all six pose parameters (degenerate view)";
+    result.refusal = "the points do not constrain all six pose parameters (degenerate view)";
     return result;
   }
   noise.add(pose.residual_sum_of_squares, pose.degrees_of_freedom);

@@ -117,8 +117,37 @@ struct PatternPoseResult {
   std::string refusal;  // why there is no pose (empty when there is one)
 };
 
+/// What a detector found of a target: the target's points (pattern frame, m) and
+/// where they are in the image (px), with the detector's corner noise model.
+struct PointCorrespondences {
+  std::vector<Eigen::Vector3d> object;
+  std::vector<Eigen::Vector2d> image;
+  std::vector<int> ids;  // the tags, markers or corners used (for messages and PatternPose::ids)
+  /// (2n x 2n) per unit sigma^2, block-diagonal in blocks of `blocks` rows (8: one
+  /// AprilTag's four corners under the edge-fit model; 2: independent corners).
+  /// Empty: independent corners, identity.
+  Eigen::MatrixXd corner_covariance;
+  int blocks = 2;
+};
+
+/// PnP (IPPE for a planar target, SQPnP otherwise; then Levenberg-Marquardt), a
+/// Gauss-Newton refinement weighed by the corner noise model, and the covariance
+/// sigma^2 (J^T C^-1 J)^-1 with sigma pooled by `noise` (this frame's residuals
+/// added first). Every detector ends here.
+PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespondences& points, PixelNoise& noise,
+                                const PatternPoseOptions& options = {});
+
+/// The corners of the detected tags that belong to `layout` (others are ignored),
+/// with the corner noise model of `options` (EdgeFit: one 8 x 8 block per tag).
+struct TagCorrespondences {
+  std::optional<PointCorrespondences> points;
+  std::string refusal;  // e.g. too few tags, a tag seen twice or edge-on
+};
+TagCorrespondences tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
+                                       const PatternPoseOptions& options = {});
+
 /// The pattern pose from the detected tags that belong to `layout` (others are
-/// ignored). The covariance uses `noise.sigma()` after adding this frame's
+/// ignored): tag_correspondences, then estimate_pose. The covariance uses `noise.sigma()` after adding this frame's
 /// residuals to it (the caller keeps one PixelNoise per camera).
 PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
                                         const std::vector<TagCorners>& detections, PixelNoise& noise,

@@ -1,0 +1,45 @@
+// A printed chessboard as a calibration target (no ROS): OpenCV's
+// findChessboardCornersSB finds the inner corners to sub-pixel accuracy, and
+// estimate_pose (pattern_pose.h) gives the board's pose with its covariance.
+//
+// The pattern frame is OpenCV's calibration convention: the origin at the first
+// inner corner OpenCV reports, which is the corner whose outer diagonal square is
+// white (the board's colours fix it); x along the board's `columns` corners, y
+// along its `rows`, z into the board (away from a camera that sees it).
+// A board whose numbers of inner corners are both even or both odd looks the same
+// turned by 180 degrees: its pose is ambiguous, and it is refused.
+// Corner noise: each corner independent, the same sigma in x and y (the
+// sector-based detector fits each corner on its own), pooled from the residuals.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "handeye_covariance/vision/pattern_pose.h"
+
+namespace handeye {
+
+struct ChessboardTarget {
+  int columns = 0, rows = 0;  // inner corners along a row, and along a column
+  double square = 0.0;        // m, the edge of one square
+};
+
+/// Throws HandEyeError(InvalidLayout) for fewer than 3 corners either way, a
+/// square that is not a positive length, or an ambiguous (symmetric) board.
+void check_chessboard(const ChessboardTarget& target, const std::string& where);
+
+/// The inner corners in the pattern frame, in OpenCV's order (row by row).
+std::vector<Eigen::Vector3d> chessboard_points(const ChessboardTarget& target);
+
+struct ChessboardDetection {
+  std::optional<PointCorrespondences> points;
+  std::string refusal;  // why not (empty when found)
+};
+
+/// The board's inner corners in an 8-bit image (every corner, or a refusal).
+ChessboardDetection detect_chessboard(const cv::Mat& gray, const ChessboardTarget& target);
+
+}  // namespace handeye
