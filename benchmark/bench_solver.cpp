@@ -85,32 +85,22 @@ BENCHMARK(BM_SolveJointEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
 
 // One next-best-pose suggestion: 150 sampled candidates ranked by the predicted
 // covariance for a session of n samples (what the node does after each sample).
-void BM_SuggestNextPose(benchmark::State& state) {
+// The pairs estimator re-solves for every candidate; the joint one adds each
+// candidate's rank-6 term to the 12x12 information.
+void suggest_next_pose(benchmark::State& state, Method method) {
   Rng rng(3);
   const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                               static_cast<int>(state.range(0)), paper_noise(1e-5));
-  const Calibration c = solve(s.samples);
+  const Calibration c = estimate(s.samples, method);
   const SuggestOptions options;
   for (auto _ : state) {
     const Suggestion suggestion = rank_candidates(s.samples, c, sample_candidates(s.samples, c, options), options);
     benchmark::DoNotOptimize(suggestion.ranked.front().score);
   }
 }
+void BM_SuggestNextPose(benchmark::State& state) { suggest_next_pose(state, Method::Pairs); }
 BENCHMARK(BM_SuggestNextPose)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
-
-// The same for the joint estimator: each candidate adds its rank-6 term to the
-// 12x12 information, no re-solve.
-void BM_SuggestNextPoseJoint(benchmark::State& state) {
-  Rng rng(3);
-  const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
-                                              static_cast<int>(state.range(0)), paper_noise(1e-5));
-  const Calibration c = solve_joint(s.samples);
-  const SuggestOptions options;
-  for (auto _ : state) {
-    const Suggestion suggestion = rank_candidates(s.samples, c, sample_candidates(s.samples, c, options), options);
-    benchmark::DoNotOptimize(suggestion.ranked.front().score);
-  }
-}
+void BM_SuggestNextPoseJoint(benchmark::State& state) { suggest_next_pose(state, Method::Joint); }
 BENCHMARK(BM_SuggestNextPoseJoint)->Arg(30)->Arg(300)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -471,6 +471,15 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   return 1.0 / (1.0 - q);
 }
 
+/// Sample i whitened by its S_i = L L^T: r = L^-1 e_i, Jw = L^-1 J_i.
+struct Whitened {
+  Vector6d r;
+  Matrix6x12 Jw;
+};
+Whitened whitened(const Solution& s, std::size_t i) {
+  return {s.L_inverse[i] * s.lin[i].e, s.L_inverse[i].lazyProduct(s.lin[i].J)};
+}
+
 /// Leverage-corrected squared Mahalanobis distances, each about chi2(6) under the
 /// model: d_i^2 = |L^-1 e_i|^2 shrinks by the share of the sample's residual the
 /// fit absorbed, E d_i^2 = 6 - tr H_ii (H_ii = Jw Sigma Jw^T, its leverage; the
@@ -479,8 +488,7 @@ std::vector<double> corrected_distances(const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
   std::vector<double> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
-    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+    const auto [r, Jw] = whitened(s, i);
     const double leverage = s.weight[i] * covariance.cwiseProduct(Jw.transpose().lazyProduct(Jw)).sum();
     out[i] = r.squaredNorm() * 6.0 / std::max(6.0 - leverage, 0.5);
   }
@@ -493,8 +501,7 @@ std::vector<Vector6d> corrected_residuals(const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
   std::vector<Vector6d> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
-    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+    const auto [r, Jw] = whitened(s, i);
     const Matrix6d H = s.weight[i] * Jw.lazyProduct(covariance).lazyProduct(Jw.transpose());
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
     const Vector6d scale = eig.eigenvalues().cwiseMax(1e-6).cwiseSqrt().cwiseInverse();
@@ -526,8 +533,7 @@ Matrix12d sandwich(const Solution& s, double k_scaled) {
   Matrix12d A = Matrix12d::Zero(), B = Matrix12d::Zero();
   const std::vector<Vector6d> corrected = corrected_residuals(s);
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const Vector6d r = s.L_inverse[i] * s.lin[i].e;
-    const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+    const auto [r, Jw] = whitened(s, i);
     const double d = r.norm(), w = s.weight[i];
     A.noalias() += w * Jw.transpose() * Jw;
     if (w < 1.0) {  // d/dx of (k/d) Jw^T r: the weight's own change

@@ -191,65 +191,59 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
          "per_pair_nees_R,per_pair_nees_t,not_converged,us_per_solve\n";
   covariances.precision(17);
   char line[512];
+  // One row of validation.csv (the per-pair columns empty for the joint protocols) and
+  // the mean predicted and Monte-Carlo covariances behind the plots.
+  const auto write_rows = [&](Protocol protocol, double lambda, const StudyResult& r, const MonteCarloSummary& s,
+                              bool per_pair) {
+    csv << to_string(protocol) << "," << lambda << "," << options.k << "," << options.M << "," << s.rotation.epsilon << ","
+        << s.rotation.floor << "," << s.translation.epsilon << "," << s.translation.floor << "," << s.rotation.nees_mean
+        << "," << s.translation.nees_mean << "," << s.pose.nees_mean << "," << s.rotation.coverage_95 << ","
+        << s.translation.coverage_95 << "," << s.pose.coverage_95 << ",";
+    if (per_pair) csv << r.per_pair.rotation.nees_mean << "," << r.per_pair.translation.nees_mean;
+    else csv << ",";
+    csv << "," << r.not_converged << "," << r.seconds_per_solve * 1e6 << "\n";
+    for (const auto& [kind, matrix] : {std::pair<const char*, const Matrix6d*>{"predicted", &s.mean_predicted_covariance},
+                                       {"monte_carlo", &s.monte_carlo_covariance}}) {
+      covariances << to_string(protocol) << "," << lambda << "," << kind;
+      for (double v : to_row_major_6x6(*matrix)) covariances << "," << v;
+      covariances << "\n";
+    }
+  };
   for (Protocol protocol : list) {
-    if (is_joint(protocol)) {
+    const bool joint = is_joint(protocol);
+    if (joint) {
       out << "protocol " << to_string(protocol) << ", " << options.k + 1 << " poses, M = " << options.M
           << ": the joint estimator's X and Y, the pairs estimator's X on the same data\n";
       out << "  lambda    X: NEES R    t     6dof  eps_t (floor)   Y: NEES R    t     6dof   pairs X: NEES 6dof"
              "  RMS t joint / pairs [mm]  nonconv  us/solve\n";
-      for (double lambda : parse_list(lambdas, "--lambda")) {
-        options.protocol = protocol;
-        options.lambda = lambda;
-        const StudyResult r = run_study(options);
-        const MonteCarloSummary &x = r.ours, &y = r.pattern;
-        std::snprintf(line, sizeof line,
-                      "  %-8.0e     %.2f  %.2f  %.2f  %.3f (%.3f)      %.2f  %.2f  %.2f        %.2f          %.4f / %.4f"
-                      "       %6d  %8.1f\n",
-                      lambda, x.rotation.nees_mean, x.translation.nees_mean, x.pose.nees_mean, x.translation.epsilon,
-                      x.translation.floor, y.rotation.nees_mean, y.translation.nees_mean, y.pose.nees_mean,
-                      r.pairs.pose.nees_mean, r.rms_translation * 1e3, r.pairs_rms_translation * 1e3, r.not_converged,
-                      r.seconds_per_solve * 1e6);
-        out << line << std::flush;
-        csv << to_string(protocol) << "," << lambda << "," << options.k << "," << options.M << "," << x.rotation.epsilon
-            << "," << x.rotation.floor << "," << x.translation.epsilon << "," << x.translation.floor << ","
-            << x.rotation.nees_mean << "," << x.translation.nees_mean << "," << x.pose.nees_mean << ","
-            << x.rotation.coverage_95 << "," << x.translation.coverage_95 << "," << x.pose.coverage_95 << ",,,"
-            << r.not_converged << "," << r.seconds_per_solve * 1e6 << "\n";
-        for (const auto& [kind, matrix] : {std::pair<const char*, const Matrix6d*>{"predicted", &x.mean_predicted_covariance},
-                                           {"monte_carlo", &x.monte_carlo_covariance}}) {
-          covariances << to_string(protocol) << "," << lambda << "," << kind;
-          for (double v : to_row_major_6x6(*matrix)) covariances << "," << v;
-          covariances << "\n";
-        }
-      }
-      continue;
+    } else {
+      out << "protocol " << to_string(protocol) << ", k = " << options.k << ", M = " << options.M << "\n";
+      out << "  lambda    eps_R (floor)    eps_t (floor)    NEES R    t     6dof   cov95 R    t     6dof  eq.35/56 NEES R  t"
+             "   nonconv  us/solve\n";
     }
-    out << "protocol " << to_string(protocol) << ", k = " << options.k << ", M = " << options.M << "\n";
-    out << "  lambda    eps_R (floor)    eps_t (floor)    NEES R    t     6dof   cov95 R    t     6dof  eq.35/56 NEES R  t"
-           "   nonconv  us/solve\n";
     for (double lambda : parse_list(lambdas, "--lambda")) {
       options.protocol = protocol;
       options.lambda = lambda;
       const StudyResult r = run_study(options);
-      const MonteCarloSummary& s = r.ours;
-      std::snprintf(line, sizeof line,
-                    "  %-8.0e  %.3f (%.3f)    %.3f (%.3f)    %.2f  %.2f  %.2f   %.3f  %.3f  %.3f    %.2f  %.2f    %6d  %8.1f\n",
-                    lambda, s.rotation.epsilon, s.rotation.floor, s.translation.epsilon, s.translation.floor,
-                    s.rotation.nees_mean, s.translation.nees_mean, s.pose.nees_mean, s.rotation.coverage_95,
-                    s.translation.coverage_95, s.pose.coverage_95, r.per_pair.rotation.nees_mean,
-                    r.per_pair.translation.nees_mean, r.not_converged, r.seconds_per_solve * 1e6);
-      out << line << std::flush;
-      csv << to_string(protocol) << "," << lambda << "," << options.k << "," << options.M << "," << s.rotation.epsilon << ","
-          << s.rotation.floor << "," << s.translation.epsilon << "," << s.translation.floor << "," << s.rotation.nees_mean
-          << "," << s.translation.nees_mean << "," << s.pose.nees_mean << "," << s.rotation.coverage_95 << ","
-          << s.translation.coverage_95 << "," << s.pose.coverage_95 << "," << r.per_pair.rotation.nees_mean << ","
-          << r.per_pair.translation.nees_mean << "," << r.not_converged << "," << r.seconds_per_solve * 1e6 << "\n";
-      for (const auto& [kind, matrix] : {std::pair<const char*, const Matrix6d*>{"predicted", &s.mean_predicted_covariance},
-                                         {"monte_carlo", &s.monte_carlo_covariance}}) {
-        covariances << to_string(protocol) << "," << lambda << "," << kind;
-        for (double v : to_row_major_6x6(*matrix)) covariances << "," << v;
-        covariances << "\n";
+      const MonteCarloSummary &s = r.ours, &y = r.pattern;
+      if (joint) {
+        std::snprintf(line, sizeof line,
+                      "  %-8.0e     %.2f  %.2f  %.2f  %.3f (%.3f)      %.2f  %.2f  %.2f        %.2f          %.4f / %.4f"
+                      "       %6d  %8.1f\n",
+                      lambda, s.rotation.nees_mean, s.translation.nees_mean, s.pose.nees_mean, s.translation.epsilon,
+                      s.translation.floor, y.rotation.nees_mean, y.translation.nees_mean, y.pose.nees_mean,
+                      r.pairs.pose.nees_mean, r.rms_translation * 1e3, r.pairs_rms_translation * 1e3, r.not_converged,
+                      r.seconds_per_solve * 1e6);
+      } else {
+        std::snprintf(line, sizeof line,
+                      "  %-8.0e  %.3f (%.3f)    %.3f (%.3f)    %.2f  %.2f  %.2f   %.3f  %.3f  %.3f    %.2f  %.2f    %6d  %8.1f\n",
+                      lambda, s.rotation.epsilon, s.rotation.floor, s.translation.epsilon, s.translation.floor,
+                      s.rotation.nees_mean, s.translation.nees_mean, s.pose.nees_mean, s.rotation.coverage_95,
+                      s.translation.coverage_95, s.pose.coverage_95, r.per_pair.rotation.nees_mean,
+                      r.per_pair.translation.nees_mean, r.not_converged, r.seconds_per_solve * 1e6);
       }
+      out << line << std::flush;
+      write_rows(protocol, lambda, r, s, !joint);
     }
   }
   if (!out_dir.empty()) {
