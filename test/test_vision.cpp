@@ -55,6 +55,9 @@ TEST(TagLayout, ReadsTheBoardAndRefusesBadEntries) {
   EXPECT_NE(code_of("tags: [{id: 0, size: 0.1}, {id: 0, size: 0.1, x: 1}]").find("appears twice"), std::string::npos);
   EXPECT_NE(code_of("tags: [{id: 0, size: 0.1, qw: 2}]").find("QuaternionNotUnit"), std::string::npos);
   EXPECT_NE(code_of("tags: [{id: 1.5, size: 0.1}]").find("integer"), std::string::npos);
+  // Range-checked before it is converted (UBSan found `id: 1e90` in the fuzzer's inputs).
+  EXPECT_NE(code_of("tags: [{id: 1e90, size: 0.1}]").find("whole number from 0 to 1000000"), std::string::npos);
+  EXPECT_NE(code_of("tags: [{id: -1, size: 0.1}]").find("whole number"), std::string::npos);
   EXPECT_NE(code_of("tags: [{id: 0, size: .nan}]").find("layout.yaml: tags[0]"), std::string::npos);
   EXPECT_EQ(code_of("tags: [{id: 0, size: 0.1}]"), "accepted");
 }

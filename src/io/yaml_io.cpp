@@ -63,6 +63,19 @@ double as_double(const YAML::Node& node, const Location& at) {
   }
 }
 
+/// A whole number in [lowest, highest], checked before it is converted (a double
+/// beyond int's range, converted, is undefined behaviour: `id: 1e90`).
+int as_integer(const YAML::Node& node, const Location& at, double lowest, double highest, const std::string& what) {
+  const double v = as_double(node, at);
+  if (!(v >= lowest && v <= highest) || v != std::floor(v)) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       what + " must be a whole number from " + number_text(lowest, 10) + " to " + number_text(highest, 10) +
+                           ", got " + number_text(v, 6),
+                       at.str(), "write a plain integer, e.g. 0");
+  }
+  return static_cast<int>(v);
+}
+
 std::string as_text(const YAML::Node& node, const Location& at) {
   if (!node.IsScalar()) {
     throw HandEyeError(ErrorCode::MalformedFile, "expected a name", at.str(), "write a plain name, e.g. base_link");
@@ -687,7 +700,7 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
   file.T_parent_camera.pose = read_pose(root, top);
   const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
   file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
-  if (root["samples_used"]) file.samples_used = static_cast<int>(as_double(root["samples_used"], top / "samples_used"));
+  if (root["samples_used"]) file.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
   // The noise model the calibration used (samples results only).
   if (const YAML::Node noise = root["noise"]; noise && noise.IsMap() && noise["model"] && noise["model"]["effector"]) {
     file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
@@ -716,11 +729,7 @@ TagLayout parse_tag_layout(const std::string& text, const std::string& source) {
     const Location at = (top / "tags")[i];
     const YAML::Node entry = tags[i];
     TagPlacement tag;
-    const double id = as_double(require(entry, "id", at, hint), at / "id");
-    if (id != std::floor(id) || id < 0) {
-      throw HandEyeError(ErrorCode::MalformedFile, "the tag id must be a non-negative integer", (at / "id").str(), hint);
-    }
-    tag.id = static_cast<int>(id);
+    tag.id = as_integer(require(entry, "id", at, hint), at / "id", 0, 1e6, "the tag id");
     tag.size = as_double(require(entry, "size", at, hint), at / "size");
     const auto optional_number = [&](const char* key, double fallback) {
       const YAML::Node node = entry[key];

@@ -65,5 +65,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   named_errors_only([&] { io::parse_pose_file(text, "fuzz"); });
   named_errors_only([&] { io::parse_candidate_poses(text, "fuzz"); });
   named_errors_only([&] { io::parse_tag_layout(text, "fuzz"); });
+  named_errors_only([&] { io::parse_robot_pose(text, "fuzz"); });
   return 0;
 }
