@@ -8,7 +8,7 @@
 
 #include <tf2/buffer_core.h>
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/simulation/tag_renderer.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"
 
 namespace handeye {

@@ -15,7 +15,7 @@
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
-#include "handeye_covariance/simulation/tag_renderer.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
 #include "node_test_helpers.h"
 
 namespace handeye {
@@ -95,7 +95,7 @@ class Detector {
 TEST(ApriltagDetector, BadCameraInputIsLoggedWithTheReasonAndGoodInputStillWorks) {
   Detector detector;
   const CameraModel camera = simulated_camera();
-  const TagRenderer renderer(single_tag_layout(0, 0.1), camera);
+  const PatternRenderer renderer(single_tag_layout(0, 0.1), camera);
   Rng rng(2);
   const cv::Mat image = renderer.render(random_view(rng, ViewpointOptions{}), rng);  // a view the rig would have
   const sensor_msgs::CameraInfo good = conversions::to_camera_info(camera);

@@ -15,7 +15,7 @@
 #include "handeye_covariance/vision/chessboard.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
-#include "handeye_covariance/simulation/tag_renderer.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"
 
 namespace handeye {
@@ -80,7 +80,7 @@ TEST(TagDetector, CornersMatchTheLayoutOrderOnRenderedTags) {
   const CameraModel camera = simulated_camera();
   for (double roll : {0.0, 0.3, 1.6, -2.5}) {
     const TagLayout layout = io::read_tag_layout(board_file());
-    const TagRenderer renderer(layout, camera);
+    const PatternRenderer renderer(layout, camera);
     const ImageRectifier rectifier(camera);
     Rng rng(11);
     const Isometry3d T = frontal_view(roll);
@@ -146,7 +146,7 @@ TEST(PatternPose, RefusesUnknownTagsAndBadFits) {
 
   // The right ids, but the printed board is 20% larger than the layout says
   // for one tag: the fit is refused, not believed.
-  const TagRenderer renderer(layout, camera);
+  const PatternRenderer renderer(layout, camera);
   Rng rng(5);
   const Isometry3d T = frontal_view();
   std::vector<TagCorners> tags = TagDetector().detect(renderer.render(T, rng));
@@ -178,7 +178,7 @@ struct Pipeline {
 /// through the same steps as the detector node.
 Consistency consistency(const TagLayout& layout, int frames, std::uint64_t seed, const Pipeline& pipeline = {}) {
   const CameraModel camera = simulated_camera();
-  const TagRenderer renderer(layout, camera);
+  const PatternRenderer renderer(layout, camera);
   const ImageRectifier rectifier(camera);
   const TagDetector detector;
   PatternPoseOptions options;
@@ -245,7 +245,7 @@ TEST(PatternPose, CovarianceIsHonestOnASingleTag) {
 TEST(PatternPose, CalibrationFromRenderedImagesIsConsistent) {
   const TagLayout layout = io::read_tag_layout(board_file());
   const CameraModel camera = simulated_camera();
-  const TagRenderer renderer(layout, camera);
+  const PatternRenderer renderer(layout, camera);
   const ImageRectifier rectifier(camera);
   const TagDetector detector;
   PixelNoise noise;

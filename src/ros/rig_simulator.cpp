@@ -24,7 +24,7 @@
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
 #include "handeye_covariance/io/yaml_io.h"
-#include "handeye_covariance/simulation/tag_renderer.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
 
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/image_transport.h>
@@ -90,7 +90,7 @@ class RigSimulator {
       RenderOptions render;
       render.noise_sigma = param(pn, "image_noise", render.noise_sigma);
       render.blur_sigma_px = param(pn, "image_blur", render.blur_sigma_px);
-      renderer_ = std::make_unique<TagRenderer>(layout, simulated_camera(), render);
+      renderer_ = std::make_unique<PatternRenderer>(layout, simulated_camera(), render);
       transport_ = std::make_unique<image_transport::ImageTransport>(node);
       image_pub_ = transport_->advertise(param<std::string>(pn, "image_topic", "camera/image_raw"), 2);
       info_pub_ = node.advertise<sensor_msgs::CameraInfo>(param<std::string>(pn, "camera_info_topic", "camera/camera_info"), 2);
@@ -199,7 +199,7 @@ class RigSimulator {
   Eigen::Isometry3d flange_T_tool_;
   ros::Time start_;
   ros::Publisher truth_pub_, pattern_truth_pub_, detections_, info_pub_;
-  std::unique_ptr<TagRenderer> renderer_;
+  std::unique_ptr<PatternRenderer> renderer_;
   std::unique_ptr<image_transport::ImageTransport> transport_;
   image_transport::Publisher image_pub_;
   ros::Timer tf_timer_, detection_timer_;

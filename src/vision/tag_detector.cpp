@@ -16,6 +16,7 @@ extern "C" {
 #include <map>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/vision/aruco.h"
 
 namespace handeye {
 namespace {
@@ -111,6 +112,7 @@ std::vector<TagCorners> TagDetector::detect(const cv::Mat& gray) const {
 }
 
 TagBitmap tag_bitmap(const std::string& family, int id) {
+  if (is_aruco_dictionary(family)) return aruco_bitmap(family, id);
   const Family f = make_family(family);
   if (id < 0 || static_cast<uint32_t>(id) >= f->ncodes) {
     throw HandEyeError(ErrorCode::InvalidLayout,

@@ -56,6 +56,7 @@ class TagDetector {
 
 /// The tag's printable bitmap from libapriltag (black border plus the white
 /// quiet zone around it: `total_width` cells, the black square `width_at_border`).
+/// An OpenCV dictionary name as `family` gives the ArUco marker (aruco.h).
 struct TagBitmap {
   cv::Mat pixels;  // CV_8UC1, one pixel per cell
   int width_at_border = 0;

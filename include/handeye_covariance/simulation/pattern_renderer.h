@@ -1,0 +1,65 @@
+// Images of a calibration target seen by a camera at a known pose, for the tests
+// and the simulated rig: the target's printed planes (libapriltag's tag bitmaps,
+// OpenCV's ArUco markers and ChArUco board, a drawn chessboard) warped by OpenCV
+// onto a supersampled ideal (pinhole) image, blurred, area-averaged to the sensor
+// resolution, distorted with the camera's distortion model, and given Gaussian
+// pixel noise. No ROS.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "handeye_covariance/simulation/simulation.h"
+#include "handeye_covariance/vision/target.h"
+
+namespace handeye {
+
+struct RenderOptions {
+  double blur_sigma_px = 0.7;   // optics (Gaussian PSF), sensor pixels
+  double noise_sigma = 2.0;     // gray levels, per pixel
+  double background = 90.0;     // gray level around the board
+  double black = 25.0, white = 225.0;
+  int supersample = 3;          // ideal image at supersample x resolution, for anti-aliasing
+  int texels_per_cell = 8;      // marker bitmap upscaling before the warp
+  int texels_per_square = 96;   // chessboard and ChArUco textures
+  double board_margin_cells = 1.0;  // white board beyond the markers' quiet zones (planar marker layouts)
+  double board_margin_squares = 0.75;  // white board beyond a chessboard's or ChArUco board's squares
+};
+
+class PatternRenderer {
+ public:
+  /// Throws HandEyeError for an invalid camera or target (unknown family or id).
+  PatternRenderer(const Target& target, const CameraModel& camera, const RenderOptions& options = {});
+  /// Markers (AprilTag or ArUco) at the layout's placements.
+  PatternRenderer(const TagLayout& layout, const CameraModel& camera, const RenderOptions& options = {});
+
+  /// An 8-bit mono image of the target at T_camera_pattern. Planes behind the
+  /// camera are not drawn.
+  cv::Mat render(const Eigen::Isometry3d& T_camera_pattern, Rng& rng) const;
+
+  const CameraModel& camera() const { return camera_; }
+
+ private:
+  /// A printed rectangle: texel (u, v) (v down) at x right, y up in the plane's
+  /// frame, whose origin is the texture's centre.
+  struct Plane {
+    cv::Mat texture;  // CV_32F, gray levels
+    Eigen::Isometry3d T_pattern_plane;
+    double width = 0.0, height = 0.0;  // m
+  };
+  void add_plane(const cv::Mat& texture_8u, const Eigen::Isometry3d& T_pattern_plane, double width, double height);
+  void add_markers(const TagLayout& layout);
+  void build_distortion_map();
+
+  CameraModel camera_;
+  RenderOptions options_;
+  std::vector<Plane> planes_;
+  std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
+  cv::Mat map_x_, map_y_;                       // distorted pixel -> ideal pixel
+};
+
+/// A camera like a typical industrial 640 x 480 camera with mild barrel
+/// distortion, for the simulated rig and the tests.
+CameraModel simulated_camera();
+
+}  // namespace handeye

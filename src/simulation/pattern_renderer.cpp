@@ -1,0 +1,233 @@
+#include "handeye_covariance/simulation/pattern_renderer.h"
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+/// Every marker in the pattern's z = 0 plane, facing either way.
+bool planar_z0(const TagLayout& layout) {
+  for (const TagPlacement& tag : layout.tags) {
+    if (std::abs(tag.T_pattern_tag.translation().z()) > 1e-9) return false;
+    if (std::abs(std::abs(tag.T_pattern_tag.linear()(2, 2)) - 1.0) > 1e-9) return false;
+  }
+  return true;
+}
+
+cv::Matx33d to_cv(const Matrix3d& m) {
+  cv::Matx33d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = m(r, c);
+  return out;
+}
+
+/// OpenCV's board frames (y down, z into the board) against a plane's (y up, z out).
+const Matrix3d& flip_y() {
+  static const Matrix3d flip = Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  return flip;
+}
+
+/// A chessboard of `t`, `texels` to a square, with `margin` white squares around:
+/// square (r, c) of the (rows + 1) x (columns + 1) is black when r + c is odd (the
+/// square outside the first inner corner is white: OpenCV's origin, chessboard.h).
+cv::Mat chessboard_texture(const ChessboardTarget& t, int texels, int margin) {
+  cv::Mat board((t.rows + 1 + 2 * margin) * texels, (t.columns + 1 + 2 * margin) * texels, CV_8UC1, cv::Scalar(255));
+  for (int r = 0; r < t.rows + 1; ++r) {
+    for (int c = 0; c < t.columns + 1; ++c) {
+      if ((r + c) % 2 == 0) continue;
+      board(cv::Rect((margin + c) * texels, (margin + r) * texels, texels, texels)).setTo(0);
+    }
+  }
+  return board;
+}
+
+}  // namespace
+
+CameraModel simulated_camera() {
+  CameraModel camera;
+  camera.width = 640;
+  camera.height = 480;
+  camera.K << 600.0, 0.0, 319.5, 0.0, 600.0, 239.5, 0.0, 0.0, 1.0;
+  camera.distortion = {-0.12, 0.08, 0.0005, -0.0003, 0.0};
+  return camera;
+}
+
+PatternRenderer::PatternRenderer(const TagLayout& layout, const CameraModel& camera, const RenderOptions& options)
+    : PatternRenderer(make_target(layout), camera, options) {}
+
+PatternRenderer::PatternRenderer(const Target& target, const CameraModel& camera, const RenderOptions& options)
+    : camera_(camera), options_(options) {
+  check_target(target, "renderer target");
+  check_camera_model(camera, "renderer camera");
+  if (camera.width <= 0 || camera.height <= 0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the camera has no image size", "renderer camera",
+                       "set width and height");
+  }
+  const int texels = std::max(8, options.texels_per_square);
+  switch (target.kind) {
+    case TargetKind::Markers:
+      add_markers(target.markers);
+      break;
+    case TargetKind::Chessboard: {
+      // A whole number of white squares around, at least the margin asked for.
+      const ChessboardTarget& t = target.chessboard;
+      const int margin = std::max(1, static_cast<int>(std::ceil(options.board_margin_squares)));
+      const Vector3d centre(0.5 * (t.columns - 1) * t.square, 0.5 * (t.rows - 1) * t.square, 0.0);
+      add_plane(chessboard_texture(t, texels, margin), se3::make_pose(flip_y(), centre),
+                (t.columns + 1 + 2 * margin) * t.square, (t.rows + 1 + 2 * margin) * t.square);
+      break;
+    }
+    case TargetKind::Charuco: {
+      const CharucoTarget& t = target.charuco;
+      const int margin = std::max(1, static_cast<int>(std::lround(options.board_margin_squares * texels)));
+      cv::Mat board;
+      cv::copyMakeBorder(charuco_image(t, texels), board, margin, margin, margin, margin, cv::BORDER_CONSTANT,
+                         cv::Scalar(255));
+      const double margin_m = t.square * margin / texels;
+      add_plane(board, se3::make_pose(flip_y(), Vector3d(0.5 * t.columns * t.square, 0.5 * t.rows * t.square, 0.0)),
+                t.columns * t.square + 2 * margin_m, t.rows * t.square + 2 * margin_m);
+      break;
+    }
+  }
+  build_distortion_map();
+}
+
+void PatternRenderer::add_plane(const cv::Mat& texture_8u, const Isometry3d& T_pattern_plane, double width, double height) {
+  Plane plane;
+  // 0 black, 255 white in every source bitmap.
+  texture_8u.convertTo(plane.texture, CV_32F, (options_.white - options_.black) / 255.0, options_.black);
+  plane.T_pattern_plane = T_pattern_plane;
+  plane.width = width;
+  plane.height = height;
+  planes_.push_back(plane);
+}
+
+void PatternRenderer::add_markers(const TagLayout& layout) {
+  double min_x = INFINITY, max_x = -INFINITY, min_y = INFINITY, max_y = -INFINITY, cell = 0.0;
+  for (const TagPlacement& placement : layout.tags) {
+    const TagBitmap bitmap = tag_bitmap(layout.family, placement.id);
+    cv::Mat upscaled;
+    cv::resize(bitmap.pixels, upscaled, cv::Size(), options_.texels_per_cell, options_.texels_per_cell, cv::INTER_NEAREST);
+    // libapriltag's bitmap: 0-alpha pixels outside a circle tag's quiet zone read as white here too.
+    cell = placement.size / bitmap.width_at_border;
+    const double width = cell * bitmap.pixels.cols;
+    add_plane(upscaled, placement.T_pattern_tag, width, width);
+    for (const Vector3d& c : {Vector3d(-0.5, -0.5, 0), Vector3d(0.5, 0.5, 0)}) {
+      const Vector3d p = placement.T_pattern_tag * (c * width);
+      min_x = std::min(min_x, p.x());
+      max_x = std::max(max_x, p.x());
+      min_y = std::min(min_y, p.y());
+      max_y = std::max(max_y, p.y());
+    }
+  }
+  if (planar_z0(layout)) {
+    const double m = options_.board_margin_cells * cell;
+    board_corners_ = {Vector3d(min_x - m, min_y - m, 0), Vector3d(max_x + m, min_y - m, 0),
+                      Vector3d(max_x + m, max_y + m, 0), Vector3d(min_x - m, max_y + m, 0)};
+  }
+}
+
+void PatternRenderer::build_distortion_map() {
+  // For each distorted (sensor) pixel, the ideal pinhole pixel it sees.
+  std::vector<cv::Point2f> sensor;
+  sensor.reserve(static_cast<std::size_t>(camera_.width) * camera_.height);
+  for (int v = 0; v < camera_.height; ++v)
+    for (int u = 0; u < camera_.width; ++u) sensor.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  std::vector<cv::Point2f> ideal;
+  const cv::Mat K(to_cv(camera_.K));
+  const cv::Mat D =
+      camera_.distortion.empty() ? cv::Mat::zeros(1, 4, CV_64F) : cv::Mat(camera_.distortion, true).reshape(1, 1);
+  cv::undistortPoints(sensor, ideal, K, D, cv::noArray(), K,
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-6));
+  map_x_.create(camera_.height, camera_.width, CV_32F);
+  map_y_.create(camera_.height, camera_.width, CV_32F);
+  for (int v = 0; v < camera_.height; ++v) {
+    for (int u = 0; u < camera_.width; ++u) {
+      map_x_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].x;
+      map_y_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].y;
+    }
+  }
+}
+
+cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) const {
+  const int s = std::max(1, options_.supersample);
+  // Ideal pixel (x, y) -> supersampled pixel: pixel centres at integers in both.
+  Matrix3d S;
+  S << s, 0, 0.5 * (s - 1), 0, s, 0.5 * (s - 1), 0, 0, 1;
+  const Matrix3d KS = S * camera_.K;
+  cv::Mat canvas(camera_.height * s, camera_.width * s, CV_32F, cv::Scalar(options_.background));
+
+  const auto project = [&](const Vector3d& p_camera) {
+    const Vector3d h = KS * p_camera;
+    return cv::Point2f(static_cast<float>(h.x() / h.z()), static_cast<float>(h.y() / h.z()));
+  };
+  if (!board_corners_.empty()) {
+    std::vector<cv::Point> polygon;
+    bool visible = true;
+    for (const Vector3d& c : board_corners_) {
+      const Vector3d p = T_camera_pattern * c;
+      visible = visible && p.z() > 1e-3;
+      const cv::Point2f q = project(p);
+      polygon.emplace_back(cvRound(q.x * 16), cvRound(q.y * 16));  // 4 fractional bits
+    }
+    if (visible) cv::fillConvexPoly(canvas, polygon, cv::Scalar(options_.white), cv::LINE_AA, 4);
+  }
+  const cv::Rect frame(0, 0, canvas.cols, canvas.rows);
+  for (const Plane& plane : planes_) {
+    const Isometry3d T_camera_plane = T_camera_pattern * plane.T_pattern_plane;
+    const double W = plane.texture.cols, H_texels = plane.texture.rows;
+    // Texel (u, v) (row down) -> plane (x right, y up): centre texels at +-(W-1)/2.
+    Matrix3d M;
+    M << plane.width / W, 0, -0.5 * plane.width * (W - 1) / W, 0, -plane.height / H_texels,
+        0.5 * plane.height * (H_texels - 1) / H_texels, 0, 0, 1;
+    Matrix3d on_plane;  // [r1 r2 t]: plane -> camera
+    on_plane.col(0) = T_camera_plane.linear().col(0);
+    on_plane.col(1) = T_camera_plane.linear().col(1);
+    on_plane.col(2) = T_camera_plane.translation();
+    const Matrix3d H = KS * on_plane * M;
+    std::vector<cv::Point2f> outline;
+    bool visible = true;
+    for (const auto& texel : {Eigen::Vector2d(-0.5, -0.5), Eigen::Vector2d(W - 0.5, -0.5),
+                              Eigen::Vector2d(W - 0.5, H_texels - 0.5), Eigen::Vector2d(-0.5, H_texels - 0.5)}) {
+      const Vector3d q = on_plane * M * Vector3d(texel.x(), texel.y(), 1.0);
+      visible = visible && q.z() > 1e-3;
+      const Vector3d h = KS * q;
+      outline.emplace_back(static_cast<float>(h.x() / h.z()), static_cast<float>(h.y() / h.z()));
+    }
+    if (!visible) continue;
+    cv::Rect bounds = cv::boundingRect(outline);
+    bounds = cv::Rect(bounds.x - 2, bounds.y - 2, bounds.width + 4, bounds.height + 4);
+    const cv::Rect roi = bounds & frame;
+    if (roi.empty()) continue;
+    Matrix3d shift = Matrix3d::Identity();
+    shift(0, 2) = -roi.x;
+    shift(1, 2) = -roi.y;
+    cv::Mat target = canvas(roi);
+    cv::warpPerspective(plane.texture, target, to_cv(shift * H), target.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+  }
+  if (options_.blur_sigma_px > 0.0) cv::GaussianBlur(canvas, canvas, cv::Size(), options_.blur_sigma_px * s);
+  cv::Mat ideal;
+  cv::resize(canvas, ideal, cv::Size(camera_.width, camera_.height), 0, 0, cv::INTER_AREA);
+  cv::Mat sensor;
+  cv::remap(ideal, sensor, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  if (options_.noise_sigma > 0.0) {
+    cv::Mat noise(sensor.size(), CV_32F);
+    cv::RNG cv_rng(rng());
+    cv_rng.fill(noise, cv::RNG::NORMAL, 0.0, options_.noise_sigma);
+    sensor += noise;
+  }
+  cv::Mat out;
+  sensor.convertTo(out, CV_8U);  // rounds and saturates
+  return out;
+}
+
+}  // namespace handeye
