@@ -16,6 +16,7 @@
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
+#include "render_consistency.h"
 #include "test_helpers.h"
 
 namespace handeye {
@@ -161,80 +162,12 @@ TEST(PatternPose, RefusesUnknownTagsAndBadFits) {
   EXPECT_NE(r.refusal.find("seen twice"), std::string::npos) << r.refusal;
 }
 
-struct Consistency {
-  double nees_rotation = 0.0, nees_translation = 0.0, nees_pose = 0.0;
-  double max_correlation = 0.0;  // largest |corr| between a rotation and a translation axis
-  double pixel_sigma = 0.0;
-  int frames = 0, missed = 0;
-};
-
-struct Pipeline {
-  bool rectify = true;
-  CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
-};
-
-/// Renders `frames` views (random as in a calibration session), detects, and
-/// compares each pose with the truth under the detector's own covariance,
-/// through the same steps as the detector node.
-Consistency consistency(const TagLayout& layout, int frames, std::uint64_t seed, const Pipeline& pipeline = {}) {
-  const CameraModel camera = simulated_camera();
-  const PatternRenderer renderer(layout, camera);
-  const ImageRectifier rectifier(camera);
-  const TagDetector detector;
-  PatternPoseOptions options;
-  options.corner_noise = pipeline.corner_noise;
-  PixelNoise noise;
-  Rng rng(seed);
-  Consistency c;
-  const auto estimate = [&](const Isometry3d& T) {
-    const cv::Mat image = renderer.render(T, rng);
-    if (!pipeline.rectify) return estimate_pattern_pose(layout, camera, detector.detect(image), noise, options);
-    return estimate_pattern_pose(layout, rectifier.rectified(), detector.detect(rectifier.rectify(image)), noise, options);
-  };
-  // Warm the pooled pixel noise as a running node would have.
-  for (int i = 0; i < 20; ++i) estimate(random_view(rng, {}));
-  for (int i = 0; i < frames; ++i) {
-    const Isometry3d T = random_view(rng, {});
-    const PatternPoseResult r = estimate(T);
-    if (!r.pose) {
-      ++c.missed;
-      continue;
-    }
-    const Vector6d e = test::pose_perturbation(r.pose->T_camera_pattern, T);
-    const Matrix6d& S = r.pose->covariance;
-    c.nees_translation += e.head<3>().dot(S.topLeftCorner<3, 3>().inverse() * e.head<3>());
-    c.nees_rotation += e.tail<3>().dot(S.bottomRightCorner<3, 3>().inverse() * e.tail<3>());
-    c.nees_pose += e.dot(S.inverse() * e);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 3; b < 6; ++b)
-        c.max_correlation = std::max(c.max_correlation, std::abs(S(a, b)) / std::sqrt(S(a, a) * S(b, b)));
-    c.pixel_sigma = r.pose->pixel_sigma;
-    ++c.frames;
-  }
-  c.nees_rotation /= c.frames;
-  c.nees_translation /= c.frames;
-  c.nees_pose /= c.frames;
-  return c;
-}
-
-// The bar: over many rendered frames the detector's covariance matches
-// its actual error, NEES mean within [2.5, 3.5] for rotation and translation.
-void expect_honest(const char* name, const Consistency& c) {
-  std::printf("%s: %d frames (%d missed), pixel sigma %.3f px, NEES R %.2f t %.2f pose %.2f, max |corr(R,t)| %.2f\n", name,
-              c.frames, c.missed, c.pixel_sigma, c.nees_rotation, c.nees_translation, c.nees_pose, c.max_correlation);
-  EXPECT_EQ(c.missed, 0);
-  EXPECT_GE(c.nees_rotation, 2.5);
-  EXPECT_LE(c.nees_rotation, 3.5);
-  EXPECT_GE(c.nees_translation, 2.5);
-  EXPECT_LE(c.nees_translation, 3.5);
-}
-
 TEST(PatternPose, CovarianceIsHonestOnRenderedBoards) {
-  expect_honest("board 2x2", consistency(io::read_tag_layout(board_file()), 300, 21));
+  expect_honest("board 2x2", consistency(make_target(io::read_tag_layout(board_file())), 300, 21));
 }
 
 TEST(PatternPose, CovarianceIsHonestOnASingleTag) {
-  expect_honest("single tag", consistency(single_tag_layout(0, 0.1), 300, 22));
+  expect_honest("single tag", consistency(make_target(single_tag_layout(0, 0.1)), 300, 22));
 }
 
 // The whole chain without ROS: sessions of 12 rendered views, the detector's
@@ -293,10 +226,10 @@ TEST(PatternPose, WithoutRectificationOrEdgeModelTheCovarianceIsWrong) {
   const TagLayout layout = single_tag_layout(0, 0.1);
   Pipeline distorted;
   distorted.rectify = false;
-  const Consistency biased = consistency(layout, 120, 23, distorted);
+  const Consistency biased = consistency(make_target(layout), 120, 23, distorted);
   Pipeline independent;
   independent.corner_noise = CornerNoiseModel::Independent;
-  const Consistency conservative = consistency(layout, 120, 23, independent);
+  const Consistency conservative = consistency(make_target(layout), 120, 23, independent);
   std::printf("unrectified: NEES t %.2f; independent corners: NEES R %.2f t %.2f\n", biased.nees_translation,
               conservative.nees_rotation, conservative.nees_translation);
   EXPECT_GT(biased.nees_translation, 4.5);  // lines fitted to curved edges: a depth bias

@@ -311,6 +311,16 @@ PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespond
     result.refusal = "the points do not constrain all six pose parameters (degenerate view)";
     return result;
   }
+  if (noise.degrees_of_freedom() >= 100 && pose.degrees_of_freedom > 0) {
+    const double sigma2 = noise.sigma() * noise.sigma(), dof = pose.degrees_of_freedom;
+    const double ratio = pose.residual_sum_of_squares / (sigma2 * dof);
+    if (ratio > options.max_variance_ratio * (1.0 + 4.0 * std::sqrt(2.0 / dof))) {
+      result.refusal = "the residuals are " + number_text(std::sqrt(ratio)) + " times the pooled pixel noise (" +
+                       number_text(noise.sigma()) + " px): a point is misdetected (often at the image border, or " +
+                       "blurred); the frame is left out";
+      return result;
+    }
+  }
   noise.add(pose.residual_sum_of_squares, pose.degrees_of_freedom);
   pose.pixel_sigma = noise.sigma();
   pose.covariance = pose.pixel_sigma * pose.pixel_sigma * information.inverse();

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
 
 namespace handeye {
 namespace {
@@ -52,6 +53,27 @@ Target make_target(const TagLayout& markers) {
   target.kind = TargetKind::Markers;
   target.markers = markers;
   return target;
+}
+
+Eigen::Isometry3d target_face(const Target& target) {
+  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  switch (target.kind) {
+    case TargetKind::Chessboard: {
+      const ChessboardTarget& t = target.chessboard;
+      return se3::make_pose(flip, Eigen::Vector3d(0.5 * (t.columns - 1) * t.square, 0.5 * (t.rows - 1) * t.square, 0.0));
+    }
+    case TargetKind::Charuco: {
+      const CharucoTarget& t = target.charuco;
+      return se3::make_pose(flip, Eigen::Vector3d(0.5 * t.columns * t.square, 0.5 * t.rows * t.square, 0.0));
+    }
+    case TargetKind::Markers:
+      break;
+  }
+  if (target.markers.tags.empty()) return Eigen::Isometry3d::Identity();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const TagPlacement& tag : target.markers.tags) centre += tag.T_pattern_tag.translation();
+  centre /= static_cast<double>(target.markers.tags.size());
+  return se3::make_pose(target.markers.tags.front().T_pattern_tag.linear(), centre);
 }
 
 void check_target(const Target& target, const std::string& where) {

@@ -5,7 +5,7 @@
 // TagPlacement::corners() order, so a single marker or any board of markers is a
 // TagLayout whose `family` is an OpenCV dictionary name (DICT_4X4_50, ...), and
 // the edge-fit corner model and tag_correspondences serve it as they serve
-// AprilTags (OpenCV refines the corners by fitting lines to the marker's contour).
+// AprilTags (OpenCV refines the corners with libapriltag's edge fit).
 //
 // Board frames are OpenCV's (4.6): the origin at the top-left corner of the
 // board as OpenCV draws it, x to the right, y down the board, z into it.
@@ -42,7 +42,7 @@ TagBitmap aruco_bitmap(const std::string& dictionary, int id);
 
 /// The markers of `dictionary` in a gray image, in TagPlacement::corners() order
 /// (bottom-left, bottom-right, top-right, top-left of the printed marker), sorted
-/// by id. Corners refined by OpenCV's contour line fit (CORNER_REFINE_CONTOUR).
+/// by id. Corners refined by libapriltag's edge fit (CORNER_REFINE_APRILTAG).
 class ArucoDetector {
  public:
   explicit ArucoDetector(const std::string& dictionary);

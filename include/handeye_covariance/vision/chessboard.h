@@ -8,8 +8,10 @@
 // along its `rows`, z into the board (away from a camera that sees it).
 // A board whose numbers of inner corners are both even or both odd looks the same
 // turned by 180 degrees: its pose is ambiguous, and it is refused.
-// Corner noise: each corner independent, the same sigma in x and y (the
-// sector-based detector fits each corner on its own), pooled from the residuals.
+// Detection: OpenCV's classic detector (the sector-based one when it fails), the
+// origin checked by the colours, then cornerSubPix on every corner.
+// Corner noise: each corner independent, the same sigma in x and y (cornerSubPix
+// fits each corner on its own), pooled from the residuals.
 #pragma once
 
 #include <optional>
@@ -38,6 +40,12 @@ struct ChessboardDetection {
   std::optional<PointCorrespondences> points;
   std::string refusal;  // why not (empty when found)
 };
+
+/// cornerSubPix to convergence on chessboard saddle points (chessboards and
+/// ChArUco boards), with a half window of 0.4 x `spacing` (the smallest distance
+/// between neighbouring corners, px), 2 to 5 px.
+void refine_saddle_points(const cv::Mat& gray, std::vector<cv::Point2f>& corners, float spacing);
+int saddle_window(float spacing);
 
 /// The board's inner corners in an 8-bit image (every corner, or a refusal).
 ChessboardDetection detect_chessboard(const cv::Mat& gray, const ChessboardTarget& target);

@@ -61,7 +61,7 @@ void check_camera_model(const CameraModel& camera, const std::string& where);
 /// scene, so it changes slowly.
 class PixelNoise {
  public:
-  explicit PixelNoise(double floor_px = 0.05, std::size_t window_frames = 200)
+  explicit PixelNoise(double floor_px = 0.02, std::size_t window_frames = 200)
       : floor_(floor_px), window_(window_frames) {}
 
   void add(double residual_sum_of_squares, int degrees_of_freedom);
@@ -94,6 +94,11 @@ enum class CornerNoiseModel { EdgeFit, Independent };
 struct PatternPoseOptions {
   int min_tags = 1;                  // tags of the layout that must be seen
   double max_rms_px = 2.0;           // refuse a fit worse than this (a wrong tag, a bad corner)
+  /// Refuse a frame whose residuals are beyond this many times the pooled pixel
+  /// variance (and its chi2 spread), once 100 degrees of freedom are pooled: one
+  /// misplaced corner among well-placed ones, which max_rms_px lets through when
+  /// the corners are good to 0.02 px.
+  double max_variance_ratio = 3.0;
   CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
 };
 

@@ -37,6 +37,12 @@ Target make_target(const ChessboardTarget& chessboard);
 Target make_target(const CharucoTarget& charuco);
 Target make_target(const TagLayout& markers);
 
+/// T_pattern_face: a frame at the middle of the target's printed face, x right,
+/// y up, z out of the face towards a camera that sees it (the frame random_view
+/// looks at; OpenCV's board frames have y down and z into the board). Markers:
+/// the centroid of their centres, turned as the first marker.
+Eigen::Isometry3d target_face(const Target& target);
+
 /// Throws HandEyeError(InvalidLayout) naming what is wrong and how to fix it.
 void check_target(const Target& target, const std::string& where);
 

@@ -1,0 +1,94 @@
+// The honesty of a detector's pose covariance on rendered images: many random
+// views of a target, each detected and compared with the truth under its own
+// covariance, through the steps the detector node and `handeye images` take
+// (rectify, detect, PnP with the pooled pixel sigma). test_vision, test_targets.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "handeye_covariance/simulation/pattern_renderer.h"
+#include "handeye_covariance/vision/target.h"
+#include "test_helpers.h"
+
+namespace handeye {
+
+struct Consistency {
+  double nees_rotation = 0.0, nees_translation = 0.0, nees_pose = 0.0;
+  double max_correlation = 0.0;  // largest |corr| between a rotation and a translation axis
+  double pixel_sigma = 0.0, points = 0.0;  // the last frame's sigma; the mean number of points used
+  int frames = 0, missed = 0;
+  std::string first_refusal;
+};
+
+struct Pipeline {
+  bool rectify = true;
+  CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
+  ViewpointOptions views;
+  RenderOptions render;
+};
+
+/// Renders `frames` random views of the target's face (after 20 that warm the
+/// pooled pixel noise), detects, and accumulates the NEES of each pose.
+inline Consistency consistency(const Target& target, int frames, std::uint64_t seed, const Pipeline& pipeline = {}) {
+  const CameraModel camera = simulated_camera();
+  const PatternRenderer renderer(target, camera, pipeline.render);
+  const ImageRectifier rectifier(camera);
+  TargetDetectorOptions options;
+  options.pose.corner_noise = pipeline.corner_noise;
+  const TargetDetector detector(target, options);
+  const Eigen::Isometry3d T_face_pattern = target_face(target).inverse();
+  PixelNoise noise;
+  Rng rng(seed);
+  Consistency c;
+  const auto estimate = [&](const Eigen::Isometry3d& T) -> PatternPoseResult {
+    const cv::Mat image = renderer.render(T, rng);
+    const CameraModel& used = pipeline.rectify ? rectifier.rectified() : camera;
+    const TargetObservation seen = detector.detect(pipeline.rectify ? rectifier.rectify(image) : image);
+    if (!seen.points) return {std::nullopt, seen.refusal};
+    return estimate_pose(used, *seen.points, noise, options.pose);
+  };
+  for (int i = 0; i < 20; ++i) estimate(random_view(rng, pipeline.views) * T_face_pattern);
+  for (int i = 0; i < frames; ++i) {
+    const Eigen::Isometry3d T = random_view(rng, pipeline.views) * T_face_pattern;
+    const PatternPoseResult r = estimate(T);
+    if (!r.pose) {
+      if (c.first_refusal.empty()) c.first_refusal = r.refusal;
+      ++c.missed;
+      continue;
+    }
+    const Vector6d e = test::pose_perturbation(r.pose->T_camera_pattern, T);
+    const Matrix6d& S = r.pose->covariance;
+    c.nees_translation += e.head<3>().dot(S.topLeftCorner<3, 3>().inverse() * e.head<3>());
+    c.nees_rotation += e.tail<3>().dot(S.bottomRightCorner<3, 3>().inverse() * e.tail<3>());
+    c.nees_pose += e.dot(S.inverse() * e);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 3; b < 6; ++b)
+        c.max_correlation = std::max(c.max_correlation, std::abs(S(a, b)) / std::sqrt(S(a, a) * S(b, b)));
+    c.pixel_sigma = r.pose->pixel_sigma;
+    c.points += r.pose->points;
+    ++c.frames;
+  }
+  c.nees_rotation /= c.frames;
+  c.nees_translation /= c.frames;
+  c.nees_pose /= c.frames;
+  c.points /= c.frames;
+  return c;
+}
+
+// The bar: over many rendered frames the detector's covariance matches
+// its actual error, NEES mean within [2.5, 3.5] for rotation and translation.
+inline void expect_honest(const char* name, const Consistency& c, int max_missed = 0) {
+  std::printf("%s: %d frames (%d missed%s%s), %.1f points, pixel sigma %.3f px, NEES R %.2f t %.2f pose %.2f, "
+              "max |corr(R,t)| %.2f\n",
+              name, c.frames, c.missed, c.first_refusal.empty() ? "" : ", first: ", c.first_refusal.c_str(), c.points,
+              c.pixel_sigma, c.nees_rotation, c.nees_translation, c.nees_pose, c.max_correlation);
+  EXPECT_LE(c.missed, max_missed) << c.first_refusal;
+  EXPECT_GE(c.nees_rotation, 2.5);
+  EXPECT_LE(c.nees_rotation, 3.5);
+  EXPECT_GE(c.nees_translation, 2.5);
+  EXPECT_LE(c.nees_translation, 3.5);
+}
+
+}  // namespace handeye
