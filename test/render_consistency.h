@@ -17,6 +17,7 @@ namespace handeye {
 struct Consistency {
   double nees_rotation = 0.0, nees_translation = 0.0, nees_pose = 0.0;
   double max_correlation = 0.0;  // largest |corr| between a rotation and a translation axis
+  double rms_translation = 0.0, rms_rotation = 0.0;  // m, rad
   double pixel_sigma = 0.0, points = 0.0;  // the last frame's sigma; the mean number of points used
   int frames = 0, missed = 0;
   std::string first_refusal;
@@ -63,6 +64,8 @@ inline Consistency consistency(const Target& target, int frames, std::uint64_t s
     c.nees_translation += e.head<3>().dot(S.topLeftCorner<3, 3>().inverse() * e.head<3>());
     c.nees_rotation += e.tail<3>().dot(S.bottomRightCorner<3, 3>().inverse() * e.tail<3>());
     c.nees_pose += e.dot(S.inverse() * e);
+    c.rms_translation += e.head<3>().squaredNorm();
+    c.rms_rotation += e.tail<3>().squaredNorm();
     for (int a = 0; a < 3; ++a)
       for (int b = 3; b < 6; ++b)
         c.max_correlation = std::max(c.max_correlation, std::abs(S(a, b)) / std::sqrt(S(a, a) * S(b, b)));
@@ -74,16 +77,23 @@ inline Consistency consistency(const Target& target, int frames, std::uint64_t s
   c.nees_translation /= c.frames;
   c.nees_pose /= c.frames;
   c.points /= c.frames;
+  c.rms_translation = std::sqrt(c.rms_translation / c.frames);
+  c.rms_rotation = std::sqrt(c.rms_rotation / c.frames);
   return c;
 }
 
 // The bar: over many rendered frames the detector's covariance matches
 // its actual error, NEES mean within [2.5, 3.5] for rotation and translation.
-inline void expect_honest(const char* name, const Consistency& c, int max_missed = 0) {
-  std::printf("%s: %d frames (%d missed%s%s), %.1f points, pixel sigma %.3f px, NEES R %.2f t %.2f pose %.2f, "
-              "max |corr(R,t)| %.2f\n",
+inline void expect_printed(const char* name, const Consistency& c) {
+  std::printf("%s: %d frames (%d missed%s%s), %.1f points, pixel sigma %.3f px, RMS error %.3f mm %.4f deg, "
+              "NEES R %.2f t %.2f pose %.2f, max |corr(R,t)| %.2f\n",
               name, c.frames, c.missed, c.first_refusal.empty() ? "" : ", first: ", c.first_refusal.c_str(), c.points,
-              c.pixel_sigma, c.nees_rotation, c.nees_translation, c.nees_pose, c.max_correlation);
+              c.pixel_sigma, c.rms_translation * 1e3, c.rms_rotation * 180.0 / M_PI, c.nees_rotation, c.nees_translation,
+              c.nees_pose, c.max_correlation);
+}
+
+inline void expect_honest(const char* name, const Consistency& c, int max_missed = 0) {
+  expect_printed(name, c);
   EXPECT_LE(c.missed, max_missed) << c.first_refusal;
   EXPECT_GE(c.nees_rotation, 2.5);
   EXPECT_LE(c.nees_rotation, 3.5);

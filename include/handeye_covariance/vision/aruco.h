@@ -5,7 +5,8 @@
 // TagPlacement::corners() order, so a single marker or any board of markers is a
 // TagLayout whose `family` is an OpenCV dictionary name (DICT_4X4_50, ...), and
 // the edge-fit corner model and tag_correspondences serve it as they serve
-// AprilTags (OpenCV refines the corners with libapriltag's edge fit).
+// AprilTags (the corners are refined by fitting lines to the sides, as
+// libapriltag does).
 //
 // Board frames are OpenCV's (4.6): the origin at the top-left corner of the
 // board as OpenCV draws it, x to the right, y down the board, z into it.
@@ -42,7 +43,10 @@ TagBitmap aruco_bitmap(const std::string& dictionary, int id);
 
 /// The markers of `dictionary` in a gray image, in TagPlacement::corners() order
 /// (bottom-left, bottom-right, top-right, top-left of the printed marker), sorted
-/// by id. Corners refined by libapriltag's edge fit (CORNER_REFINE_APRILTAG).
+/// by id. OpenCV finds and decodes them; the corners are refined as libapriltag
+/// refines its own (lines fitted to each side's edge points, intersected), so
+/// the edge-fit corner model holds. A marker whose sides cannot be fitted (cut
+/// by the image border) is left out.
 class ArucoDetector {
  public:
   explicit ArucoDetector(const std::string& dictionary);

@@ -98,7 +98,7 @@ struct PatternPoseOptions {
   /// variance (and its chi2 spread), once 100 degrees of freedom are pooled: one
   /// misplaced corner among well-placed ones, which max_rms_px lets through when
   /// the corners are good to 0.02 px.
-  double max_variance_ratio = 3.0;
+  double max_variance_ratio = 10.0;
   CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
 };
 
