@@ -747,6 +747,75 @@ TagLayout parse_tag_layout(const std::string& text, const std::string& source) {
 
 TagLayout read_tag_layout(const std::string& path) { return parse_tag_layout(read_file(path), path); }
 
+// ---------------------------------------------------------------- targets
+
+Target parse_target(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  const std::string kinds = "chessboard, charuco, aruco, aruco_board or apriltag";
+  if (root.IsMap() && root["tags"] && !root["type"]) return make_target(parse_tag_layout(text, source));
+  const std::string type = as_text(require(root, "type", top, "write `type: " + kinds + "` (README, \"Targets\")"),
+                                   top / "type");
+  const auto length = [&](const char* key, const std::string& hint) {
+    const double v = as_double(require(root, key, top, hint), top / key);
+    if (!(v > 0.0 && v < 10.0)) {
+      throw HandEyeError(ErrorCode::InvalidLayout, std::string("`") + key + "` must be a length in m, above 0 and below 10",
+                         (top / key).str(), hint);
+    }
+    return v;
+  };
+  const auto pair = [&](const char* key, const std::string& what, const std::string& hint) {
+    const YAML::Node node = require(root, key, top, hint);
+    if (!node.IsSequence() || node.size() != 2) {
+      throw HandEyeError(ErrorCode::WrongLength, "`" + std::string(key) + "` must be [columns, rows] (" + what + ")",
+                         (top / key).str(), hint);
+    }
+    return std::array<int, 2>{as_integer(node[0], (top / key)[0], 1, 1000, what),
+                              as_integer(node[1], (top / key)[1], 1, 1000, what)};
+  };
+  const auto name = [&](const char* key, const std::string& hint) { return as_text(require(root, key, top, hint), top / key); };
+  const auto id = [&](const char* key, const std::string& hint) {
+    return as_integer(require(root, key, top, hint), top / key, 0, 1e6, "the marker id");
+  };
+  if (type == "chessboard") {
+    const std::string hint = "e.g. {type: chessboard, inner_corners: [9, 6], square: 0.0236}";
+    const auto corners = pair("inner_corners", "inner corners", hint);
+    return make_target(ChessboardTarget{corners[0], corners[1], length("square", hint)});
+  }
+  if (type == "charuco") {
+    const std::string hint = "e.g. {type: charuco, squares: [7, 5], square: 0.036, marker: 0.018, dictionary: DICT_6X6_250}";
+    const auto squares = pair("squares", "squares", hint);
+    return make_target(CharucoTarget{squares[0], squares[1], length("square", hint), length("marker", hint),
+                                     name("dictionary", hint)});
+  }
+  if (type == "aruco") {
+    const std::string hint = "e.g. {type: aruco, dictionary: DICT_4X4_50, id: 7, marker: 0.05}";
+    const std::string dictionary = name("dictionary", hint);
+    return make_target(single_tag_layout(id("id", hint), length("marker", hint), dictionary));
+  }
+  if (type == "aruco_board") {
+    const std::string hint =
+        "e.g. {type: aruco_board, dictionary: DICT_4X4_50, markers: [4, 3], marker: 0.06, separation: 0.015}";
+    const std::string dictionary = name("dictionary", hint);
+    const auto markers = pair("markers", "markers", hint);
+    const double separation = as_double(require(root, "separation", top, hint), top / "separation");
+    if (!(separation >= 0.0 && separation < 10.0)) {
+      throw HandEyeError(ErrorCode::InvalidLayout, "`separation` must be a length in m, 0 or more", (top / "separation").str(), hint);
+    }
+    const int first = root["first_id"] ? as_integer(root["first_id"], top / "first_id", 0, 1e6, "the first id") : 0;
+    return make_target(aruco_grid_layout(dictionary, markers[0], markers[1], length("marker", hint), separation, first));
+  }
+  if (type == "apriltag") {
+    const std::string hint = "e.g. {type: apriltag, family: tag36h11, id: 10, size: 0.048}";
+    const std::string family = root["family"] ? as_text(root["family"], top / "family") : "tag36h11";
+    return make_target(single_tag_layout(id("id", hint), length("size", hint), family));
+  }
+  throw HandEyeError(ErrorCode::InvalidLayout, "unknown target type `" + type + "`", (top / "type").str(),
+                     "use " + kinds);
+}
+
+Target read_target(const std::string& path) { return parse_target(read_file(path), path); }
+
 // ---------------------------------------------------------------- session config
 
 void read_session_config(const std::string& path, SessionConfig& config) {

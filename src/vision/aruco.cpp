@@ -201,26 +201,6 @@ std::vector<TagCorners> ArucoDetector::detect(const cv::Mat& gray) const {
   return tags;
 }
 
-TagLayout aruco_grid_layout(const std::string& name, int columns, int rows, double marker, double separation,
-                            int first_id) {
-  TagLayout layout;
-  layout.family = name;
-  // OpenCV's board frame has y down and z into the board; a marker's frame has
-  // y up and z out of it: the same plane turned by 180 degrees about x.
-  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < columns; ++c) {
-      TagPlacement tag;
-      tag.id = first_id + r * columns + c;
-      tag.size = marker;
-      tag.T_pattern_tag = se3::make_pose(flip, Eigen::Vector3d(c * (marker + separation) + 0.5 * marker,
-                                                               r * (marker + separation) + 0.5 * marker, 0.0));
-      layout.tags.push_back(tag);
-    }
-  }
-  return layout;
-}
-
 void check_charuco(const CharucoTarget& t, const std::string& where) {
   if (t.columns < 3 || t.rows < 3) {
     throw HandEyeError(ErrorCode::InvalidLayout,

@@ -25,6 +25,7 @@
 #include <opencv2/core.hpp>
 
 #include "handeye_covariance/core/tag_layout.h"
+#include "handeye_covariance/core/target.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
 
@@ -54,17 +55,6 @@ class ArucoDetector {
 
  private:
   std::string dictionary_;
-};
-
-/// A grid board of markers (OpenCV's GridBoard) as a layout in OpenCV's frame.
-TagLayout aruco_grid_layout(const std::string& dictionary, int columns, int rows, double marker, double separation,
-                            int first_id = 0);
-
-struct CharucoTarget {
-  int columns = 0, rows = 0;  // squares along a row, and along a column
-  double square = 0.0;        // m, a square's edge
-  double marker = 0.0;        // m, a marker's edge (black border included)
-  std::string dictionary = "DICT_6X6_250";
 };
 
 /// Throws HandEyeError(InvalidLayout): fewer than 3 squares either way, lengths

@@ -20,14 +20,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "handeye_covariance/core/target.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
-
-struct ChessboardTarget {
-  int columns = 0, rows = 0;  // inner corners along a row, and along a column
-  double square = 0.0;        // m, the edge of one square
-};
 
 /// Throws HandEyeError(InvalidLayout) for fewer than 3 corners either way, a
 /// square that is not a positive length, or an ambiguous (symmetric) board.

@@ -1,0 +1,60 @@
+// A calibration target as printed (no ROS, no OpenCV): a chessboard, a ChArUco
+// board, or markers (one or a board of AprilTags or ArUco markers, a TagLayout
+// whose family names the detector). The vision layer detects each kind
+// (vision/target.h); io reads target files (io/yaml_io.h).
+//
+// Frames: a chessboard's and a ChArUco board's are OpenCV's (vision/chessboard.h,
+// vision/aruco.h): origin at a corner, x along a row, y down the rows, z into the
+// board. Markers: tag_layout.h.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+
+#include "handeye_covariance/core/tag_layout.h"
+
+namespace handeye {
+
+struct ChessboardTarget {
+  int columns = 0, rows = 0;  // inner corners along a row, and along a column
+  double square = 0.0;        // m, the edge of one square
+};
+
+struct CharucoTarget {
+  int columns = 0, rows = 0;  // squares along a row, and along a column
+  double square = 0.0;        // m, a square's edge
+  double marker = 0.0;        // m, a marker's edge (black border included)
+  std::string dictionary = "DICT_6X6_250";
+};
+
+enum class TargetKind { Chessboard, Charuco, Markers };
+
+struct Target {
+  TargetKind kind = TargetKind::Markers;
+  ChessboardTarget chessboard;  // kind Chessboard
+  CharucoTarget charuco;        // kind Charuco
+  /// kind Markers: AprilTags (family: a libapriltag family, e.g. tag36h11) or
+  /// ArUco markers (family: an OpenCV dictionary, e.g. DICT_4X4_50).
+  TagLayout markers;
+
+  /// e.g. "chessboard 9 x 6 inner corners, 23.6 mm squares".
+  std::string describe() const;
+};
+
+/// A grid board of markers (OpenCV's GridBoard: ids row by row from `first_id`)
+/// as a layout in OpenCV's board frame (the top-left corner of the top-left
+/// marker, x right, y down, z into the board); `family` is the dictionary.
+TagLayout aruco_grid_layout(const std::string& dictionary, int columns, int rows, double marker, double separation,
+                            int first_id = 0);
+
+Target make_target(const ChessboardTarget& chessboard);
+Target make_target(const CharucoTarget& charuco);
+Target make_target(const TagLayout& markers);
+
+/// T_pattern_face: a frame at the middle of the target's printed face, x right,
+/// y up, z out of the face towards a camera that sees it (the frame random_view
+/// looks at; OpenCV's board frames have y down and z into the board). Markers:
+/// the centroid of their centres, turned as the first marker.
+Eigen::Isometry3d target_face(const Target& target);
+
+}  // namespace handeye

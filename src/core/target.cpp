@@ -1,0 +1,98 @@
+#include "handeye_covariance/core/target.h"
+
+#include <cstdio>
+
+#include "handeye_covariance/core/lie.h"
+
+namespace handeye {
+namespace {
+
+std::string mm(double metres) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f mm", metres * 1e3);
+  return text;
+}
+
+}  // namespace
+
+std::string Target::describe() const {
+  switch (kind) {
+    case TargetKind::Chessboard:
+      return "chessboard " + std::to_string(chessboard.columns) + " x " + std::to_string(chessboard.rows) +
+             " inner corners, " + mm(chessboard.square) + " squares";
+    case TargetKind::Charuco:
+      return "ChArUco " + std::to_string(charuco.columns) + " x " + std::to_string(charuco.rows) + " squares of " +
+             mm(charuco.square) + ", " + mm(charuco.marker) + " markers, " + charuco.dictionary;
+    case TargetKind::Markers:
+      break;
+  }
+  const std::string what = markers.family.rfind("DICT_", 0) == 0 ? "ArUco" : "AprilTag";
+  if (markers.tags.size() == 1) {
+    return what + " " + markers.family + " id " + std::to_string(markers.tags[0].id) + ", " + mm(markers.tags[0].size);
+  }
+  return what + " board of " + std::to_string(markers.tags.size()) + " " + markers.family + " markers";
+}
+
+Target make_target(const ChessboardTarget& chessboard) {
+  Target target;
+  target.kind = TargetKind::Chessboard;
+  target.chessboard = chessboard;
+  return target;
+}
+
+Target make_target(const CharucoTarget& charuco) {
+  Target target;
+  target.kind = TargetKind::Charuco;
+  target.charuco = charuco;
+  return target;
+}
+
+Target make_target(const TagLayout& markers) {
+  Target target;
+  target.kind = TargetKind::Markers;
+  target.markers = markers;
+  return target;
+}
+
+Eigen::Isometry3d target_face(const Target& target) {
+  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  switch (target.kind) {
+    case TargetKind::Chessboard: {
+      const ChessboardTarget& t = target.chessboard;
+      return se3::make_pose(flip, Eigen::Vector3d(0.5 * (t.columns - 1) * t.square, 0.5 * (t.rows - 1) * t.square, 0.0));
+    }
+    case TargetKind::Charuco: {
+      const CharucoTarget& t = target.charuco;
+      return se3::make_pose(flip, Eigen::Vector3d(0.5 * t.columns * t.square, 0.5 * t.rows * t.square, 0.0));
+    }
+    case TargetKind::Markers:
+      break;
+  }
+  if (target.markers.tags.empty()) return Eigen::Isometry3d::Identity();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const TagPlacement& tag : target.markers.tags) centre += tag.T_pattern_tag.translation();
+  centre /= static_cast<double>(target.markers.tags.size());
+  return se3::make_pose(target.markers.tags.front().T_pattern_tag.linear(), centre);
+}
+
+TagLayout aruco_grid_layout(const std::string& name, int columns, int rows, double marker, double separation,
+                            int first_id) {
+  TagLayout layout;
+  layout.family = name;
+  // OpenCV's board frame has y down and z into the board; a marker's frame has
+  // y up and z out of it: the same plane turned by 180 degrees about x.
+  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      TagPlacement tag;
+      tag.id = first_id + r * columns + c;
+      tag.size = marker;
+      tag.T_pattern_tag = se3::make_pose(flip, Eigen::Vector3d(c * (marker + separation) + 0.5 * marker,
+                                                               r * (marker + separation) + 0.5 * marker, 0.0));
+      layout.tags.push_back(tag);
+    }
+  }
+  return layout;
+}
+
+}  // namespace handeye

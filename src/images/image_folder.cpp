@@ -1,0 +1,288 @@
+#include "handeye_covariance/images/image_folder.h"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/vision/target.h"
+
+namespace handeye {
+namespace images {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+/// The last run of digits in a file stem ("franka_image-3" -> "3"), without leading zeros.
+std::optional<std::string> trailing_number(const std::string& stem) {
+  std::size_t end = stem.find_last_of("0123456789");
+  if (end == std::string::npos) return std::nullopt;
+  std::size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
+  std::string digits = stem.substr(begin, end - begin + 1);
+  digits.erase(0, std::min(digits.find_first_not_of('0'), digits.size() - 1));
+  return digits;
+}
+
+CameraModel camera_from_opencv(const std::string& path) {
+  cv::FileStorage file;
+  try {
+    file.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it: " + std::string(e.what()), path,
+                       "write it with cv::FileStorage (camera_matrix, distortion_coefficients)");
+  }
+  const std::string hint = "OpenCV's camera file has camera_matrix (3 x 3) and distortion_coefficients";
+  if (!file.isOpened()) throw HandEyeError(ErrorCode::IoError, "cannot open the camera file", path, "check the path");
+  cv::Mat K, D;
+  file["camera_matrix"] >> K;
+  file["distortion_coefficients"] >> D;
+  if (K.rows != 3 || K.cols != 3) throw HandEyeError(ErrorCode::MissingKey, "no 3 x 3 camera_matrix", path, hint);
+  CameraModel camera;
+  K.convertTo(K, CV_64F);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) camera.K(r, c) = K.at<double>(r, c);
+  if (!D.empty()) {
+    D.convertTo(D, CV_64F);
+    D = D.reshape(1, 1);
+    camera.distortion.assign(D.begin<double>(), D.end<double>());
+  }
+  if (!file["image_width"].empty()) file["image_width"] >> camera.width;
+  if (!file["image_height"].empty()) file["image_height"] >> camera.height;
+  return camera;
+}
+
+std::vector<double> numbers(const YAML::Node& node, const std::string& where, const std::string& hint) {
+  const YAML::Node data = node && node.IsMap() ? node["data"] : node;
+  if (!data || !data.IsSequence()) throw HandEyeError(ErrorCode::MissingKey, "expected a `data:` list", where, hint);
+  std::vector<double> values;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    try {
+      values.push_back(data[i].as<double>());
+    } catch (const YAML::Exception&) {
+      throw HandEyeError(ErrorCode::MalformedFile, "expected a number", where + ".data[" + std::to_string(i) + "]", hint);
+    }
+    if (!std::isfinite(values.back())) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf", where + ".data[" + std::to_string(i) + "]", hint);
+    }
+  }
+  return values;
+}
+
+CameraModel camera_from_camera_info(const std::string& path) {
+  const std::string hint = "a ROS camera_info YAML (camera_calibration writes one): image_width, image_height, "
+                           "camera_matrix: {data: [9 numbers]}, distortion_coefficients: {data: [...]}";
+  YAML::Node root;
+  try {
+    root = YAML::Load(io::read_file(path));
+  } catch (const YAML::Exception& e) {
+    throw HandEyeError(ErrorCode::MalformedFile, "not YAML: " + std::string(e.what()), path, hint);
+  }
+  if (!root.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a camera_info YAML", path, hint);
+  CameraModel camera;
+  const std::vector<double> K = numbers(root["camera_matrix"], path + ": camera_matrix", hint);
+  if (K.size() != 9) throw HandEyeError(ErrorCode::WrongLength, "camera_matrix needs 9 numbers", path + ": camera_matrix", hint);
+  for (int i = 0; i < 9; ++i) camera.K(i / 3, i % 3) = K[static_cast<std::size_t>(i)];
+  if (root["distortion_coefficients"]) camera.distortion = numbers(root["distortion_coefficients"], path + ": distortion_coefficients", hint);
+  const auto size = [&](const char* key) {
+    const YAML::Node node = root[key];
+    if (!node) return 0;
+    double v = 0.0;
+    try {
+      v = node.as<double>();
+    } catch (const YAML::Exception&) {
+      v = -1.0;
+    }
+    if (!(v >= 0.0 && v <= 100000.0) || v != std::floor(v)) {
+      throw HandEyeError(ErrorCode::MalformedFile, std::string(key) + " must be a whole number of pixels", path + ": " + key, hint);
+    }
+    return static_cast<int>(v);
+  };
+  camera.width = size("image_width");
+  camera.height = size("image_height");
+  return camera;
+}
+
+}  // namespace
+
+CameraModel read_camera(const std::string& path) {
+  if (!fs::exists(path)) throw HandEyeError(ErrorCode::IoError, "no such camera file", path, "check the path");
+  const std::string text = io::read_file(path);
+  const bool opencv = lower(fs::path(path).extension().string()) == ".xml" || text.rfind("%YAML", 0) == 0 ||
+                      text.find("!!opencv-matrix") != std::string::npos;
+  CameraModel camera = opencv ? camera_from_opencv(path) : camera_from_camera_info(path);
+  check_camera_model(camera, path);
+  return camera;
+}
+
+std::vector<ImageWithPose> pair_images_with_poses(const fs::path& images, const fs::path& poses) {
+  if (!fs::is_directory(images)) {
+    throw HandEyeError(ErrorCode::IoError, "not a folder", images.string(), "give the folder that holds the images");
+  }
+  std::vector<ImageWithPose> out;
+  for (const fs::directory_entry& entry : fs::directory_iterator(images)) {
+    const std::string ext = lower(entry.path().extension().string());
+    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) out.push_back({entry.path(), {}, "", ""});
+  }
+  std::sort(out.begin(), out.end(), [](const ImageWithPose& a, const ImageWithPose& b) { return a.image < b.image; });
+  if (out.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "no .png or .jpg image in the folder", images.string(),
+                       "give the folder that holds the images");
+  }
+  if (!fs::exists(poses)) throw HandEyeError(ErrorCode::IoError, "no such file or folder", poses.string(), "check --poses");
+
+  if (fs::is_regular_file(poses)) {  // one CSV for all: image,tx,ty,tz,qx,qy,qz,qw
+    std::ifstream in(poses);
+    std::map<std::string, std::pair<Eigen::Isometry3d, std::string>> by_name;
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+      std::stringstream fields(line);
+      std::vector<std::string> cells;
+      for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+      if (cells.empty() || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      const std::string where = poses.string() + " line " + std::to_string(number);
+      double v[7];
+      bool numeric = cells.size() == 8;
+      for (int i = 0; numeric && i < 7; ++i) {
+        char* end = nullptr;
+        v[i] = std::strtod(cells[static_cast<std::size_t>(i + 1)].c_str(), &end);
+        numeric = end != cells[static_cast<std::size_t>(i + 1)].c_str() && std::isfinite(v[i]);
+      }
+      if (!numeric) {
+        if (number == 1) continue;  // a header
+        throw HandEyeError(ErrorCode::MalformedFile, "expected image,tx,ty,tz,qx,qy,qz,qw", where,
+                           "one line per image: its file name, the translation (m) and the unit quaternion");
+      }
+      const std::string yaml = "translation: [" + cells[1] + "," + cells[2] + "," + cells[3] + "]\nrotation: [" + cells[4] +
+                               "," + cells[5] + "," + cells[6] + "," + cells[7] + "]\n";
+      const std::string name = cells[0].substr(0, cells[0].find_last_not_of(" \t\r") + 1);
+      by_name[fs::path(name).filename().string()] = {io::parse_robot_pose(yaml, where), where};
+    }
+    for (ImageWithPose& item : out) {
+      auto it = by_name.find(item.image.filename().string());
+      if (it == by_name.end()) it = by_name.find(item.image.stem().string());
+      if (it == by_name.end()) {
+        item.why = "no line for it in " + poses.string();
+        continue;
+      }
+      item.T_base_effector = it->second.first;
+      item.pose_source = it->second.second;
+    }
+    return out;
+  }
+
+  std::vector<fs::path> pose_files;
+  for (const fs::directory_entry& entry : fs::directory_iterator(poses)) {
+    const std::string ext = lower(entry.path().extension().string());
+    if (entry.is_regular_file() && (ext == ".yaml" || ext == ".yml" || ext == ".json" || ext == ".csv" || ext == ".txt")) {
+      pose_files.push_back(entry.path());
+    }
+  }
+  for (ImageWithPose& item : out) {
+    std::vector<fs::path> same_stem, same_number;
+    const auto number = trailing_number(item.image.stem().string());
+    for (const fs::path& p : pose_files) {
+      if (p.stem() == item.image.stem()) same_stem.push_back(p);
+      else if (number && trailing_number(p.stem().string()) == number) same_number.push_back(p);
+    }
+    const std::vector<fs::path>& matches = same_stem.empty() ? same_number : same_stem;
+    if (matches.size() > 1) {
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         "two pose files match image " + item.image.filename().string() + ": " +
+                             matches[0].filename().string() + " and " + matches[1].filename().string(),
+                         poses.string(), "keep one pose file per image (the same stem, or the same number in it)");
+    }
+    if (matches.empty()) {
+      item.why = "no pose file with its stem or its number in " + poses.string();
+      continue;
+    }
+    item.T_base_effector = io::read_robot_pose(matches[0].string());
+    item.pose_source = matches[0].string();
+  }
+  return out;
+}
+
+ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const CameraModel& camera, const Target& target,
+                           const Rig& rig, const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress) {
+  const TargetDetector detector(target);
+  const ImageRectifier rectifier(camera);
+  ImageSession session;
+  session.samples.rig = rig;
+  // First pass: detect, and pool the pixel noise over every image.
+  PixelNoise pooled;
+  std::vector<std::optional<PointCorrespondences>> found(inputs.size());
+  session.images.resize(inputs.size());
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    ImageReport& report = session.images[i];
+    report.image = inputs[i].image.filename().string();
+    if (!inputs[i].T_base_effector) {
+      report.why = inputs[i].why;
+    } else {
+      const cv::Mat image = cv::imread(inputs[i].image.string(), cv::IMREAD_GRAYSCALE);
+      if (image.empty()) {
+        report.why = "cannot be read as an image";
+      } else if (camera.width > 0 && (image.cols != camera.width || image.rows != camera.height)) {
+        report.why = "is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) + ", the camera file says " +
+                     std::to_string(camera.width) + " x " + std::to_string(camera.height);
+      } else {
+        TargetObservation seen = detector.detect(rectifier.rectify(image));
+        report.why = seen.refusal;
+        if (seen.points) {
+          PixelNoise frame_only = pooled;
+          const PatternPoseResult r = estimate_pose(rectifier.rectified(), *seen.points, pooled);
+          if (r.pose) {
+            found[i] = std::move(seen.points);
+          } else {
+            report.why = r.refusal;
+            pooled = frame_only;
+          }
+        }
+      }
+    }
+    if (progress) progress(i, inputs.size(), report);
+  }
+  session.pixel_sigma = pooled.sigma();
+  // Second pass: every pose under the pooled sigma (this frame's residuals are already in it).
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (!found[i]) continue;
+    ImageReport& report = session.images[i];
+    PixelNoise noise = pooled;
+    PatternPoseOptions options;
+    options.max_variance_ratio = INFINITY;  // judged in the first pass
+    const PatternPoseResult r = estimate_pose(rectifier.rectified(), *found[i], noise, options);
+    if (!r.pose) {
+      report.why = r.refusal;
+      continue;
+    }
+    report.used = true;
+    report.points = r.pose->points;
+    report.rms_px = r.pose->rms_px;
+    report.sigma_px = pooled.sigma();
+    report.distance = r.pose->T_camera_pattern.translation().norm();
+    PoseSample sample;
+    sample.T_base_effector = *inputs[i].T_base_effector;
+    sample.T_camera_pattern = r.pose->T_camera_pattern;
+    // The pooled sigma: r.pose->covariance used noise after adding this frame again; scale to the pooled one.
+    const double scale = std::pow(pooled.sigma() / r.pose->pixel_sigma, 2);
+    sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(scale * r.pose->covariance)};
+    session.samples.samples.push_back(sample);
+  }
+  return session;
+}
+
+}  // namespace images
+}  // namespace handeye
