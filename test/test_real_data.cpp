@@ -14,15 +14,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
-#include <opencv2/imgcodecs.hpp>
 
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
-#include "handeye_covariance/vision/chessboard.h"
-#include "handeye_covariance/vision/pattern_pose.h"
-#include "handeye_covariance/vision/tag_detector.h"
+#include "handeye_covariance/images/image_folder.h"
 
 namespace handeye {
 namespace {
@@ -50,49 +46,25 @@ struct RealSession {
   int images = 0, detected = 0;
 };
 
-CameraModel franka_d435() {  // franka_camera.xml / camera_info.yaml of both sessions: no distortion
-  CameraModel camera;
-  camera.K << 607.5931396484375, 0, 323.46282958984375, 0, 607.574951171875, 243.25529479980469, 0, 0, 1;
-  camera.width = 640, camera.height = 480;
-  return camera;
-}
-
-/// One of the two sessions through a detector (image -> correspondences). The
-/// pixel sigma is pooled over all frames first (the node's detector pools over
-/// its last 200 frames, which at 30 Hz are many frames of each pose), then each
-/// image's pose and covariance.
-RealSession real_session(const fs::path& dir, Setup setup, const std::string& pattern,
-                         const std::function<std::optional<PointCorrespondences>(const cv::Mat&, std::string&)>& detect) {
-  const CameraModel camera = franka_d435();
-  PixelNoise pixels;
-  std::vector<std::optional<PointCorrespondences>> found;
+/// One of the two sessions as `handeye images` runs it (images/image_folder.h):
+/// the images paired with franka_pose_rPe_<n>.yaml by their number, the camera
+/// from camera_info.yaml, the pixel sigma pooled over all images first.
+RealSession real_session(const fs::path& dir, Setup setup, const Target& target) {
+  const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(dir, dir);
+  Rig rig{setup, {"base", "effector", "camera", "pattern"}};
+  const images::ImageSession found =
+      images::detect_images(inputs, images::read_camera((dir / "camera_info.yaml").string()), target, rig);
   RealSession session;
-  for (int i = 1; i <= 8; ++i) {
-    const cv::Mat image = cv::imread((dir / ("franka_image-" + std::to_string(i) + ".png")).string(), cv::IMREAD_GRAYSCALE);
-    if (image.empty()) ADD_FAILURE() << "cannot read image " << i << " in " << dir;
-    std::string why;
-    found.push_back(image.empty() ? std::nullopt : detect(image, why));
-    if (!found.back()) std::printf("  image %d: not detected (%s)\n", i, why.c_str());
-    ++session.images;
-    if (found.back()) estimate_pose(camera, *found.back(), pixels);  // pools the pixel noise
-  }
-  session.samples.rig = {setup, {"base", "effector", "camera", pattern}};
-  for (int i = 1; i <= 8; ++i) {
-    if (!found[static_cast<std::size_t>(i - 1)]) continue;
-    PixelNoise pooled = pixels;
-    const PatternPoseResult r = estimate_pose(camera, *found[static_cast<std::size_t>(i - 1)], pooled);
-    if (!r.pose) {
-      std::printf("  image %d: no pose (%s)\n", i, r.refusal.c_str());
+  session.samples = found.samples;
+  session.images = static_cast<int>(found.images.size());
+  for (const images::ImageReport& r : found.images) {
+    if (!r.used) {
+      std::printf("  %s: skipped (%s)\n", r.image.c_str(), r.why.c_str());
       continue;
     }
     ++session.detected;
-    PoseSample s;
-    s.T_base_effector = io::read_robot_pose((dir / ("franka_pose_rPe_" + std::to_string(i) + ".yaml")).string());
-    s.T_camera_pattern = r.pose->T_camera_pattern;
-    s.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(r.pose->covariance)};
-    std::printf("  image %d: %d points, reprojection RMS %.3f px, pixel sigma %.3f px, pattern at %.3f m\n", i,
-                r.pose->points, r.pose->rms_px, r.pose->pixel_sigma, r.pose->T_camera_pattern.translation().norm());
-    session.samples.samples.push_back(s);
+    std::printf("  %s: %d points, reprojection RMS %.3f px, pixel sigma %.3f px, pattern at %.3f m\n", r.image.c_str(),
+                r.points, r.rms_px, r.sigma_px, r.distance);
   }
   return session;
 }
@@ -151,13 +123,8 @@ TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithin3SigmaOfThePublish
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir
                                << ": put shared/realdata beside the repository (or a parent of it), or set HANDEYE_REALDATA";
   std::printf("[real eye-to-hand, AprilTag, the node's path] %s\n", dir.c_str());
-  const TagLayout layout = single_tag_layout(10, 0.048);  // apriltag-data.txt: tag36h11 id 10, 0.048 m
-  const TagDetector detector;
-  const RealSession session = real_session(dir, Setup::EyeToHand, "tag_10", [&](const cv::Mat& image, std::string& why) {
-    const TagCorrespondences found = tag_correspondences(layout, detector.detect(image));
-    why = found.refusal;
-    return found.points;
-  });
+  // apriltag-data.txt: tag36h11 id 10, 0.048 m
+  const RealSession session = real_session(dir, Setup::EyeToHand, make_target(single_tag_layout(10, 0.048)));
   EXPECT_EQ(session.detected, 8) << "every image shows the tag";
   // ViSP's published X = T_base_camera (the data's README).
   const Calibration c = judge(session, theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018},
@@ -174,12 +141,10 @@ TEST(RealData, EyeInHandChessboardLandsWithin3SigmaOfThePublishedX) {
   const fs::path dir = realdata() / "visp-franka" / "data-eye-in-hand";
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
   std::printf("[real eye-in-hand, chessboard 9 x 6 inner corners, 23.6 mm squares] %s\n", dir.c_str());
-  const ChessboardTarget board{9, 6, 0.0236};  // chessboard-data.txt
-  const RealSession session = real_session(dir, Setup::EyeInHand, "chessboard", [&](const cv::Mat& image, std::string& why) {
-    const ChessboardDetection d = detect_chessboard(image, board);
-    why = d.refusal;
-    return d.points;
-  });
+  // chessboard-data.txt, read as a target file
+  const RealSession session = real_session(dir, Setup::EyeInHand,
+                                           io::parse_target("{type: chessboard, inner_corners: [9, 6], square: 0.0236}",
+                                                            "chessboard.yaml"));
   EXPECT_EQ(session.detected, 8) << "every image shows the board";
   // ViSP's published X = T_effector_camera (the data's README).
   judge(session, theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244}, {0.001783530191, 0.009173747947, 1.581782359}));

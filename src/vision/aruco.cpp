@@ -1,6 +1,7 @@
 #include "handeye_covariance/vision/aruco.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 
@@ -156,6 +157,12 @@ std::vector<std::string> aruco_dictionaries() {
 }
 
 bool is_aruco_dictionary(const std::string& name) { return dictionary_names().count(name) > 0; }
+
+bool names_aruco_dictionary(const std::string& name) {
+  return name.size() >= 4 && std::toupper(static_cast<unsigned char>(name[0])) == 'D' &&
+         std::toupper(static_cast<unsigned char>(name[1])) == 'I' && std::toupper(static_cast<unsigned char>(name[2])) == 'C' &&
+         std::toupper(static_cast<unsigned char>(name[3])) == 'T';
+}
 
 int aruco_dictionary_size(const std::string& name) { return dictionary(name)->bytesList.rows; }
 

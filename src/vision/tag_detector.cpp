@@ -112,7 +112,7 @@ std::vector<TagCorners> TagDetector::detect(const cv::Mat& gray) const {
 }
 
 TagBitmap tag_bitmap(const std::string& family, int id) {
-  if (is_aruco_dictionary(family)) return aruco_bitmap(family, id);
+  if (names_aruco_dictionary(family)) return aruco_bitmap(family, id);
   const Family f = make_family(family);
   if (id < 0 || static_cast<uint32_t>(id) >= f->ncodes) {
     throw HandEyeError(ErrorCode::InvalidLayout,

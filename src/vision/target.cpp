@@ -25,7 +25,7 @@ TargetDetector::TargetDetector(const Target& target, const TargetDetectorOptions
     : target_(target), options_(options) {
   check_target(target, "target");
   if (target.kind != TargetKind::Markers) return;
-  if (is_aruco_dictionary(target.markers.family)) {
+  if (names_aruco_dictionary(target.markers.family)) {
     aruco_ = std::make_unique<ArucoDetector>(target.markers.family);
   } else {
     TagDetectorOptions apriltag = options.apriltag;

@@ -34,6 +34,9 @@ namespace handeye {
 /// OpenCV's predefined dictionaries by name (DICT_4X4_50 ... DICT_APRILTAG_36h11).
 std::vector<std::string> aruco_dictionaries();
 bool is_aruco_dictionary(const std::string& name);
+/// The name is meant as an OpenCV dictionary (it starts with DICT, any case),
+/// known or not: the ArUco path then names the typo with the known dictionaries.
+bool names_aruco_dictionary(const std::string& name);
 /// The number of markers in the dictionary; throws HandEyeError(InvalidLayout)
 /// naming the known dictionaries when `name` is not one.
 int aruco_dictionary_size(const std::string& name);

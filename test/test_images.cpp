@@ -1,0 +1,198 @@
+// A folder of images with robot poses (images/image_folder.h) and the target
+// files (io::parse_target): which pose goes with which image, the two camera
+// file formats, named errors for bad files, and a rendered session of every
+// target kind calibrated through detect_images and the session.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/images/image_folder.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("handeye_images_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+void write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const HandEyeError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(ImageFolder, PairsImagesWithPosesByStemNumberOrCsv) {
+  const fs::path dir = fresh_dir("pairing");
+  const cv::Mat image(8, 8, CV_8UC1, cv::Scalar(0));
+  for (const char* name : {"000_image.png", "franka_image-3.png", "img_7.jpg", "lonely.png"}) {
+    cv::imwrite((dir / name).string(), image);
+  }
+  write(dir / "000_image.yaml", "translation: [0.1, 0, 0]\nrotation: [0, 0, 0, 1]\n");  // same stem
+  write(dir / "franka_pose_rPe_3.yaml", "rows: 6\ncols: 1\ndata: [[0.2], [0], [0], [0], [0], [0]]\n");  // same number (ViSP)
+  write(dir / "pose_0007.txt", "1 0 0 0.3\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");  // same number, leading zeros
+  const auto pairs = images::pair_images_with_poses(dir, dir);
+  ASSERT_EQ(pairs.size(), 4u);
+  EXPECT_EQ(pairs[0].image.filename(), "000_image.png");
+  ASSERT_TRUE(pairs[0].T_base_effector);
+  EXPECT_NEAR(pairs[0].T_base_effector->translation().x(), 0.1, 1e-12);
+  ASSERT_TRUE(pairs[1].T_base_effector) << pairs[1].why;
+  EXPECT_NEAR(pairs[1].T_base_effector->translation().x(), 0.2, 1e-12);
+  ASSERT_TRUE(pairs[2].T_base_effector) << pairs[2].why;
+  EXPECT_NEAR(pairs[2].T_base_effector->translation().x(), 0.3, 1e-12);
+  EXPECT_FALSE(pairs[3].T_base_effector);
+  EXPECT_NE(pairs[3].why.find("no pose file"), std::string::npos) << pairs[3].why;
+
+  // Two files claim one image: named, not guessed.
+  write(dir / "other_3.yaml", "translation: [0, 0, 0]\nrotation: [0, 0, 0, 1]\n");
+  EXPECT_NE(error_of([&] { images::pair_images_with_poses(dir, dir); }).find("two pose files match image franka_image-3.png"),
+            std::string::npos);
+
+  // One CSV for all, by file name or stem, with a header.
+  const fs::path csv = fresh_dir("csv") / "poses.csv";
+  write(csv, "image,tx,ty,tz,qx,qy,qz,qw\n000_image.png,0.5,0,0,0,0,0,1\nimg_7,0.6,0,0,0,0,0,1\n");
+  const auto from_csv = images::pair_images_with_poses(dir, csv);
+  ASSERT_TRUE(from_csv[0].T_base_effector);
+  EXPECT_NEAR(from_csv[0].T_base_effector->translation().x(), 0.5, 1e-12);
+  ASSERT_TRUE(from_csv[2].T_base_effector);
+  EXPECT_FALSE(from_csv[1].T_base_effector);
+  write(csv, "000_image.png,0.5,0,0,0,0,0,1\nimg_7,0.6,zero,0,0,0,0,1\n");
+  EXPECT_NE(error_of([&] { images::pair_images_with_poses(dir, csv); }).find("line 2"), std::string::npos);
+  EXPECT_NE(error_of([&] { images::pair_images_with_poses(fresh_dir("empty"), csv); }).find("no .png or .jpg"),
+            std::string::npos);
+}
+
+TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
+  const fs::path dir = fresh_dir("camera");
+  write(dir / "camera_info.yaml",
+        "image_width: 640\nimage_height: 480\ncamera_matrix: {rows: 3, cols: 3, data: [600, 0, 320, 0, 601, 240, 0, 0, 1]}\n"
+        "distortion_model: plumb_bob\ndistortion_coefficients: {rows: 1, cols: 5, data: [-0.1, 0.05, 0, 0, 0]}\n");
+  const CameraModel ros = images::read_camera((dir / "camera_info.yaml").string());
+  EXPECT_EQ(ros.width, 640);
+  EXPECT_DOUBLE_EQ(ros.K(1, 1), 601.0);
+  ASSERT_EQ(ros.distortion.size(), 5u);
+  for (const char* name : {"camera.yaml", "camera.xml"}) {
+    cv::FileStorage file((dir / name).string(), cv::FileStorage::WRITE);
+    file << "image_width" << 640 << "image_height" << 480;
+    file << "camera_matrix" << (cv::Mat_<double>(3, 3) << 600, 0, 320, 0, 601, 240, 0, 0, 1);
+    file << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << -0.1, 0.05, 0, 0, 0);
+    file.release();
+    const CameraModel opencv = images::read_camera((dir / name).string());
+    EXPECT_TRUE(opencv.K.isApprox(ros.K)) << name;
+    EXPECT_EQ(opencv.distortion, ros.distortion) << name;
+    EXPECT_EQ(opencv.height, 480) << name;
+  }
+  write(dir / "bad.yaml", "camera_matrix: {data: [600, 0, 320]}\n");
+  EXPECT_NE(error_of([&] { images::read_camera((dir / "bad.yaml").string()); }).find("9 numbers"), std::string::npos);
+  write(dir / "nan.yaml", "camera_matrix: {data: [.nan, 0, 320, 0, 601, 240, 0, 0, 1]}\n");
+  EXPECT_NE(error_of([&] { images::read_camera((dir / "nan.yaml").string()); }).find("NaN"), std::string::npos);
+}
+
+TEST(TargetFile, ReadsEveryKindAndNamesBadEntries) {
+  const Target chessboard = io::parse_target("{type: chessboard, inner_corners: [9, 6], square: 0.0202}", "t.yaml");
+  EXPECT_EQ(chessboard.kind, TargetKind::Chessboard);
+  EXPECT_EQ(chessboard.chessboard.rows, 6);
+  const Target charuco =
+      io::parse_target("{type: charuco, squares: [7, 5], square: 0.036, marker: 0.018, dictionary: DICT_6X6_250}", "t.yaml");
+  EXPECT_EQ(charuco.kind, TargetKind::Charuco);
+  EXPECT_EQ(charuco.charuco.dictionary, "DICT_6X6_250");
+  const Target aruco = io::parse_target("{type: aruco, dictionary: DICT_4X4_50, id: 7, marker: 0.05}", "t.yaml");
+  ASSERT_EQ(aruco.markers.tags.size(), 1u);
+  EXPECT_EQ(aruco.markers.family, "DICT_4X4_50");
+  const Target board = io::parse_target(
+      "{type: aruco_board, dictionary: DICT_4X4_50, markers: [4, 3], marker: 0.06, separation: 0.015, first_id: 10}",
+      "t.yaml");
+  ASSERT_EQ(board.markers.tags.size(), 12u);
+  EXPECT_EQ(board.markers.tags.back().id, 21);
+  EXPECT_EQ(io::parse_target("{type: apriltag, id: 10, size: 0.048}", "t.yaml").markers.family, "tag36h11");
+  EXPECT_EQ(io::read_target(std::string(HANDEYE_SOURCE_DIR) + "/config/tag_board_2x2.yaml").markers.tags.size(), 4u);
+
+  EXPECT_NE(error_of([] { io::parse_target("{type: checkerboard}", "t.yaml"); }).find("unknown target type"), std::string::npos);
+  EXPECT_NE(error_of([] { io::parse_target("{type: chessboard, inner_corners: [9], square: 0.02}", "t.yaml"); })
+                .find("[columns, rows]"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { io::parse_target("{type: chessboard, inner_corners: [9, 6], square: -1}", "t.yaml"); })
+                .find("t.yaml: square"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { io::parse_target("{type: aruco, dictionary: DICT_4X4_50, id: 1e90, marker: 0.05}", "t.yaml"); })
+                .find("whole number"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { io::parse_target("{type: aruco, id: 1, marker: 0.05}", "t.yaml"); }).find("dictionary"),
+            std::string::npos);
+  // An unknown dictionary is named by the detector, with the known ones.
+  const Target typo = io::parse_target("{type: aruco, dictionary: DICT_4x4_50, id: 1, marker: 0.05}", "t.yaml");
+  EXPECT_NE(error_of([&] { TargetDetector detector(typo); }).find("unknown ArUco dictionary `DICT_4x4_50`"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { TargetDetector detector(typo); }).find("DICT_4X4_50"), std::string::npos);
+}
+
+// A rendered session of each target kind written as a folder (PNG images, one
+// YAML pose per image), read back and calibrated as `handeye images` does:
+// every image used, and X within 3 sigma per axis of the truth. (ArUco targets
+// are left out: their covariance is not yet honest, test_targets.)
+TEST(ImageFolder, RenderedSessionsOfEveryTargetKindCalibrate) {
+  const std::vector<std::pair<std::string, Target>> targets = {
+      {"chessboard", make_target(ChessboardTarget{9, 6, 0.025})},
+      {"charuco", make_target(CharucoTarget{7, 5, 0.035, 0.026, "DICT_5X5_100"})},
+      {"apriltag", make_target(single_tag_layout(3, 0.1))}};
+  for (const auto& [name, target] : targets) {
+    const fs::path dir = fresh_dir("rendered_" + name);
+    const CameraModel camera = simulated_camera();
+    const PatternRenderer renderer(target, camera);
+    Rng rng(41);
+    // The views around the target's face, then the robot's poses from the rig.
+    SimulatedSession truth = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 15, MeasurementNoise{});
+    const Eigen::Isometry3d T_face_pattern = target_face(target).inverse();
+    for (std::size_t i = 0; i < truth.samples.samples.size(); ++i) {
+      const PoseSample& s = truth.samples.samples[i];
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "%03zu", i);
+      cv::imwrite((dir / (std::string(stem) + "_image.png")).string(), renderer.render(s.T_camera_pattern * T_face_pattern, rng));
+      const Eigen::Quaterniond q(s.T_base_effector.linear());
+      const Eigen::Vector3d t = s.T_base_effector.translation();
+      char pose[256];
+      std::snprintf(pose, sizeof pose, "translation: [%.17g, %.17g, %.17g]\nrotation: [%.17g, %.17g, %.17g, %.17g]\n", t.x(),
+                    t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+      write(dir / (std::string(stem) + "_image.yaml"), pose);
+    }
+    const images::ImageSession found = images::detect_images(images::pair_images_with_poses(dir, dir), camera, target,
+                                                             truth.samples.rig);
+    int used = 0;
+    for (const images::ImageReport& r : found.images) {
+      used += r.used;
+      if (!r.used) ADD_FAILURE() << name << " " << r.image << ": " << r.why;
+    }
+    SessionSettings settings = session_settings(found.samples);
+    settings.session_file.clear();
+    CalibrationSession session(settings);
+    session.replace(found.samples.samples, name);
+    const Calibration c = session.calibrate(session.snapshot());
+    // The pattern frame the images show is the target's, T_face_pattern away from the simulated one.
+    const Vector6d e = test::pose_perturbation(c.T_parent_camera, truth.X);
+    const Vector6d sigma = c.pose_covariance.diagonal().cwiseSqrt();
+    std::printf("%-12s %d/15 images, pixel sigma %.3f px, X error %.3f mm %.4f deg, 1 sigma %.3f mm %.4f deg\n",
+                name.c_str(), used, found.pixel_sigma, e.head<3>().norm() * 1e3, e.tail<3>().norm() * 180 / M_PI,
+                sigma.head<3>().norm() * 1e3, sigma.tail<3>().norm() * 180 / M_PI);
+    for (int a = 0; a < 6; ++a) EXPECT_LE(std::abs(e[a]), 3.0 * sigma[a]) << name << " axis " << a;
+  }
+}
+
+}  // namespace
+}  // namespace handeye
