@@ -20,7 +20,6 @@
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/simulation/simulation.h"
-#include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/calibration_session.h"
 
@@ -30,16 +29,18 @@ namespace cli {
 namespace {
 
 /// `handeye bag ...` and `handeye sim --output x.bag ...` run the handeye_bag
-/// program beside this one: it links rosbag, and this one links no ROS library.
-int run_bag_tool(const std::string& command, const Args& args, std::ostream& out, std::ostream& err) {
+/// program beside this one (it links rosbag), `handeye images ...` handeye_images
+/// (OpenCV, libapriltag): this one links neither.
+int run_tool(const std::string& program, const std::string& command, const Args& args, std::ostream& out,
+             std::ostream& err) {
   std::error_code ec;
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (ec) {  // never a relative "handeye_bag" from the current directory
     err << "handeye " << command << ": cannot find this program's own path (/proc/self/exe: " << ec.message()
-        << "); run handeye_bag from the package's lib folder instead\n";
+        << "); run " << program << " from the package's lib folder instead\n";
     return kInternal;
   }
-  const std::string tool = (self.parent_path() / "handeye_bag").string();
+  const std::string tool = (self.parent_path() / program).string();
   std::vector<std::string> words = {tool, command};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -51,6 +52,10 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
   err << "handeye " << command << ": cannot run " << tool << ": " << std::strerror(errno)
       << " (it is built with the package: ./scripts/setup, or catkin_make)\n";
   return kInternal;
+}
+
+int run_bag_tool(const std::string& command, const Args& args, std::ostream& out, std::ostream& err) {
+  return run_tool("handeye_bag", command, args, out, err);
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -108,84 +113,6 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   out << split_report;
   out << "  result written to     " << output << "\n";
   (void)err;
-  return kOk;
-}
-
-int images_command(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string images_dir, poses, camera_path, target_path, setup_name, output, samples_out, robust = "auto";
-  po::options_description options("images: calibrate from a folder of images and one robot pose per image");
-  options.add_options()("help,h", "show this help")(
-      "images", po::value(&images_dir)->required(), "folder of .png/.jpg images (sorted by name)")(
-      "poses", po::value(&poses)->required(),
-      "folder of robot pose files (T_base_effector, m; matched by stem or by the number in it) or one CSV "
-      "image,tx,ty,tz,qx,qy,qz,qw")(
-      "camera", po::value(&camera_path)->required(), "ROS camera_info YAML, or OpenCV's YAML/XML (camera_matrix, "
-                                                     "distortion_coefficients)")(
-      "target", po::value(&target_path)->required(), "target file (chessboard, charuco, aruco, aruco_board, apriltag, "
-                                                     "or a tag layout)")(
-      "setup", po::value(&setup_name)->required(), "eye_in_hand or eye_to_hand")(
-      "robust", po::value(&robust), "auto (default), on or off, as for solve")(
-      "output,o", po::value(&output), "result file (YAML); default: <images folder>_result.yaml here")(
-      "samples-out", po::value(&samples_out), "also write the samples (each detection with its covariance) for "
-                                              "`handeye solve`");
-  po::variables_map vm;
-  if (!parse("images", "--images DIR --poses DIR_OR_CSV --camera FILE --target FILE --setup eye_in_hand|eye_to_hand",
-             options, args, vm, out)) {
-    return kOk;
-  }
-  if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
-    throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + setup_name + "`", "--setup",
-                       "eye_in_hand (camera on the robot) or eye_to_hand (camera fixed, target on the robot)");
-  }
-  const Setup setup = setup_name == "eye_in_hand" ? Setup::EyeInHand : Setup::EyeToHand;
-  if (output.empty()) output = default_result_path(std::filesystem::path(images_dir).lexically_normal().string());
-  const CameraModel camera = images::read_camera(camera_path);
-  const Target target = io::read_target(target_path);
-  const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(images_dir, poses);
-  out << inputs.size() << " images in " << images_dir << ", target: " << target.describe() << "\n";
-  const bool tty = ::isatty(STDERR_FILENO) && &err == &std::cerr;
-  const auto progress = [&](std::size_t i, std::size_t n, const images::ImageReport&) {
-    if (!tty) return;
-    const int width = 30, done = static_cast<int>(width * (i + 1) / n);
-    err << "\r  detecting [" << std::string(static_cast<std::size_t>(done), '#')
-        << std::string(static_cast<std::size_t>(width - done), ' ') << "] " << i + 1 << "/" << n << std::flush;
-    if (i + 1 == n) err << "\n";
-  };
-  Rig rig;
-  rig.setup = setup;
-  rig.frames = {"base", "effector", "camera", "pattern"};
-  const images::ImageSession found = images::detect_images(inputs, camera, target, rig, progress);
-  char line[256];
-  for (const images::ImageReport& r : found.images) {
-    if (r.used) {
-      std::snprintf(line, sizeof line, "  %-28s %3d points, reprojection RMS %.3f px, sigma %.3f px, target at %.3f m\n",
-                    r.image.c_str(), r.points, r.rms_px, r.sigma_px, r.distance);
-      out << line;
-    } else {
-      out << "  " << r.image << "  skipped: " << r.why << "\n";
-    }
-  }
-  const std::size_t used = found.samples.samples.size();
-  out << used << " of " << found.images.size() << " images used, pooled pixel sigma " << number_text(found.pixel_sigma)
-      << " px\n";
-  if (!samples_out.empty()) {
-    io::write_file_atomically(samples_out, io::format_samples(found.samples));
-    out << "  samples written to    " << samples_out << "  (handeye solve --input " << samples_out << ")\n";
-  }
-  if (used < 3) {
-    throw HandEyeError(ErrorCode::NoData, "only " + std::to_string(used) + " images give a target pose, need at least 3",
-                       images_dir, "see the skipped images' reasons above; check --target against the printed target");
-  }
-  SessionSettings settings = session_settings(found.samples);
-  settings.robust = robust_from_string(robust);
-  CalibrationSession session(settings);
-  session.replace(found.samples.samples, "images in " + images_dir);
-  const SessionSnapshot snapshot = session.snapshot();
-  const Calibration calibration = session.calibrate(snapshot);
-  const io::ResultContext context = io::context_of(snapshot.samples);
-  io::write_file_atomically(output, io::format_result(calibration, context));
-  out << io::human_summary(calibration, context);
-  out << "  result written to     " << output << "\n";
   return kOk;
 }
 
@@ -660,7 +587,9 @@ const CommandTable& commands() {
       {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore",
                [](const Args& args, std::ostream& out, std::ostream& err) { return run_bag_tool("bag", args, out, err); }}},
       {"images", {"calibrate from a folder of images (chessboard, ChArUco, ArUco, AprilTag) and one robot pose per image",
-                  images_command}},
+                  [](const Args& args, std::ostream& out, std::ostream& err) {
+                    return run_tool("handeye_images", "images", args, out, err);
+                  }}},
       {"compose", {"the object's pose in the robot base with its covariance: robot pose + X + detection (eq. 68)",
                    compose_command}},
       {"noise", {"measure the pose noise from repeated observations or residuals (eq. 64-67); write a noise block",
