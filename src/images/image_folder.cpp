@@ -222,9 +222,9 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
   const ImageRectifier rectifier(camera);
   ImageSession session;
   session.samples.rig = rig;
-  // First pass: detect, and pool the pixel noise over every image.
+  // Detect, and pool the pixel noise over every image.
   PixelNoise pooled;
-  std::vector<std::optional<PointCorrespondences>> found(inputs.size());
+  std::vector<std::optional<PatternPose>> poses(inputs.size());
   session.images.resize(inputs.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     ImageReport& report = session.images[i];
@@ -239,46 +239,35 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
         report.why = "is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) + ", the camera file says " +
                      std::to_string(camera.width) + " x " + std::to_string(camera.height);
       } else {
-        TargetObservation seen = detector.detect(rectifier.rectify(image));
+        const TargetObservation seen = detector.detect(rectifier.rectify(image));
         report.why = seen.refusal;
         if (seen.points) {
-          PixelNoise frame_only = pooled;
-          const PatternPoseResult r = estimate_pose(rectifier.rectified(), *seen.points, pooled);
-          if (r.pose) {
-            found[i] = std::move(seen.points);
-          } else {
-            report.why = r.refusal;
-            pooled = frame_only;
-          }
+          // A refused frame adds nothing to the pool (estimate_pose adds only what it accepts).
+          PatternPoseResult r = estimate_pose(rectifier.rectified(), *seen.points, pooled);
+          poses[i] = std::move(r.pose);
+          if (!poses[i]) report.why = r.refusal;
         }
       }
     }
     if (progress) progress(i, inputs.size(), report);
   }
   session.pixel_sigma = pooled.sigma();
-  // Second pass: every pose under the pooled sigma (this frame's residuals are already in it).
+  // Every pose under the pooled sigma: the covariance is sigma^2 (J^T C^-1 J)^-1,
+  // so rescaling from the sigma the image had when it was added is exact.
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    if (!found[i]) continue;
+    if (!poses[i]) continue;
+    const PatternPose& pose = *poses[i];
     ImageReport& report = session.images[i];
-    PixelNoise noise = pooled;
-    PatternPoseOptions options;
-    options.max_variance_ratio = INFINITY;  // judged in the first pass
-    const PatternPoseResult r = estimate_pose(rectifier.rectified(), *found[i], noise, options);
-    if (!r.pose) {
-      report.why = r.refusal;
-      continue;
-    }
     report.used = true;
-    report.points = r.pose->points;
-    report.rms_px = r.pose->rms_px;
-    report.sigma_px = pooled.sigma();
-    report.distance = r.pose->T_camera_pattern.translation().norm();
+    report.points = pose.points;
+    report.rms_px = pose.rms_px;
+    report.sigma_px = session.pixel_sigma;
+    report.distance = pose.T_camera_pattern.translation().norm();
     PoseSample sample;
     sample.T_base_effector = *inputs[i].T_base_effector;
-    sample.T_camera_pattern = r.pose->T_camera_pattern;
-    // The pooled sigma: r.pose->covariance used noise after adding this frame again; scale to the pooled one.
-    const double scale = std::pow(pooled.sigma() / r.pose->pixel_sigma, 2);
-    sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(scale * r.pose->covariance)};
+    sample.T_camera_pattern = pose.T_camera_pattern;
+    const double scale = std::pow(session.pixel_sigma / pose.pixel_sigma, 2);
+    sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(scale * pose.covariance)};
     session.samples.samples.push_back(sample);
   }
   return session;
