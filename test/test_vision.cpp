@@ -285,7 +285,7 @@ TEST(Chessboard, FindsTheBoardInItsFrameAndRefusesBadTargets) {
     const Eigen::Isometry3d truth =
         se3::make_pose(so3::exp(Eigen::Vector3d(0.25, -0.2, 0.1)), Eigen::Vector3d(0.01, -0.01, 0.42)) * about_centre;
     const cv::Mat image = render_chessboard(board, camera, truth);
-    const ChessboardDetection found = detect_chessboard(image, board);
+    const TargetObservation found = detect_chessboard(image, board);
     if (!found.points) cv::imwrite(::testing::TempDir() + "/chessboard_not_found.png", image);
     ASSERT_TRUE(found.points) << found.refusal << " (the image: " << ::testing::TempDir() << "/chessboard_not_found.png)";
     EXPECT_EQ(found.points->image.size(), 54u);

@@ -1,5 +1,6 @@
 #include "handeye_covariance/core/target.h"
 
+#include <cctype>
 #include <cstdio>
 
 #include "handeye_covariance/core/lie.h"
@@ -26,11 +27,18 @@ std::string Target::describe() const {
     case TargetKind::Markers:
       break;
   }
-  const std::string what = markers.family.rfind("DICT_", 0) == 0 ? "ArUco" : "AprilTag";
+  const std::string what = names_aruco_dictionary(markers.family) ? "ArUco" : "AprilTag";
   if (markers.tags.size() == 1) {
     return what + " " + markers.family + " id " + std::to_string(markers.tags[0].id) + ", " + mm(markers.tags[0].size);
   }
   return what + " board of " + std::to_string(markers.tags.size()) + " " + markers.family + " markers";
+}
+
+bool names_aruco_dictionary(const std::string& name) {
+  if (name.size() < 4) return false;
+  std::string head = name.substr(0, 4);
+  for (char& c : head) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return head == "DICT";
 }
 
 Target make_target(const ChessboardTarget& chessboard) {

@@ -158,12 +158,6 @@ std::vector<std::string> aruco_dictionaries() {
 
 bool is_aruco_dictionary(const std::string& name) { return dictionary_names().count(name) > 0; }
 
-bool names_aruco_dictionary(const std::string& name) {
-  return name.size() >= 4 && std::toupper(static_cast<unsigned char>(name[0])) == 'D' &&
-         std::toupper(static_cast<unsigned char>(name[1])) == 'I' && std::toupper(static_cast<unsigned char>(name[2])) == 'C' &&
-         std::toupper(static_cast<unsigned char>(name[3])) == 'T';
-}
-
 int aruco_dictionary_size(const std::string& name) { return dictionary(name)->bytesList.rows; }
 
 TagBitmap aruco_bitmap(const std::string& name, int id) {
@@ -242,8 +236,8 @@ cv::Mat charuco_image(const CharucoTarget& t, int texels_per_square) {
   return image;
 }
 
-CharucoDetection detect_charuco(const cv::Mat& gray, const CharucoTarget& t, int min_corners) {
-  CharucoDetection out;
+TargetObservation detect_charuco(const cv::Mat& gray, const CharucoTarget& t, int min_corners) {
+  TargetObservation out;
   if (gray.type() != CV_8UC1) {
     throw HandEyeError(ErrorCode::MalformedFile, "the image is not 8-bit single-channel", "detect_charuco",
                        "convert it to mono8 first");

@@ -82,8 +82,8 @@ void refine_saddle_points(const cv::Mat& gray, std::vector<cv::Point2f>& corners
                    cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-4));
 }
 
-ChessboardDetection detect_chessboard(const cv::Mat& gray, const ChessboardTarget& t) {
-  ChessboardDetection out;
+TargetObservation detect_chessboard(const cv::Mat& gray, const ChessboardTarget& t) {
+  TargetObservation out;
   if (gray.type() != CV_8UC1) {
     throw HandEyeError(ErrorCode::MalformedFile, "the image is not 8-bit single-channel", "detect_chessboard",
                        "convert it to mono8 first");

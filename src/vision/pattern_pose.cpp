@@ -172,9 +172,9 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel
   return J;
 }
 
-TagCorrespondences tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
+TargetObservation tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
                                        const PatternPoseOptions& options) {
-  TagCorrespondences result;
+  TargetObservation result;
   PointCorrespondences points;
   for (const TagCorners& detection : detections) {
     const TagPlacement* tag = layout.find(detection.id);
@@ -220,7 +220,7 @@ TagCorrespondences tag_correspondences(const TagLayout& layout, const std::vecto
 PatternPoseResult estimate_pattern_pose(const TagLayout& layout, const CameraModel& camera,
                                         const std::vector<TagCorners>& detections, PixelNoise& noise,
                                         const PatternPoseOptions& options) {
-  const TagCorrespondences found = tag_correspondences(layout, detections, options);
+  const TargetObservation found = tag_correspondences(layout, detections, options);
   if (!found.points) return {std::nullopt, found.refusal};
   return estimate_pose(camera, *found.points, noise, options);
 }

@@ -37,25 +37,16 @@ TargetDetector::TargetDetector(const Target& target, const TargetDetectorOptions
 TargetDetector::~TargetDetector() = default;
 
 TargetObservation TargetDetector::detect(const cv::Mat& gray) const {
-  TargetObservation out;
   switch (target_.kind) {
-    case TargetKind::Chessboard: {
-      ChessboardDetection found = detect_chessboard(gray, target_.chessboard);
-      out.points = std::move(found.points);
-      out.refusal = std::move(found.refusal);
-      return out;
-    }
-    case TargetKind::Charuco: {
-      CharucoDetection found = detect_charuco(gray, target_.charuco, options_.min_charuco_corners);
-      out.points = std::move(found.points);
-      out.refusal = std::move(found.refusal);
-      return out;
-    }
+    case TargetKind::Chessboard:
+      return detect_chessboard(gray, target_.chessboard);
+    case TargetKind::Charuco:
+      return detect_charuco(gray, target_.charuco, options_.min_charuco_corners);
     case TargetKind::Markers:
       break;
   }
   const std::vector<TagCorners> tags = aruco_ ? aruco_->detect(gray) : apriltag_->detect(gray);
-  TagCorrespondences found = tag_correspondences(target_.markers, tags, options_.pose);
+  TargetObservation found = tag_correspondences(target_.markers, tags, options_.pose);
   if (!found.points && tags.empty()) {
     found.refusal = "no " + target_.markers.family + " marker found (is the target in view, and printed with this " +
                     (aruco_ ? "dictionary" : "family") + "?)";
@@ -64,9 +55,7 @@ TargetObservation TargetDetector::detect(const cv::Mat& gray) const {
     for (const TagCorners& t : tags) seen += (seen.empty() ? "" : ", ") + std::to_string(t.id);
     found.refusal = "saw markers " + seen + " but none of the target's ids; check the ids in the target file";
   }
-  out.points = std::move(found.points);
-  out.refusal = std::move(found.refusal);
-  return out;
+  return found;
 }
 
 }  // namespace handeye

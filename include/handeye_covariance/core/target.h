@@ -47,6 +47,10 @@ struct Target {
 TagLayout aruco_grid_layout(const std::string& dictionary, int columns, int rows, double marker, double separation,
                             int first_id = 0);
 
+/// The name is meant as an OpenCV dictionary (it starts with DICT, any case),
+/// known or not: the ArUco path then names a typo with the known dictionaries.
+bool names_aruco_dictionary(const std::string& name);
+
 Target make_target(const ChessboardTarget& chessboard);
 Target make_target(const CharucoTarget& charuco);
 Target make_target(const TagLayout& markers);

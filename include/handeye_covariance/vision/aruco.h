@@ -34,9 +34,6 @@ namespace handeye {
 /// OpenCV's predefined dictionaries by name (DICT_4X4_50 ... DICT_APRILTAG_36h11).
 std::vector<std::string> aruco_dictionaries();
 bool is_aruco_dictionary(const std::string& name);
-/// The name is meant as an OpenCV dictionary (it starts with DICT, any case),
-/// known or not: the ArUco path then names the typo with the known dictionaries.
-bool names_aruco_dictionary(const std::string& name);
 /// The number of markers in the dictionary; throws HandEyeError(InvalidLayout)
 /// naming the known dictionaries when `name` is not one.
 int aruco_dictionary_size(const std::string& name);
@@ -72,13 +69,8 @@ std::vector<Eigen::Vector3d> charuco_points(const CharucoTarget& target);
 /// margin: texel (u, v) covers [u, u + 1) x [v, v + 1) / texels_per_square squares.
 cv::Mat charuco_image(const CharucoTarget& target, int texels_per_square);
 
-struct CharucoDetection {
-  std::optional<PointCorrespondences> points;
-  std::string refusal;  // why not (empty when found)
-};
-
 /// The board's corners that OpenCV interpolates from the markers it finds (at
 /// least `min_corners`, not all on one line), each refined by cornerSubPix.
-CharucoDetection detect_charuco(const cv::Mat& gray, const CharucoTarget& target, int min_corners = 6);
+TargetObservation detect_charuco(const cv::Mat& gray, const CharucoTarget& target, int min_corners = 6);
 
 }  // namespace handeye

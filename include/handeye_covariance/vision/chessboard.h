@@ -32,11 +32,6 @@ void check_chessboard(const ChessboardTarget& target, const std::string& where);
 /// The inner corners in the pattern frame, in OpenCV's order (row by row).
 std::vector<Eigen::Vector3d> chessboard_points(const ChessboardTarget& target);
 
-struct ChessboardDetection {
-  std::optional<PointCorrespondences> points;
-  std::string refusal;  // why not (empty when found)
-};
-
 /// cornerSubPix to convergence on chessboard saddle points (chessboards and
 /// ChArUco boards), with a half window of 0.4 x `spacing` (the smallest distance
 /// between neighbouring corners, px), 2 to 5 px.
@@ -44,6 +39,6 @@ void refine_saddle_points(const cv::Mat& gray, std::vector<cv::Point2f>& corners
 int saddle_window(float spacing);
 
 /// The board's inner corners in an 8-bit image (every corner, or a refusal).
-ChessboardDetection detect_chessboard(const cv::Mat& gray, const ChessboardTarget& target);
+TargetObservation detect_chessboard(const cv::Mat& gray, const ChessboardTarget& target);
 
 }  // namespace handeye

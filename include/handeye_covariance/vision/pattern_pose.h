@@ -142,13 +142,17 @@ struct PointCorrespondences {
 PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespondences& points, PixelNoise& noise,
                                 const PatternPoseOptions& options = {});
 
-/// The corners of the detected tags that belong to `layout` (others are ignored),
-/// with the corner noise model of `options` (EdgeFit: one 8 x 8 block per tag).
-struct TagCorrespondences {
+/// What a detector saw of a target in one image: its correspondences, or why not
+/// (every detector returns it: chessboard, ChArUco, tags and markers).
+struct TargetObservation {
   std::optional<PointCorrespondences> points;
-  std::string refusal;  // e.g. too few tags, a tag seen twice or edge-on
+  std::string refusal;  // why not (empty when found)
 };
-TagCorrespondences tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
+
+/// The corners of the detected tags that belong to `layout` (others are ignored),
+/// with the corner noise model of `options` (EdgeFit: one 8 x 8 block per tag);
+/// or a refusal, e.g. too few tags, a tag seen twice or edge-on.
+TargetObservation tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
                                        const PatternPoseOptions& options = {});
 
 /// The pattern pose from the detected tags that belong to `layout` (others are

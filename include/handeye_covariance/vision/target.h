@@ -28,11 +28,6 @@ struct TargetDetectorOptions {
   int min_charuco_corners = 6;
 };
 
-struct TargetObservation {
-  std::optional<PointCorrespondences> points;
-  std::string refusal;  // why not (empty when found)
-};
-
 class TargetDetector {
  public:
   /// Checks the target (throws as check_target).
