@@ -75,6 +75,10 @@ TEST(ImageFolder, PairsImagesWithPosesByStemNumberOrCsv) {
   EXPECT_FALSE(from_csv[1].T_base_effector);
   write(csv, "000_image.png,0.5,0,0,0,0,0,1\nimg_7,0.6,zero,0,0,0,0,1\n");
   EXPECT_NE(error_of([&] { images::pair_images_with_poses(dir, csv); }).find("line 2"), std::string::npos);
+  write(csv, "000_image.png,0.5,0,0,0,0,0,1\nimg_7,0.6,0.1mm,0,0,0,0,1\n");  // a number with trailing text
+  EXPECT_NE(error_of([&] { images::pair_images_with_poses(dir, csv); }).find("line 2"), std::string::npos);
+  write(csv, "000_image.png,0.5,0,0,0,0,0,2\n");  // not a unit quaternion
+  EXPECT_NE(error_of([&] { images::pair_images_with_poses(dir, csv); }).find("line 1"), std::string::npos);
   EXPECT_NE(error_of([&] { images::pair_images_with_poses(fresh_dir("empty"), csv); }).find("no .png or .jpg"),
             std::string::npos);
 }

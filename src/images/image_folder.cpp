@@ -13,6 +13,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/target.h"
 
@@ -159,18 +160,20 @@ std::vector<ImageWithPose> pair_images_with_poses(const fs::path& images, const 
       bool numeric = cells.size() == 8;
       for (int i = 0; numeric && i < 7; ++i) {
         char* end = nullptr;
-        v[i] = std::strtod(cells[static_cast<std::size_t>(i + 1)].c_str(), &end);
-        numeric = end != cells[static_cast<std::size_t>(i + 1)].c_str() && std::isfinite(v[i]);
+        const char* cell = cells[static_cast<std::size_t>(i + 1)].c_str();
+        v[i] = std::strtod(cell, &end);
+        while (end != cell && std::isspace(static_cast<unsigned char>(*end))) ++end;
+        numeric = end != cell && *end == '\0' && std::isfinite(v[i]);  // the whole cell is one number
       }
       if (!numeric) {
         if (number == 1) continue;  // a header
         throw HandEyeError(ErrorCode::MalformedFile, "expected image,tx,ty,tz,qx,qy,qz,qw", where,
                            "one line per image: its file name, the translation (m) and the unit quaternion");
       }
-      const std::string yaml = "translation: [" + cells[1] + "," + cells[2] + "," + cells[3] + "]\nrotation: [" + cells[4] +
-                               "," + cells[5] + "," + cells[6] + "," + cells[7] + "]\n";
+      const Eigen::Quaterniond q = checked_unit_quaternion(Eigen::Quaterniond(v[6], v[3], v[4], v[5]), where);
       const std::string name = cells[0].substr(0, cells[0].find_last_not_of(" \t\r") + 1);
-      by_name[fs::path(name).filename().string()] = {io::parse_robot_pose(yaml, where), where};
+      by_name[fs::path(name).filename().string()] = {se3::make_pose(q.toRotationMatrix(), Eigen::Vector3d(v[0], v[1], v[2])),
+                                                     where};
     }
     for (ImageWithPose& item : out) {
       auto it = by_name.find(item.image.filename().string());
