@@ -9,7 +9,6 @@
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
@@ -67,54 +66,13 @@ CameraModel camera_from_opencv(const std::string& path) {
   return camera;
 }
 
-std::vector<double> numbers(const YAML::Node& node, const std::string& where, const std::string& hint) {
-  const YAML::Node data = node && node.IsMap() ? node["data"] : node;
-  if (!data || !data.IsSequence()) throw HandEyeError(ErrorCode::MissingKey, "expected a `data:` list", where, hint);
-  std::vector<double> values;
-  for (std::size_t i = 0; i < data.size(); ++i) {
-    try {
-      values.push_back(data[i].as<double>());
-    } catch (const YAML::Exception&) {
-      throw HandEyeError(ErrorCode::MalformedFile, "expected a number", where + ".data[" + std::to_string(i) + "]", hint);
-    }
-    if (!std::isfinite(values.back())) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf", where + ".data[" + std::to_string(i) + "]", hint);
-    }
-  }
-  return values;
-}
-
 CameraModel camera_from_camera_info(const std::string& path) {
-  const std::string hint = "a ROS camera_info YAML (camera_calibration writes one): image_width, image_height, "
-                           "camera_matrix: {data: [9 numbers]}, distortion_coefficients: {data: [...]}";
-  YAML::Node root;
-  try {
-    root = YAML::Load(io::read_file(path));
-  } catch (const YAML::Exception& e) {
-    throw HandEyeError(ErrorCode::MalformedFile, "not YAML: " + std::string(e.what()), path, hint);
-  }
-  if (!root.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a camera_info YAML", path, hint);
+  const io::CameraInfoFile file = io::parse_camera_info(io::read_file(path), path);
   CameraModel camera;
-  const std::vector<double> K = numbers(root["camera_matrix"], path + ": camera_matrix", hint);
-  if (K.size() != 9) throw HandEyeError(ErrorCode::WrongLength, "camera_matrix needs 9 numbers", path + ": camera_matrix", hint);
-  for (int i = 0; i < 9; ++i) camera.K(i / 3, i % 3) = K[static_cast<std::size_t>(i)];
-  if (root["distortion_coefficients"]) camera.distortion = numbers(root["distortion_coefficients"], path + ": distortion_coefficients", hint);
-  const auto size = [&](const char* key) {
-    const YAML::Node node = root[key];
-    if (!node) return 0;
-    double v = 0.0;
-    try {
-      v = node.as<double>();
-    } catch (const YAML::Exception&) {
-      v = -1.0;
-    }
-    if (!(v >= 0.0 && v <= 100000.0) || v != std::floor(v)) {
-      throw HandEyeError(ErrorCode::MalformedFile, std::string(key) + " must be a whole number of pixels", path + ": " + key, hint);
-    }
-    return static_cast<int>(v);
-  };
-  camera.width = size("image_width");
-  camera.height = size("image_height");
+  camera.K = file.K;
+  camera.distortion = file.distortion;
+  camera.width = file.width;
+  camera.height = file.height;
   return camera;
 }
 

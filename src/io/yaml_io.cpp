@@ -816,6 +816,39 @@ Target parse_target(const std::string& text, const std::string& source) {
 
 Target read_target(const std::string& path) { return parse_target(read_file(path), path); }
 
+// ---------------------------------------------------------------- camera_info
+
+CameraInfoFile parse_camera_info(const std::string& text, const std::string& source) {
+  const std::string hint = "a ROS camera_info YAML (camera_calibration writes one): image_width, image_height, "
+                           "camera_matrix: {data: [9 numbers]}, distortion_coefficients: {data: [...]}";
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  if (!root.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a camera_info YAML", top.str(), hint);
+  const auto numbers = [&](const char* key) {
+    const Location at = top / key / "data";
+    const YAML::Node data = require(require(root, key, top, hint), "data", top / key, hint);
+    if (!data.IsSequence()) throw HandEyeError(ErrorCode::MalformedFile, "expected a list of numbers", at.str(), hint);
+    std::vector<double> values;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      values.push_back(as_double(data[i], at[i]));
+      if (!std::isfinite(values.back())) throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf", at[i].str(), hint);
+    }
+    return values;
+  };
+  CameraInfoFile camera;
+  const std::vector<double> K = numbers("camera_matrix");
+  if (K.size() != 9) {
+    throw HandEyeError(ErrorCode::WrongLength, "camera_matrix needs 9 numbers, got " + std::to_string(K.size()),
+                       (top / "camera_matrix" / "data").str(), hint);
+  }
+  for (int i = 0; i < 9; ++i) camera.K(i / 3, i % 3) = K[static_cast<std::size_t>(i)];
+  if (root["distortion_coefficients"]) camera.distortion = numbers("distortion_coefficients");
+  for (const auto& [key, member] : {std::pair<const char*, int*>{"image_width", &camera.width}, {"image_height", &camera.height}}) {
+    if (root[key]) *member = as_integer(root[key], top / key, 0, 100000, std::string(key) + " (pixels)");
+  }
+  return camera;
+}
+
 // ---------------------------------------------------------------- session config
 
 void read_session_config(const std::string& path, SessionConfig& config) {

@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
@@ -54,6 +55,17 @@ TagLayout read_tag_layout(const std::string& path);
 /// dictionary or family exists is checked by the detector (vision/target.h).
 Target parse_target(const std::string& text, const std::string& source);
 Target read_target(const std::string& path);
+
+/// A ROS camera_info YAML (camera_calibration writes one): image_width,
+/// image_height, camera_matrix: {data: [9 numbers]}, distortion_coefficients:
+/// {data: [...]} (optional). Numbers checked (finite; sizes whole pixels); whether K
+/// is a usable pinhole matrix is the vision layer's check (check_camera_model).
+struct CameraInfoFile {
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  std::vector<double> distortion;
+  int width = 0, height = 0;  // 0: not given
+};
+CameraInfoFile parse_camera_info(const std::string& text, const std::string& source);
 
 /// A file holding either samples or motions (told apart by its top-level key).
 using Input = std::variant<SampleSet, MotionSet>;
