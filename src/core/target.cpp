@@ -14,6 +14,10 @@ std::string mm(double metres) {
   return text;
 }
 
+/// OpenCV's board frames (y down, z into the board) seen as a printed face or a
+/// marker's frame (y up, z out of it): the same plane turned by 180 degrees about x.
+Eigen::Matrix3d opencv_board_to_face() { return Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal(); }
+
 }  // namespace
 
 std::string Target::describe() const {
@@ -63,7 +67,7 @@ Target make_target(const TagLayout& markers) {
 }
 
 Eigen::Isometry3d target_face(const Target& target) {
-  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  const Eigen::Matrix3d flip = opencv_board_to_face();
   switch (target.kind) {
     case TargetKind::Chessboard: {
       const ChessboardTarget& t = target.chessboard;
@@ -87,9 +91,7 @@ TagLayout aruco_grid_layout(const std::string& name, int columns, int rows, doub
                             int first_id) {
   TagLayout layout;
   layout.family = name;
-  // OpenCV's board frame has y down and z into the board; a marker's frame has
-  // y up and z out of it: the same plane turned by 180 degrees about x.
-  const Eigen::Matrix3d flip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  const Eigen::Matrix3d flip = opencv_board_to_face();  // each marker in the board's frame
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < columns; ++c) {
       TagPlacement tag;

@@ -5,7 +5,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/lie.h"
 
 namespace handeye {
 namespace {
@@ -28,12 +27,6 @@ cv::Matx33d to_cv(const Matrix3d& m) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) out(r, c) = m(r, c);
   return out;
-}
-
-/// OpenCV's board frames (y down, z into the board) against a plane's (y up, z out).
-const Matrix3d& flip_y() {
-  static const Matrix3d flip = Vector3d(1.0, -1.0, -1.0).asDiagonal();
-  return flip;
 }
 
 /// A chessboard of `t`, `texels` to a square, with `margin` white squares around:
@@ -81,8 +74,8 @@ PatternRenderer::PatternRenderer(const Target& target, const CameraModel& camera
       // A whole number of white squares around, at least the margin asked for.
       const ChessboardTarget& t = target.chessboard;
       const int margin = std::max(1, static_cast<int>(std::ceil(options.board_margin_squares)));
-      const Vector3d centre(0.5 * (t.columns - 1) * t.square, 0.5 * (t.rows - 1) * t.square, 0.0);
-      add_plane(chessboard_texture(t, texels, margin), se3::make_pose(flip_y(), centre),
+      // The texture's centre is the board's face (target_face: the middle of its inner corners).
+      add_plane(chessboard_texture(t, texels, margin), target_face(target),
                 (t.columns + 1 + 2 * margin) * t.square, (t.rows + 1 + 2 * margin) * t.square);
       break;
     }
@@ -93,7 +86,7 @@ PatternRenderer::PatternRenderer(const Target& target, const CameraModel& camera
       cv::copyMakeBorder(charuco_image(t, texels), board, margin, margin, margin, margin, cv::BORDER_CONSTANT,
                          cv::Scalar(255));
       const double margin_m = t.square * margin / texels;
-      add_plane(board, se3::make_pose(flip_y(), Vector3d(0.5 * t.columns * t.square, 0.5 * t.rows * t.square, 0.0)),
+      add_plane(board, target_face(target),  // the middle of the squares, the texture's centre
                 t.columns * t.square + 2 * margin_m, t.rows * t.square + 2 * margin_m);
       break;
     }
