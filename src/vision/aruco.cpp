@@ -177,7 +177,7 @@ TagBitmap aruco_bitmap(const std::string& name, int id) {
   return bitmap;
 }
 
-ArucoDetector::ArucoDetector(const std::string& name) : dictionary_(name) { dictionary(name); }
+ArucoDetector::ArucoDetector(const std::string& name) : dictionary_(dictionary(name)), parameters_(marker_parameters()) {}
 
 std::vector<TagCorners> ArucoDetector::detect(const cv::Mat& gray) const {
   if (gray.type() != CV_8UC1) {
@@ -186,7 +186,7 @@ std::vector<TagCorners> ArucoDetector::detect(const cv::Mat& gray) const {
   }
   std::vector<std::vector<cv::Point2f>> corners;
   std::vector<int> ids;
-  cv::aruco::detectMarkers(gray, dictionary(dictionary_), corners, ids, marker_parameters());
+  cv::aruco::detectMarkers(gray, dictionary_, corners, ids, parameters_);
   std::vector<TagCorners> tags;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     TagCorners tag;

@@ -29,6 +29,13 @@
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
 
+namespace cv {
+namespace aruco {
+class Dictionary;
+struct DetectorParameters;
+}  // namespace aruco
+}  // namespace cv
+
 namespace handeye {
 
 /// OpenCV's predefined dictionaries by name (DICT_4X4_50 ... DICT_APRILTAG_36h11).
@@ -54,7 +61,9 @@ class ArucoDetector {
   std::vector<TagCorners> detect(const cv::Mat& gray) const;
 
  private:
-  std::string dictionary_;
+  // Made once: OpenCV builds a predefined dictionary's tables on each lookup.
+  cv::Ptr<cv::aruco::Dictionary> dictionary_;
+  cv::Ptr<cv::aruco::DetectorParameters> parameters_;
 };
 
 /// Throws HandEyeError(InvalidLayout): fewer than 3 squares either way, lengths
