@@ -759,28 +759,28 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   double largest_residual = 0.0;
   for (const Linear& l : s.lin) largest_residual = std::max(largest_residual, l.e.cwiseAbs().maxCoeff());
   if (n >= 8 && options.robust != JointOptions::Robust::Off && largest_residual > 1e-10) {
-    const double z = kurtosis_z(corrected_distances(s));
+    const std::vector<double> d2 = corrected_distances(s);  // leverage-corrected squared Mahalanobis residuals
+    const double z = kurtosis_z(d2);
     const bool passed = z <= options.kurtosis_test_z;
     result.residual_checks.push_back({"kurtosis z of the Mahalanobis residuals", z, options.kurtosis_test_z, passed});
     robust = robust || !passed;
-  }
-  if (robust && n > 12 && largest_residual > 1e-10) {
-    const std::vector<double> d2 = corrected_distances(s);
-    const double scale = std::sqrt(std::max(median(d2) / 5.348, 1e-12));
-    const double k_scaled = std::sqrt(options.huber_threshold_squared) * scale;
-    for (int round = 0; round < options.max_robust_rounds; ++round) {
-      const std::vector<double> before = s.weight;
-      problem.gauss_newton(model, k_scaled, s);
-      double change = 0.0;
-      for (std::size_t i = 0; i < before.size(); ++i) change = std::max(change, std::abs(before[i] - s.weight[i]));
-      if (round > 0 && change < 1e-6) break;
+    if (robust && n > 12) {
+      const double scale = std::sqrt(std::max(median(d2) / 5.348, 1e-12));
+      const double k_scaled = std::sqrt(options.huber_threshold_squared) * scale;
+      for (int round = 0; round < options.max_robust_rounds; ++round) {
+        const std::vector<double> before = s.weight;
+        problem.gauss_newton(model, k_scaled, s);
+        double change = 0.0;
+        for (std::size_t i = 0; i < before.size(); ++i) change = std::max(change, std::abs(before[i] - s.weight[i]));
+        if (round > 0 && change < 1e-6) break;
+      }
+      const double small_sample = n / (n - 7.0);  // n > 12 here
+      covariance = sandwich(s, k_scaled) * small_sample;
+      inflation = small_sample;
+      result.loss = "huber";
+      result.covariance_kind = "sandwich";
+      result.downweighted = static_cast<int>(std::count_if(s.weight.begin(), s.weight.end(), [](double w) { return w < 1.0; }));
     }
-    const double small_sample = n / (n - 7.0);  // n > 12 here
-    covariance = sandwich(s, k_scaled) * small_sample;
-    inflation = small_sample;
-    result.loss = "huber";
-    result.covariance_kind = "sandwich";
-    result.downweighted = static_cast<int>(std::count_if(s.weight.begin(), s.weight.end(), [](double w) { return w < 1.0; }));
   }
   result.covariance_inflation = inflation;
 
