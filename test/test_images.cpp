@@ -107,6 +107,16 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
   EXPECT_NE(error_of([&] { images::read_camera((dir / "bad.yaml").string()); }).find("9 numbers"), std::string::npos);
   write(dir / "nan.yaml", "camera_matrix: {data: [.nan, 0, 320, 0, 601, 240, 0, 0, 1]}\n");
   EXPECT_NE(error_of([&] { images::read_camera((dir / "nan.yaml").string()); }).find("NaN"), std::string::npos);
+  // OpenCV's files, as the fuzzer found them: a declared size OpenCV would allocate
+  // (48 GB) before reading, and a file on which its YAML parser throws std::length_error.
+  const std::string huge = "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 1000000000\n   dt: d\n"
+                           "   data: [ 600., 0., 320., 0., 601., 240., 0., 0., 1. ]\n";
+  EXPECT_NE(error_of([&] { images::parse_opencv_camera(huge, "huge"); }).find("camera_matrix.cols must be a whole number"),
+            std::string::npos);
+  const std::string thrown = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
+                                           "/test/fuzz/corpus/files/regression-opencv-length-error.yaml");
+  EXPECT_NE(error_of([&] { images::parse_opencv_camera(thrown, "length"); }).find("OpenCV cannot read it"),
+            std::string::npos);
 }
 
 TEST(TargetFile, ReadsEveryKindAndNamesBadEntries) {

@@ -2,11 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <map>
-#include <sstream>
 
-#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -38,36 +35,7 @@ std::optional<std::string> trailing_number(const std::string& stem) {
   return digits;
 }
 
-CameraModel camera_from_opencv(const std::string& path) {
-  cv::FileStorage file;
-  try {
-    file.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it: " + std::string(e.what()), path,
-                       "write it with cv::FileStorage (camera_matrix, distortion_coefficients)");
-  }
-  const std::string hint = "OpenCV's camera file has camera_matrix (3 x 3) and distortion_coefficients";
-  if (!file.isOpened()) throw HandEyeError(ErrorCode::IoError, "cannot open the camera file", path, "check the path");
-  cv::Mat K, D;
-  file["camera_matrix"] >> K;
-  file["distortion_coefficients"] >> D;
-  if (K.rows != 3 || K.cols != 3) throw HandEyeError(ErrorCode::MissingKey, "no 3 x 3 camera_matrix", path, hint);
-  CameraModel camera;
-  K.convertTo(K, CV_64F);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) camera.K(r, c) = K.at<double>(r, c);
-  if (!D.empty()) {
-    D.convertTo(D, CV_64F);
-    D = D.reshape(1, 1);
-    camera.distortion.assign(D.begin<double>(), D.end<double>());
-  }
-  if (!file["image_width"].empty()) file["image_width"] >> camera.width;
-  if (!file["image_height"].empty()) file["image_height"] >> camera.height;
-  return camera;
-}
-
-CameraModel camera_from_camera_info(const std::string& path) {
-  const io::CameraInfoFile file = io::parse_camera_info(io::read_file(path), path);
+CameraModel camera_model(const io::CameraInfoFile& file) {
   CameraModel camera;
   camera.K = file.K;
   camera.distortion = file.distortion;
@@ -83,7 +51,7 @@ CameraModel read_camera(const std::string& path) {
   const std::string text = io::read_file(path);
   const bool opencv = lower(fs::path(path).extension().string()) == ".xml" || text.rfind("%YAML", 0) == 0 ||
                       text.find("!!opencv-matrix") != std::string::npos;
-  CameraModel camera = opencv ? camera_from_opencv(path) : camera_from_camera_info(path);
+  CameraModel camera = camera_model(opencv ? parse_opencv_camera(text, path) : io::parse_camera_info(text, path));
   check_camera_model(camera, path);
   return camera;
 }
@@ -105,33 +73,9 @@ std::vector<ImageWithPose> pair_images_with_poses(const fs::path& images, const 
   if (!fs::exists(poses)) throw HandEyeError(ErrorCode::IoError, "no such file or folder", poses.string(), "check --poses");
 
   if (fs::is_regular_file(poses)) {  // one CSV for all: image,tx,ty,tz,qx,qy,qz,qw
-    std::ifstream in(poses);
     std::map<std::string, std::pair<Eigen::Isometry3d, std::string>> by_name;
-    std::string line;
-    for (int number = 1; std::getline(in, line); ++number) {
-      std::stringstream fields(line);
-      std::vector<std::string> cells;
-      for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
-      if (cells.empty() || line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      const std::string where = poses.string() + " line " + std::to_string(number);
-      double v[7];
-      bool numeric = cells.size() == 8;
-      for (int i = 0; numeric && i < 7; ++i) {
-        char* end = nullptr;
-        const char* cell = cells[static_cast<std::size_t>(i + 1)].c_str();
-        v[i] = std::strtod(cell, &end);
-        while (end != cell && std::isspace(static_cast<unsigned char>(*end))) ++end;
-        numeric = end != cell && *end == '\0' && std::isfinite(v[i]);  // the whole cell is one number
-      }
-      if (!numeric) {
-        if (number == 1) continue;  // a header
-        throw HandEyeError(ErrorCode::MalformedFile, "expected image,tx,ty,tz,qx,qy,qz,qw", where,
-                           "one line per image: its file name, the translation (m) and the unit quaternion");
-      }
-      const Eigen::Quaterniond q = checked_unit_quaternion(Eigen::Quaterniond(v[6], v[3], v[4], v[5]), where);
-      const std::string name = cells[0].substr(0, cells[0].find_last_not_of(" \t\r") + 1);
-      by_name[fs::path(name).filename().string()] = {se3::make_pose(q.toRotationMatrix(), Eigen::Vector3d(v[0], v[1], v[2])),
-                                                     where};
+    for (const io::PoseTableRow& row : io::parse_pose_table(io::read_file(poses.string()), poses.string())) {
+      by_name[fs::path(row.image).filename().string()] = {row.T_base_effector, row.where};
     }
     for (ImageWithPose& item : out) {
       auto it = by_name.find(item.image.filename().string());

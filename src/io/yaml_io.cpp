@@ -5,7 +5,9 @@
 #include <Eigen/SVD>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -689,6 +691,37 @@ Eigen::Isometry3d parse_robot_pose(const std::string& text, const std::string& s
 }
 
 Eigen::Isometry3d read_robot_pose(const std::string& path) { return parse_robot_pose(read_file(path), path); }
+
+std::vector<PoseTableRow> parse_pose_table(const std::string& text, const std::string& source) {
+  std::vector<PoseTableRow> rows;
+  std::stringstream in(text);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::stringstream fields(line);
+    std::vector<std::string> cells;
+    for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+    const std::string where = source + " line " + std::to_string(number);
+    double v[7];
+    bool numeric = cells.size() == 8;
+    for (int i = 0; numeric && i < 7; ++i) {
+      char* end = nullptr;
+      const char* cell = cells[static_cast<std::size_t>(i + 1)].c_str();
+      v[i] = std::strtod(cell, &end);
+      while (end != cell && std::isspace(static_cast<unsigned char>(*end))) ++end;
+      numeric = end != cell && *end == '\0' && std::isfinite(v[i]);  // the whole cell is one number
+    }
+    if (!numeric) {
+      if (number == 1) continue;  // a header
+      throw HandEyeError(ErrorCode::MalformedFile, "expected image,tx,ty,tz,qx,qy,qz,qw", where,
+                         "one line per image: its file name, the translation (m) and the unit quaternion");
+    }
+    const Eigen::Quaterniond q = checked_unit_quaternion(Eigen::Quaterniond(v[6], v[3], v[4], v[5]), where);
+    const std::string name = cells[0].substr(0, cells[0].find_last_not_of(" \t\r") + 1);
+    rows.push_back({name, se3::make_pose(q.toRotationMatrix(), Eigen::Vector3d(v[0], v[1], v[2])), where});
+  }
+  return rows;
+}
 
 CalibrationFile parse_result(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);

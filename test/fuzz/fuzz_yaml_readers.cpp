@@ -66,5 +66,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   named_errors_only([&] { io::parse_candidate_poses(text, "fuzz"); });
   named_errors_only([&] { io::parse_tag_layout(text, "fuzz"); });
   named_errors_only([&] { io::parse_robot_pose(text, "fuzz"); });
+  named_errors_only([&] { io::parse_pose_table(text, "fuzz"); });
+  named_errors_only([&] { io::parse_target(text, "fuzz"); });
+  named_errors_only([&] { io::parse_camera_info(text, "fuzz"); });
   return 0;
 }

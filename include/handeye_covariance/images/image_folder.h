@@ -11,6 +11,7 @@
 
 #include "handeye_covariance/core/measurements.h"
 #include "handeye_covariance/core/target.h"
+#include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
@@ -21,6 +22,12 @@ namespace images {
 /// camera_matrix, distortion_coefficients, optional image_width/image_height).
 /// Throws HandEyeError naming the file and what is missing.
 CameraModel read_camera(const std::string& path);
+
+/// OpenCV's camera file (cv::FileStorage YAML or XML, in memory): camera_matrix
+/// (3 x 3), distortion_coefficients (optional), image_width and image_height
+/// (optional). Every number checked as io::parse_camera_info checks them; the
+/// pinhole check is read_camera's. Throws HandEyeError naming the source.
+io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::string& source);
 
 struct ImageWithPose {
   std::filesystem::path image;

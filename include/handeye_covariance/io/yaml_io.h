@@ -137,6 +137,16 @@ PoseFile read_pose_file(const std::string& path);
 Eigen::Isometry3d parse_robot_pose(const std::string& text, const std::string& source);
 Eigen::Isometry3d read_robot_pose(const std::string& path);
 
+/// One CSV of robot poses for a folder of images: `image,tx,ty,tz,qx,qy,qz,qw`
+/// per line (m, unit quaternion), a header line skipped, blank lines ignored.
+/// `image` is the file name or its stem. Throws HandEyeError naming the line.
+struct PoseTableRow {
+  std::string image;
+  Eigen::Isometry3d T_base_effector;
+  std::string where;  // "poses.csv line 3"
+};
+std::vector<PoseTableRow> parse_pose_table(const std::string& text, const std::string& source);
+
 /// Session settings from a YAML file with the node's parameter names (the
 /// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
 /// from the file keep their value in `config`. Unknown keys are refused (typos).

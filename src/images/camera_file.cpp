@@ -1,0 +1,107 @@
+// OpenCV's camera files, read with cv::FileStorage from memory (so the fuzzer
+// can drive it without files). Only opencv_core: test/sanitize builds this file
+// alone into fuzz_camera_files.
+#include <cmath>
+#include <limits>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/images/image_folder.h"
+
+namespace handeye {
+namespace images {
+namespace {
+
+int image_size(const cv::FileNode& node, const std::string& key, const std::string& source) {
+  if (node.empty()) return 0;
+  const double value = node.isInt() || node.isReal() ? node.real() : std::numeric_limits<double>::quiet_NaN();
+  if (!(value >= 1 && value <= 100000) || value != std::floor(value)) {
+    throw HandEyeError(ErrorCode::MalformedFile, key + " must be a whole number of pixels in [1, 100000]", source,
+                       "write the image size in pixels, or leave it out");
+  }
+  return static_cast<int>(value);
+}
+
+/// A matrix node read only after its declared size is checked: OpenCV allocates
+/// rows x cols before it reads `data`, so `cols: 1000000000` would ask for gigabytes.
+cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_entries, const std::string& source,
+                     const std::string& hint) {
+  cv::Mat m;
+  if (node.empty()) return m;
+  if (!node.isMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, key + " is not an opencv-matrix", source, hint);
+  }
+  double entries = 1;
+  for (const char* dim : {"rows", "cols"}) {
+    const cv::FileNode n = node[dim];
+    const double v = n.isInt() || n.isReal() ? n.real() : -1;
+    if (!(v >= 1 && v <= max_entries) || v != std::floor(v)) {
+      throw HandEyeError(ErrorCode::MalformedFile, key + "." + dim + " must be a whole number in [1, " +
+                                                       std::to_string(max_entries) + "]",
+                         source, hint);
+    }
+    entries *= v;
+  }
+  if (entries > max_entries || node["data"].size() != static_cast<std::size_t>(entries)) {
+    throw HandEyeError(ErrorCode::WrongLength, key + ".data must hold rows x cols numbers (at most " +
+                                                   std::to_string(max_entries) + ")",
+                       source, hint);
+  }
+  node >> m;
+  return m;
+}
+
+}  // namespace
+
+io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::string& source) {
+  const std::string hint = "OpenCV's camera file has camera_matrix (3 x 3) and distortion_coefficients "
+                           "(write it with cv::FileStorage)";
+  io::CameraInfoFile file;
+  try {
+    cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+    if (!storage.isOpened()) throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it", source, hint);
+    cv::Mat K = small_matrix(storage["camera_matrix"], "camera_matrix", 9, source, hint);
+    cv::Mat D = small_matrix(storage["distortion_coefficients"], "distortion_coefficients", 14, source, hint);
+    if (K.rows != 3 || K.cols != 3 || K.channels() != 1) {
+      throw HandEyeError(ErrorCode::MissingKey, "no 3 x 3 camera_matrix", source, hint);
+    }
+    K.convertTo(K, CV_64F);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        file.K(r, c) = K.at<double>(r, c);
+        if (!std::isfinite(file.K(r, c))) {
+          throw HandEyeError(ErrorCode::NonFinite, "camera_matrix has a non-finite entry", source, hint);
+        }
+      }
+    }
+    if (!D.empty()) {
+      if (D.total() > 14 || D.channels() != 1) {
+        throw HandEyeError(ErrorCode::MalformedFile, "distortion_coefficients has " + std::to_string(D.total()) +
+                                                         " entries; OpenCV's models have at most 14",
+                           source, hint);
+      }
+      D.convertTo(D, CV_64F);
+      D = D.reshape(1, 1);
+      file.distortion.assign(D.begin<double>(), D.end<double>());
+      for (double d : file.distortion) {
+        if (!std::isfinite(d)) {
+          throw HandEyeError(ErrorCode::NonFinite, "distortion_coefficients has a non-finite entry", source, hint);
+        }
+      }
+    }
+    file.width = image_size(storage["image_width"], "image_width", source);
+    file.height = image_size(storage["image_height"], "image_height", source);
+  } catch (const HandEyeError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // cv::Exception, and the std::length_error that OpenCV 4.6's YAML parser lets
+    // out on some malformed files (test/fuzz/corpus/files/regression-opencv-*).
+    throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it: " + std::string(e.what()), source, hint);
+  }
+  return file;
+}
+
+}  // namespace images
+}  // namespace handeye
