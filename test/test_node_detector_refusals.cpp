@@ -1,4 +1,4 @@
-// The real apriltag_detector node fed bad camera input (detector_refusals.test).
+// The real target_detector node fed bad camera input (detector_refusals.test).
 // Its refusals are read where a user sees them: the log, on /rosout.
 #include <cv_bridge/cv_bridge.h>
 #include <gtest/gtest.h>
@@ -28,7 +28,7 @@ class Detector {
     info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("/refusals/camera_info", 2);
     log_sub_ = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [this](const rosgraph_msgs::Log::ConstPtr& m) {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (m->name.find("apriltag_detector") != std::string::npos) log_.push_back(m->msg);
+      if (m->name.find("target_detector") != std::string::npos) log_.push_back(m->msg);
     });
     detections_sub_ = nh_.subscribe<TagDetectionArray>("/refusals/tag_detections", 10, [this](const TagDetectionArray::ConstPtr& m) {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -38,6 +38,15 @@ std::string Target::describe() const {
   return what + " board of " + std::to_string(markers.tags.size()) + " " + markers.family + " markers";
 }
 
+std::string Target::kind_name() const {
+  switch (kind) {
+    case TargetKind::Chessboard: return "chessboard";
+    case TargetKind::Charuco: return "charuco";
+    case TargetKind::Markers: break;
+  }
+  return names_aruco_dictionary(markers.family) ? "aruco" : "apriltag";
+}
+
 bool names_aruco_dictionary(const std::string& name) {
   if (name.size() < 4) return false;
   std::string head = name.substr(0, 4);

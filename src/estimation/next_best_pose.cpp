@@ -69,12 +69,14 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
     throw HandEyeError(ErrorCode::NoData, "no samples to suggest from", "samples", "take at least 3 samples first");
   }
   Rng rng(options.seed);
-  const Isometry3d pattern =
-      calibration.pattern ? calibration.pattern->pose : pattern_pose(samples, calibration.T_parent_camera);
+  // The views look at the middle of the target's printed face (Rig::T_pattern_face).
+  const Isometry3d face =
+      (calibration.pattern ? calibration.pattern->pose : pattern_pose(samples, calibration.T_parent_camera)) *
+      samples.rig.T_pattern_face;
   const Isometry3d& current = samples.samples.back().T_base_effector;
   std::vector<Isometry3d> candidates;
   for (int draw = 0; draw < 50 * options.candidates && static_cast<int>(candidates.size()) < options.candidates; ++draw) {
-    const Isometry3d E = samples.rig.effector_for_view(calibration.T_parent_camera, pattern, random_view(rng, options.views));
+    const Isometry3d E = samples.rig.effector_for_view(calibration.T_parent_camera, face, random_view(rng, options.views));
     if ((E.translation() - current.translation()).norm() > options.max_step_translation ||
         angle_between(E, current) > options.max_step_rotation || !distinct_from_all(E, samples.samples, options)) {
       continue;

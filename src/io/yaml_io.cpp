@@ -287,6 +287,7 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
     auto name = [&](const char* key) { return frames[key] ? as_text(frames[key], top / "frames" / key) : std::string(); };
     set.rig.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
   }
+  if (root["pattern_face"]) set.rig.T_pattern_face = read_pose(root["pattern_face"], top / "pattern_face");
   set.noise = optional_noise(root, top, "effector", "pattern");
   const YAML::Node list = require_list(root, "samples", top);
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -323,6 +324,9 @@ std::string format_samples(const SampleSet& set) {
     out << YAML::Key << "base" << YAML::Value << f.base << YAML::Key << "effector" << YAML::Value
         << f.effector << YAML::Key << "camera" << YAML::Value << f.camera << YAML::Key << "pattern"
         << YAML::Value << f.pattern << YAML::EndMap;
+  }
+  if (set.rig.T_pattern_face.matrix() != Eigen::Matrix4d::Identity()) {
+    emit_keyed_pose(out, "pattern_face", set.rig.T_pattern_face);  // where new views look (Rig)
   }
   if (set.noise) {
     out << YAML::Key << "noise" << YAML::Value;

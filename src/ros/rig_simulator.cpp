@@ -3,32 +3,34 @@
 // next in ~move_time. The base -> flange TF is published at ~tf_rate, with a static
 // flange -> tool0 offset. Pattern detections come at ~detection_rate, stamped with
 // the capture time and published ~latency later, with per-frame noise. With
-// ~output:=images the rig instead renders what its camera sees (the tag layout
-// ~layout_file, or one tag ~tag_size of id 0) and publishes the image and its
-// CameraInfo, stamped with the capture time, for the apriltag_detector node.
+// ~output:=images the rig instead renders what its camera sees (the target of
+// ~target_file, ~layout_file or one tag ~tag_size of id 0: target_params.h) and
+// publishes the image and its CameraInfo, stamped with the capture time, for the
+// target_detector node.
 // With ~camera_link set, the rig publishes a camera driver's own TF tree
 // (camera_link -> the optical frame, the usual optical rotation) and can stamp
 // its detections in another frame of that tree (~detection_frame); their pose
 // and covariance are then expressed in that frame. The detection noise is
 // drawn in the optical frame: lateral (~pattern_translation_noise_mm) and depth
 // (~pattern_depth_noise_mm) differ, as a monocular detector's do.
+#include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <image_transport/image_transport.h>
 #include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
-#include "handeye_covariance/ros/messages.h"
-#include "handeye_covariance/simulation/simulation.h"
+#include <optional>
+
 #include "handeye_covariance/ros/camera_info_conversion.h"
+#include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
-#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/target_params.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
-
-#include <cv_bridge/cv_bridge.h>
-#include <image_transport/image_transport.h>
-#include <sensor_msgs/image_encodings.h>
+#include "handeye_covariance/simulation/simulation.h"
 
 namespace handeye {
 namespace {
@@ -67,6 +69,13 @@ class RigSimulator {
                           : typical_X(setup_);
     trajectory_ = make_rig_trajectory(rng_, setup_, X, param(pn, "poses", 12), param(pn, "pause_time", 2.0),
                                       param(pn, "move_time", 1.0));
+    std::optional<Target> target;
+    if (output_ == "images") {
+      target = target_from_params(pn);
+      // The views look at the middle of the printed face; a board's own frame
+      // (OpenCV's: a corner, z into the board) is target_face() away from it.
+      trajectory_.T_world_pattern = trajectory_.T_world_pattern * target_face(*target).inverse();
+    }
     flange_T_tool_ = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
 
     truth_pub_ = pn.advertise<geometry_msgs::PoseStamped>("truth", 1, true);
@@ -85,12 +94,10 @@ class RigSimulator {
     if (output_ == "pose_with_covariance") detections_ = node.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 10);
     if (output_ == "pose") detections_ = node.advertise<geometry_msgs::PoseStamped>(topic, 10);
     if (output_ == "images") {
-      const std::string layout_file = param<std::string>(pn, "layout_file", "");
-      const TagLayout layout = layout_file.empty() ? single_tag_layout(0, param(pn, "tag_size", 0.1)) : io::read_tag_layout(layout_file);
       RenderOptions render;
       render.noise_sigma = param(pn, "image_noise", render.noise_sigma);
       render.blur_sigma_px = param(pn, "image_blur", render.blur_sigma_px);
-      renderer_ = std::make_unique<PatternRenderer>(layout, simulated_camera(), render);
+      renderer_ = std::make_unique<PatternRenderer>(*target, simulated_camera(), render);
       transport_ = std::make_unique<image_transport::ImageTransport>(node);
       image_pub_ = transport_->advertise(param<std::string>(pn, "image_topic", "camera/image_raw"), 2);
       info_pub_ = node.advertise<sensor_msgs::CameraInfo>(param<std::string>(pn, "camera_info_topic", "camera/camera_info"), 2);
@@ -212,7 +219,12 @@ class RigSimulator {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "rig_simulator");
-  handeye::RigSimulator rig(ros::NodeHandle(), ros::NodeHandle("~"));
-  ros::spin();
+  try {
+    handeye::RigSimulator rig(ros::NodeHandle(), ros::NodeHandle("~"));
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("rig_simulator: %s", e.what());
+    return 1;
+  }
   return 0;
 }

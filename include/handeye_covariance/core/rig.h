@@ -39,6 +39,12 @@ struct FrameNames {
 struct Rig {
   Setup setup = Setup::EyeInHand;
   FrameNames frames;
+  /// Where the target's printed face is in the pattern frame: its middle, z out
+  /// of the face towards a camera that sees it (core/target.h, target_face). The
+  /// identity for a tag or a layout centred on its frame; a chessboard's or a
+  /// ChArUco board's frame is OpenCV's (a corner, z into the board). New views
+  /// (next-best-pose candidates) look at the face, not at the frame's origin.
+  Eigen::Isometry3d T_pattern_face = Eigen::Isometry3d::Identity();
 
   bool eye_in_hand() const { return setup == Setup::EyeInHand; }
   /// X's parent frame: the effector (eye_in_hand) or the base (eye_to_hand).

@@ -39,6 +39,9 @@ struct Target {
 
   /// e.g. "chessboard 9 x 6 inner corners, 23.6 mm squares".
   std::string describe() const;
+  /// "chessboard", "charuco", "aruco" (one marker or a board) or "apriltag":
+  /// the names of the node's `target` argument.
+  std::string kind_name() const;
 };
 
 /// A grid board of markers (OpenCV's GridBoard: ids row by row from `first_id`)

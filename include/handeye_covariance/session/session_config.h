@@ -15,6 +15,7 @@ struct SessionConfig {
   std::string detection_input = "tags";  // tags | pose_with_covariance | pose | tf
   std::string detections_topic = "/tag_detections";
   std::vector<int> tag_ids;              // empty: a lone detection is taken
+  std::string target_file;  // the target the detector sees (io::read_target): where new views look (Rig::T_pattern_face)
   std::string noise_config;              // YAML with a `noise:` block; empty: estimated
   bool publish_tf = true;
   bool publish_pattern_tf = false;  // also TF <pattern parent> -> tracking_marker_frame for Y (joint)
@@ -56,6 +57,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("detection_input", c.detection_input, 1.0);
   visit("detections_topic", c.detections_topic, 1.0);
   visit("tag_ids", c.tag_ids, 1.0);
+  visit("target_file", c.target_file, 1.0);
   visit("noise_config", c.noise_config, 1.0);
   visit("publish_tf", c.publish_tf, 1.0);
   visit("publish_pattern_tf", c.publish_pattern_tf, 1.0);

@@ -1,7 +1,8 @@
-// The AprilTag detector node: image + CameraInfo in, the pattern's pose with its
+// The target detector node: image + CameraInfo in, the target's pose with its
 // covariance out as TagDetectionArray (and optionally TF camera -> pattern at
-// the image stamp). The work is done by the ROS-free vision layer
-// (tag_detector.h, pattern_pose.h); this class is glue.
+// the image stamp). Any target of core/target.h: chessboard, ChArUco, ArUco
+// (one marker or a board), AprilTag (one tag or a board). The work is done by
+// the ROS-free vision layer (vision/target.h, pattern_pose.h); this class is glue.
 #pragma once
 
 #include <image_transport/image_transport.h>
@@ -13,34 +14,33 @@
 #include <mutex>
 #include <optional>
 
-#include "handeye_covariance/core/tag_layout.h"
+#include "handeye_covariance/core/target.h"
 #include "handeye_covariance/vision/pattern_pose.h"
-#include "handeye_covariance/vision/tag_detector.h"
+#include "handeye_covariance/vision/target.h"
 
 namespace handeye {
 
-class ApriltagDetectorNode {
+class TargetDetectorNode {
  public:
-  /// Reads ~parameters (see launch/apriltag_detector.launch); throws
-  /// HandEyeError for an unreadable layout or an unknown family.
-  ApriltagDetectorNode(ros::NodeHandle node, ros::NodeHandle private_node);
+  /// Reads ~parameters (see launch/target_detector.launch); throws
+  /// HandEyeError for an unreadable target file or an unknown family or dictionary.
+  TargetDetectorNode(ros::NodeHandle node, ros::NodeHandle private_node);
 
  private:
   void on_camera_info(const sensor_msgs::CameraInfo::ConstPtr& info);
   void on_image(const sensor_msgs::Image::ConstPtr& image);
 
-  TagLayout layout_;
   std::string pattern_frame_;
   bool publish_tf_ = false, image_is_rectified_ = false;
-  PatternPoseOptions pose_options_;
-  std::unique_ptr<TagDetector> detector_;
+  TargetDetectorOptions options_;
+  std::unique_ptr<TargetDetector> detector_;
   image_transport::ImageTransport transport_;
   image_transport::Subscriber image_sub_;
   ros::Subscriber info_sub_;
   ros::Publisher detections_pub_;
   tf2_ros::TransformBroadcaster broadcaster_;
 
-  std::mutex mutex_;  // camera_ and rectifier_ come from the info callback
+  std::mutex mutex_;  // info_ and rectifier_ come from the info callback
   std::optional<sensor_msgs::CameraInfo> info_;
   std::unique_ptr<ImageRectifier> rectifier_;
   PixelNoise pixel_noise_;
