@@ -26,26 +26,18 @@ TEST(Targets, CharucoCovarianceIsHonest) {
   expect_honest("ChArUco 7 x 5", consistency(make_target(charuco()), 300, 32), kMaxMissed);
 }
 
-// ArUco markers: found in their frame to a fraction of a millimetre, every view.
-// Their covariance is NOT yet honest: the sides are fitted as libapriltag fits
-// them (aruco.h), the corners are good to 0.07 px, but the edge-fit model's
-// NEES is 6-8 (single marker) and 3.2 / 6.1 (grid board) for R / t. Printed here,
-// tracked in the issue; the bound below guards the accuracy, not the covariance.
-void expect_accurate(const char* name, const Consistency& c, double max_rms_mm, double max_rms_deg) {
-  expect_printed(name, c);
-  EXPECT_LE(c.missed, kMaxMissed) << c.first_refusal;
-  EXPECT_LT(c.rms_translation * 1e3, max_rms_mm);
-  EXPECT_LT(c.rms_rotation * 180.0 / M_PI, max_rms_deg);
+// ArUco markers: OpenCV finds and decodes them, the sides are fitted as libapriltag
+// fits them (aruco.h) until the corners stop moving. With two passes instead the
+// corners stayed 0.011 px inside and the NEES was 6.7 / 8.3 (single marker) and
+// 3.2 / 6.0 (grid board) for R / t.
+TEST(Targets, SingleArucoMarkerCovarianceIsHonest) {
+  expect_honest("ArUco DICT_4X4_50 id 7", consistency(make_target(single_tag_layout(7, 0.1, "DICT_4X4_50")), 300, 33),
+                kMaxMissed);
 }
 
-TEST(Targets, SingleArucoMarkerIsFoundInItsFrame) {
-  expect_accurate("ArUco DICT_4X4_50 id 7", consistency(make_target(single_tag_layout(7, 0.1, "DICT_4X4_50")), 300, 33),
-                  0.5, 0.1);
-}
-
-TEST(Targets, ArucoBoardIsFoundInItsFrame) {
-  expect_accurate("ArUco grid 3 x 2",
-                  consistency(make_target(aruco_grid_layout("DICT_4X4_50", 3, 2, 0.06, 0.015)), 300, 34), 0.5, 0.1);
+TEST(Targets, ArucoBoardCovarianceIsHonest) {
+  expect_honest("ArUco grid 3 x 2", consistency(make_target(aruco_grid_layout("DICT_4X4_50", 3, 2, 0.06, 0.015)), 300, 34),
+                kMaxMissed);
 }
 
 }  // namespace
