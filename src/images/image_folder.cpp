@@ -10,8 +10,8 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/images/pooled_detector.h"
 #include "handeye_covariance/io/yaml_io.h"
-#include "handeye_covariance/vision/target.h"
 
 namespace handeye {
 namespace images {
@@ -123,14 +123,11 @@ std::vector<ImageWithPose> pair_images_with_poses(const fs::path& images, const 
 
 ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const CameraModel& camera, const Target& target,
                            const Rig& rig, const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress) {
-  const TargetDetector detector(target);
-  const ImageRectifier rectifier(camera);
+  PooledDetector detector(target);
   ImageSession session;
   session.samples.rig = rig;
-  // Detect, and pool the pixel noise over every image.
-  PixelNoise pooled;
-  std::vector<std::optional<PatternPose>> poses(inputs.size());
   session.images.resize(inputs.size());
+  std::vector<std::optional<std::size_t>> frame_of(inputs.size());  // the detector's frame of each input
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     ImageReport& report = session.images[i];
     report.image = inputs[i].image.filename().string();
@@ -144,35 +141,27 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
         report.why = "is " + std::to_string(image.cols) + " x " + std::to_string(image.rows) + ", the camera file says " +
                      std::to_string(camera.width) + " x " + std::to_string(camera.height);
       } else {
-        const TargetObservation seen = detector.detect(rectifier.rectify(image));
-        report.why = seen.refusal;
-        if (seen.points) {
-          // A refused frame adds nothing to the pool (estimate_pose adds only what it accepts).
-          PatternPoseResult r = estimate_pose(rectifier.rectified(), *seen.points, pooled);
-          poses[i] = std::move(r.pose);
-          if (!poses[i]) report.why = r.refusal;
-        }
+        report.why = detector.add(image, camera).why;
+        frame_of[i] = detector.size() - 1;
       }
     }
     if (progress) progress(i, inputs.size(), report);
   }
-  session.pixel_sigma = pooled.sigma();
-  // Every pose under the pooled sigma: the covariance is sigma^2 (J^T C^-1 J)^-1,
-  // so rescaling from the sigma the image had when it was added is exact.
+  session.pixel_sigma = detector.pixel_sigma();
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    if (!poses[i]) continue;
-    const PatternPose& pose = *poses[i];
+    if (!frame_of[i]) continue;
+    const std::optional<PatternPose> pose = detector.pooled(*frame_of[i]);
+    if (!pose) continue;
     ImageReport& report = session.images[i];
     report.used = true;
-    report.points = pose.points;
-    report.rms_px = pose.rms_px;
+    report.points = pose->points;
+    report.rms_px = pose->rms_px;
     report.sigma_px = session.pixel_sigma;
-    report.distance = pose.T_camera_pattern.translation().norm();
+    report.distance = pose->T_camera_pattern.translation().norm();
     PoseSample sample;
     sample.T_base_effector = *inputs[i].T_base_effector;
-    sample.T_camera_pattern = pose.T_camera_pattern;
-    const double scale = std::pow(session.pixel_sigma / pose.pixel_sigma, 2);
-    sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(scale * pose.covariance)};
+    sample.T_camera_pattern = pose->T_camera_pattern;
+    sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(pose->covariance)};
     session.samples.samples.push_back(sample);
   }
   return session;
