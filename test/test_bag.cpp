@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 #include <ros/time.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/ros/bag.h"
 
@@ -69,6 +71,67 @@ TEST(Bag, EveryDetectionInputOfTheNode) {
     const Vector6d error = pose_error(c.T_parent_camera, bag.X);
     EXPECT_LT(error.dot(c.pose_covariance.ldlt().solve(error)), 20.06) << type;
   }
+}
+
+// A bag of camera images instead of detections (`handeye bag --target`): the
+// target detector runs on every image, the pose of each under the pixel sigma
+// pooled over them all, and X comes out within its predicted uncertainty.
+BagSimulationOptions image_bag(const std::string& target_file) {
+  BagSimulationOptions options;
+  options.detection_type = "images";
+  options.target = io::read_target(target_file);
+  options.poses = 8;
+  options.pause = 2.0;  // the sampler's still_window (1 s) and a few frames to spare
+  options.move = 0.5;
+  options.detection_rate = 4.0;
+  return options;
+}
+
+std::string target_file(const std::string& name) { return std::string(HANDEYE_SOURCE_DIR) + "/config/" + name; }
+
+TEST(Bag, ImagesOfEveryTargetKind) {
+  for (const std::string name : {"targets/chessboard.yaml", "targets/charuco.yaml", "targets/aruco.yaml",
+                                 "targets/apriltag.yaml", "tag_board_2x2.yaml"}) {
+    BagSimulationOptions options = image_bag(target_file(name));
+    options.compressed = name == "targets/charuco.yaml";  // one kind as sensor_msgs/CompressedImage
+    options.seed = 11;
+    const std::string path = temp("images.bag");
+    const SimulatedBag bag = write_simulated_bag(path, options);
+    SessionConfig config;
+    config.target_file = target_file(name);
+    SessionSettings settings = session_settings(config);
+    settings.session_file.clear();
+    CalibrationSession session(settings);
+    const BagReplay replay = replay_bag(path, config, session);
+    EXPECT_EQ(replay.images, bag.detections) << name;
+    EXPECT_EQ(replay.image_topic, options.compressed ? "/camera/image_raw/compressed" : "/camera/image_raw") << name;
+    EXPECT_EQ(replay.camera_info_topic, "/camera/camera_info") << name;
+    EXPECT_GE(replay.detections, bag.detections - 2) << name;
+    EXPECT_GE(replay.samples.samples.size(), 7u) << name;
+    const Calibration c = session.calibrate(session.snapshot());  // as `handeye bag` does: the joint estimator
+    const Vector6d error = pose_error(c.T_parent_camera, bag.X);
+    const double nees = error.dot(c.pose_covariance.ldlt().solve(error));
+    std::printf("%-26s %d images, %d detected, pixel sigma %.3f px, %zu samples, X error %.3f mm, NEES %.2f\n",
+                name.c_str(), replay.images, replay.detections, replay.pixel_sigma, replay.samples.samples.size(),
+                error.head<3>().norm() * 1e3, nees);
+    EXPECT_LT(nees, 20.06) << name;
+  }
+}
+
+TEST(Bag, ImagesNeedTheTargetAndTheirCameraInfo) {
+  const std::string path = temp("images_errors.bag");
+  write_simulated_bag(path, image_bag(target_file("targets/chessboard.yaml")));
+  expect_error(path, ErrorCode::NoData, "but no target to look for");
+  SessionConfig config;
+  config.target_file = target_file("targets/charuco.yaml");  // not the printed one
+  expect_error(path, ErrorCode::NoData, "the target was found in none of the", config);
+  config.target_file = target_file("targets/chessboard.yaml");
+  config.image_topic = "/camera/image_rect";
+  expect_error(path, ErrorCode::NoData, "`/camera/image_rect` is not in the bag; the bag's image topics are: /camera/image_raw",
+               config);
+  config.image_topic.clear();
+  config.camera_info_topic = "/tf";
+  expect_error(path, ErrorCode::NoData, "no CameraInfo for `/camera/image_raw`", config);
 }
 
 TEST(Bag, ReplayIsDeterministic) {

@@ -9,11 +9,22 @@
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/images/pooled_detector.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
 
 namespace handeye {
 
@@ -37,8 +48,19 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   result.X = typical_X(o.setup);
   result.frames = SessionConfig{}.rig.frames;
   const FrameNames& f = result.frames;
-  const RigTrajectory trajectory = make_rig_trajectory(rng, o.setup, result.X, o.poses, o.pause, o.move);
+  RigTrajectory trajectory = make_rig_trajectory(rng, o.setup, result.X, o.poses, o.pause, o.move);
   result.duration = trajectory.duration();
+  const bool images = o.detection_type == "images";
+  if (images && !o.target) {
+    throw HandEyeError(ErrorCode::MissingKey, "a bag of images needs the target to draw", "sim",
+                       "give --target FILE (config/targets/)");
+  }
+  std::optional<PatternRenderer> renderer;
+  if (images) {
+    // The views look at the middle of the printed face; a board's frame is target_face() away.
+    trajectory.T_world_pattern = trajectory.T_world_pattern * target_face(*o.target).inverse();
+    renderer.emplace(*o.target, simulated_camera());
+  }
 
   PoseNoise noise;  // in the camera frame (the parent of T_camera_pattern)
   const double lateral = o.lateral_noise_mm * 1e-3, depth = o.depth_noise_mm * 1e-3;
@@ -77,6 +99,28 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   }
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (double t = 0.0; o.detections && t <= span; t += 1.0 / o.detection_rate) {
+    if (images) {  // what the camera sees, and its CameraInfo, stamped with the capture time
+      const ros::Time capture = start + ros::Duration(t);
+      const cv::Mat gray = renderer->render(trajectory.pattern_at(t), rng);
+      std_msgs::Header header;
+      header.stamp = capture;
+      header.frame_id = f.camera;
+      sensor_msgs::CameraInfo info = conversions::to_camera_info(renderer->camera());
+      info.header = header;
+      const ros::Time received = capture + ros::Duration(o.latency);
+      if (o.compressed) {
+        sensor_msgs::CompressedImage msg;
+        msg.header = header;
+        msg.format = "mono8; png compressed";
+        cv::imencode(".png", gray, msg.data);
+        bag.write(o.image_topic + "/compressed", received, msg);
+      } else {
+        bag.write(o.image_topic, received, cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, gray).toImageMsg());
+      }
+      bag.write(o.camera_info_topic, received, info);
+      ++result.detections;
+      continue;
+    }
     if (unit(rng) < o.dropout) continue;
     const ros::Time capture = start + ros::Duration(t);
     Eigen::Isometry3d P = perturb(rng, trajectory.pattern_at(t), noise);
@@ -124,6 +168,154 @@ namespace {
 
 HandEyeError no_data(const std::string& what, const std::string& path, const std::string& fix) {
   return HandEyeError(ErrorCode::NoData, what, path, fix);
+}
+
+struct ImageTopics {
+  std::string image, info;
+  bool compressed = false;
+};
+
+/// Where the images are when the detections are to come from them: the
+/// configured image topic, or, when the bag has no detections topic, its one
+/// image topic (raw or compressed); and their CameraInfo topic. Nothing when the
+/// bag holds detections.
+std::optional<ImageTopics> image_topics(rosbag::View& everything, const SessionConfig& config,
+                                        const std::string& path) {
+  std::map<std::string, std::string> type_of;
+  for (const rosbag::ConnectionInfo* c : everything.getConnections()) type_of[c->topic] = c->datatype;
+  const auto list = [&](const std::string& type) {
+    std::vector<std::string> topics;
+    for (const auto& [topic, t] : type_of)
+      if (t == type) topics.push_back(topic);
+    return topics;
+  };
+  const auto joined = [](const std::vector<std::string>& topics) {
+    std::string text;
+    for (const std::string& t : topics) text += (text.empty() ? "" : ", ") + t;
+    return text.empty() ? std::string("none") : text;
+  };
+  ImageTopics topics;
+  if (!config.image_topic.empty()) {
+    topics.image = config.image_topic;
+  } else {
+    if (type_of.count(config.detections_topic)) return std::nullopt;
+    std::vector<std::string> images = list("sensor_msgs/Image");
+    for (const std::string& t : list("sensor_msgs/CompressedImage")) images.push_back(t);
+    if (images.empty()) return std::nullopt;
+    if (images.size() > 1) {
+      throw no_data("the bag has no `" + config.detections_topic + "` but several image topics: " + joined(images), path,
+                    "choose one with image_topic (in --config) or --image-topic");
+    }
+    topics.image = images.front();
+  }
+  const auto type = type_of.find(topics.image);
+  if (type == type_of.end() || (type->second != "sensor_msgs/Image" && type->second != "sensor_msgs/CompressedImage")) {
+    throw no_data("`" + topics.image + "` is " + (type == type_of.end() ? "not in the bag" : "a " + type->second) +
+                      "; the bag's image topics are: " +
+                      joined(list("sensor_msgs/Image")) + " (raw), " + joined(list("sensor_msgs/CompressedImage")) +
+                      " (compressed)",
+                  path, "set image_topic to one of them");
+  }
+  topics.compressed = type->second == "sensor_msgs/CompressedImage";
+  if (!config.camera_info_topic.empty()) {
+    topics.info = config.camera_info_topic;
+  } else {
+    std::string base = topics.image;  // /camera/image_raw/compressed -> /camera/camera_info
+    if (topics.compressed && base.size() > 11 && base.compare(base.size() - 11, 11, "/compressed") == 0) {
+      base.resize(base.size() - 11);
+    }
+    const std::string beside = base.substr(0, base.find_last_of('/')) + "/camera_info";
+    const std::vector<std::string> infos = list("sensor_msgs/CameraInfo");
+    if (type_of.count(beside)) topics.info = beside;
+    else if (infos.size() == 1) topics.info = infos.front();
+  }
+  if (topics.info.empty() || !type_of.count(topics.info) || type_of[topics.info] != "sensor_msgs/CameraInfo") {
+    throw no_data("no CameraInfo for `" + topics.image + "` (the bag's CameraInfo topics: " +
+                      joined(list("sensor_msgs/CameraInfo")) + ")",
+                  path, "record the camera's camera_info with its images, or set camera_info_topic");
+  }
+  return topics;
+}
+
+/// The target's pose in every image of the topic, through the target detector,
+/// each with its covariance under the pixel sigma pooled over all the images.
+std::vector<Detection> detect_bag_images(rosbag::Bag& bag, const ImageTopics& topics, const Target& target,
+                                         const std::string& path, BagReplay& replay,
+                                         const std::function<void(double)>& progress) {
+  std::vector<sensor_msgs::CameraInfo> infos;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topics.info))) {
+    ++replay.messages[m.getTopic()];
+    if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) infos.push_back(*info);
+  }
+  if (infos.empty()) throw no_data("`" + topics.info + "` holds no CameraInfo", path, "record the camera_info topic");
+  std::stable_sort(infos.begin(), infos.end(), [](const auto& a, const auto& b) { return a.header.stamp < b.header.stamp; });
+  std::optional<std::size_t> camera_of;  // the info the current camera model is from
+  CameraModel camera;
+
+  images::PooledDetector detector(target);
+  std::vector<std::pair<std::size_t, Detection>> found;  // detector frame -> detection (pose filled after pooling)
+  rosbag::View view(bag, rosbag::TopicQuery(topics.image));
+  const double total = std::max<double>(1.0, view.size());
+  for (const rosbag::MessageInstance& m : view) {
+    ++replay.messages[m.getTopic()];
+    ++replay.images;
+    cv::Mat gray;
+    std_msgs::Header header;
+    if (topics.compressed) {
+      const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
+      if (!msg) continue;
+      header = msg->header;
+      gray = cv::imdecode(msg->data, cv::IMREAD_GRAYSCALE);
+    } else {
+      const auto msg = m.instantiate<sensor_msgs::Image>();
+      if (!msg) continue;
+      header = msg->header;
+      try {
+        gray = cv_bridge::toCvCopy(msg, sensor_msgs::image_encodings::MONO8)->image;
+      } catch (const cv_bridge::Exception& e) {
+        throw no_data("cannot convert a `" + msg->encoding + "` image on `" + topics.image + "` to mono8: " + e.what(),
+                      path, "record the images as mono8, bgr8 or rgb8");
+      }
+    }
+    if (gray.empty()) {
+      ++replay.refusals["unreadable_image"];
+      replay.refusal_examples.emplace("unreadable_image", "an image on `" + topics.image + "` could not be decoded");
+      continue;
+    }
+    // The CameraInfo of this image: the last one stamped at or before it.
+    std::size_t i = 0;
+    while (i + 1 < infos.size() && infos[i + 1].header.stamp <= header.stamp) ++i;
+    if (camera_of != i) {
+      camera = conversions::to_camera_model(infos[i]);  // throws a named error for an uncalibrated camera
+      camera_of = i;
+    }
+    if (gray.cols != camera.width || gray.rows != camera.height) {
+      throw no_data("an image on `" + topics.image + "` is " + std::to_string(gray.cols) + " x " +
+                        std::to_string(gray.rows) + " but `" + topics.info + "` says " + std::to_string(camera.width) +
+                        " x " + std::to_string(camera.height),
+                    path, "set camera_info_topic to the info of these images");
+    }
+    const images::PooledDetector::Frame& frame = detector.add(gray, camera);
+    if (frame.pose) {
+      Detection d;
+      d.stamp = header.stamp;
+      d.frame = header.frame_id;
+      found.emplace_back(detector.size() - 1, d);
+    } else {
+      ++replay.refusals["no_target_pose"];
+      replay.refusal_examples.emplace("no_target_pose", frame.why);
+    }
+    if (progress && replay.images % 10 == 0) progress(0.8 * replay.images / total);
+  }
+  replay.pixel_sigma = detector.pixel_sigma();
+  std::vector<Detection> detections;
+  for (auto& [index, d] : found) {
+    const std::optional<PatternPose> pose = detector.pooled(index);
+    d.pose = conversions::to_pose_msg(pose->T_camera_pattern);
+    d.covariance = pose->covariance;
+    detections.push_back(d);
+  }
+  return detections;
 }
 
 }  // namespace
@@ -191,6 +383,23 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, Calib
         feed(detection_of(pattern_transforms[i]));
         if (progress) progress(static_cast<double>(i + 1) / pattern_transforms.size());
       }
+    } else if (const std::optional<ImageTopics> images = image_topics(everything, config, path)) {
+      if (config.target_file.empty()) {
+        throw no_data("the bag has images on `" + images->image + "` and no detections on `" + config.detections_topic +
+                          "`, but no target to look for",
+                      path, "give the target: --target FILE (config/targets/), or target_file in --config");
+      }
+      replay.image_topic = images->image;
+      replay.camera_info_topic = images->info;
+      std::vector<Detection> detections =
+          detect_bag_images(bag, *images, io::read_target(config.target_file), path, replay, progress);
+      std::stable_sort(detections.begin(), detections.end(),
+                       [](const Detection& a, const Detection& b) { return a.stamp < b.stamp; });
+      replay.detections = static_cast<int>(detections.size());
+      for (std::size_t i = 0; i < detections.size(); ++i) {
+        feed(detections[i]);
+        if (progress && (i % 50 == 0 || i + 1 == detections.size())) progress(0.8 + 0.2 * (i + 1) / detections.size());
+      }
     } else {
       if (!topics.count(config.detections_topic)) {
         std::string list;
@@ -241,6 +450,13 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, Calib
   } catch (const rosbag::BagException& e) {
     throw HandEyeError(ErrorCode::IoError, std::string("the bag is corrupt or truncated: ") + e.what(), path,
                        "try `rosbag reindex` on a copy of it, or record again");
+  }
+  if (replay.images > 0 && replay.detections == 0) {
+    const auto most = replay.refusals.find("no_target_pose");
+    throw no_data("the target was found in none of the " + std::to_string(replay.images) + " images on `" +
+                      replay.image_topic + "`" +
+                      (most == replay.refusals.end() ? std::string() : ": " + replay.refusal_examples["no_target_pose"]),
+                  path, "check the target file against the printed target (kind, sizes, dictionary, ids)");
   }
   if (replay.detections == 0 && !replay.refusals.empty()) {  // messages came, but none held the pattern
     const auto most = std::max_element(replay.refusals.begin(), replay.refusals.end(),

@@ -35,19 +35,30 @@ class ProgressBar {
 };
 
 int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
-  std::string bag_path, config_path, output, samples_out;
+  std::string bag_path, config_path, output, samples_out, target, image_topic, camera_info_topic;
   po::options_description options("bag: calibrate from a rosbag, without a roscore");
   options.add_options()("help,h", "show this help")(
-      "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections)")(
+      "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections, or images)")(
       "config,c", po::value(&config_path), "YAML with the node's settings (config/calibration_defaults.yaml keys)")(
+      "target", po::value(&target), "a bag of images: the target file (config/targets/); overrides target_file")(
+      "image-topic", po::value(&image_topic), "a bag of images: the image topic (raw or compressed); default: the "
+                                              "bag's one image topic when it has no detections")(
+      "camera-info-topic", po::value(&camera_info_topic), "a bag of images: their CameraInfo; default: camera_info "
+                                                          "beside the image topic")(
       "output,o", po::value(&output), "result file; default: <bag stem>_result.yaml in the current directory")(
       "samples-out", po::value(&samples_out), "also write the samples taken (the samples file format)");
   po::variables_map vm;
-  if (!parse("bag", "--bag FILE [--config YAML] [--output FILE] [--samples-out FILE]", options, args, vm, out)) return kOk;
+  if (!parse("bag", "--bag FILE [--config YAML] [--target FILE] [--output FILE] [--samples-out FILE]", options, args, vm,
+             out)) {
+    return kOk;
+  }
   if (output.empty()) output = default_result_path(bag_path);
 
   SessionConfig config;
   if (!config_path.empty()) io::read_session_config(config_path, config);
+  if (!target.empty()) config.target_file = target;
+  if (!image_topic.empty()) config.image_topic = image_topic;
+  if (!camera_info_topic.empty()) config.camera_info_topic = camera_info_topic;
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();  // the node's session file is the node's
   CalibrationSession session(settings);
@@ -58,6 +69,10 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
 
   out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
   for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";
+  if (replay.images > 0) {
+    out << "\n  images on " << replay.image_topic << " (CameraInfo " << replay.camera_info_topic << "): " << replay.images
+        << ", target found in " << replay.detections << ", pooled pixel sigma " << number_text(replay.pixel_sigma) << " px";
+  }
   out << "\n  detections " << replay.detections << ", paired with a robot pose " << replay.observations
       << ", samples accepted " << snapshot.samples.samples.size() << "\n";
   for (const auto& [kind, count] : replay.refusals) {
@@ -82,6 +97,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
 int sim_bag_command(const Args& args, std::ostream& out, std::ostream&) {
   SimArgs a;
   BagSimulationOptions bag;
+  std::string target;
   po::options_description options("sim --output x.bag: a simulated calibration session with known truth, as a rosbag");
   add_sim_options(options, a);
   options.add_options()(
@@ -92,7 +108,11 @@ int sim_bag_command(const Args& args, std::ostream& out, std::ostream&) {
       "dropout", po::value(&bag.dropout), "share of frames without a detection (default 0.05)")(
       "wrong-detections", po::value(&bag.wrong_detections), "share of flipped poses (default 0.005)")(
       "latency", po::value(&bag.latency), "s from capture to message (default 0.05)")(
-      "detection-type", po::value(&bag.detection_type), "tags (default), pose_with_covariance, pose or tf");
+      "detection-type", po::value(&bag.detection_type), "tags (default), pose_with_covariance, pose, tf, or images "
+                                                        "(rendered camera images, with --target)")(
+      "target", po::value(&target), "images: the target to draw (config/targets/)")(
+      "rate", po::value(&bag.detection_rate), "Hz of detections or images (default 20)")(
+      "compressed", po::bool_switch(&bag.compressed), "images: as sensor_msgs/CompressedImage (PNG)");
   po::variables_map vm;
   if (!parse("sim", "--output FILE.bag [options]", options, args, vm, out)) return kOk;
   bag.setup = a.checked_setup();
@@ -102,9 +122,11 @@ int sim_bag_command(const Args& args, std::ostream& out, std::ostream&) {
   if (vm.count("pattern-translation-noise-mm")) bag.lateral_noise_mm = a.translation_mm;
   if (vm.count("pattern-rotation-noise-deg")) bag.roll_noise_deg = a.rotation_deg;
   bag.detection_covariance = !a.omit_noise;
+  if (!target.empty()) bag.target = io::read_target(target);
   const SimulatedBag written = write_simulated_bag(a.output, bag);
   out << "wrote a " << written.duration << " s simulated " << a.setup_name << " bag to " << a.output << ": "
-      << written.tf_messages << " /tf, " << written.detections << " detections (" << written.wrong_detections << " wrong)\n";
+      << written.tf_messages << " /tf, " << written.detections << (bag.detection_type == "images" ? " images" : " detections")
+      << " (" << written.wrong_detections << " wrong)\n";
   std::string truth = a.truth;
   if (truth.empty()) {
     truth = (std::filesystem::path(a.output).parent_path() / std::filesystem::path(a.output).stem()).string() + "_truth.yaml";

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "handeye_covariance/core/target.h"
 #include "handeye_covariance/session/session_config.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/session/calibration_session.h"
@@ -35,6 +36,12 @@ struct BagSimulationOptions {
   /// How detections are recorded: tags (TagDetectionArray), pose_with_covariance,
   /// pose, or tf (camera -> pattern transforms on /tf) - the node's inputs.
   std::string detection_type = "tags";
+  /// images: the camera's view rendered (simulated_camera(), mono8) on `image_topic`
+  /// with its CameraInfo on `camera_info_topic`, instead of detections. The target
+  /// drawn is `target` (views look at its face).
+  std::optional<Target> target;
+  std::string image_topic = "/camera/image_raw", camera_info_topic = "/camera/camera_info";
+  bool compressed = false;  // images as sensor_msgs/CompressedImage (PNG) on <image_topic>/compressed
   double start_time = 1700000000.0; // s, the first stamp
 };
 
@@ -54,6 +61,9 @@ struct BagReplay {
   int observations = 0;                 // detections paired with a robot pose
   std::map<std::string, int> refusals;  // by kind: no_robot_tf, too_close, other_tags, ...
   std::map<std::string, std::string> refusal_examples;  // kind -> one full message
+  std::string image_topic, camera_info_topic;  // images: where they came from
+  int images = 0;                       // images: read and run through the detector
+  double pixel_sigma = 0.0;             // images: pooled over every detection
   int stamps_went_back = 0;             // detections stamped before the previous one in the bag (a looping recording)
   int repeated_stamps = 0;              // detections whose stamp was already seen: used once
   SampleSet samples;                    // the session's at the end, with its noise model
@@ -61,7 +71,10 @@ struct BagReplay {
 };
 
 /// Feeds the bag's detections, in stamp order, into `session` (made from the
-/// same `config`). `progress(fraction)` is called as the detections are read,
+/// same `config`). A bag with images instead (config.image_topic, or no
+/// detections topic and one image topic, raw or compressed, with its CameraInfo)
+/// goes through the target detector first (config.target_file), every pose under
+/// the pixel sigma pooled over all the images (images/pooled_detector.h). `progress(fraction)` is called as the detections are read,
 /// for bags longer than 5 s (may be empty).
 /// Throws HandEyeError: IoError (unreadable, truncated or corrupt bag) or
 /// NoData (topic missing, no detections, or no sample could be taken).

@@ -16,6 +16,9 @@ struct SessionConfig {
   std::string detections_topic = "/tag_detections";
   std::vector<int> tag_ids;              // empty: a lone detection is taken
   std::string target_file;  // the target the detector sees (io::read_target): where new views look (Rig::T_pattern_face)
+  // The bag replay: images instead of detections (the target detector runs on them).
+  std::string image_topic;        // empty: the bag's one image topic when it has no detections topic
+  std::string camera_info_topic;  // empty: camera_info beside the image topic, or the bag's one CameraInfo topic
   std::string noise_config;              // YAML with a `noise:` block; empty: estimated
   bool publish_tf = true;
   bool publish_pattern_tf = false;  // also TF <pattern parent> -> tracking_marker_frame for Y (joint)
@@ -58,6 +61,8 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("detections_topic", c.detections_topic, 1.0);
   visit("tag_ids", c.tag_ids, 1.0);
   visit("target_file", c.target_file, 1.0);
+  visit("image_topic", c.image_topic, 1.0);
+  visit("camera_info_topic", c.camera_info_topic, 1.0);
   visit("noise_config", c.noise_config, 1.0);
   visit("publish_tf", c.publish_tf, 1.0);
   visit("publish_pattern_tf", c.publish_pattern_tf, 1.0);
