@@ -117,6 +117,9 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
                                            "/test/fuzz/corpus/files/regression-opencv-length-error.yaml");
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(thrown, "length"); }).find("OpenCV cannot read it"),
             std::string::npos);
+  const std::string nul = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
+                                        "/test/fuzz/corpus/files/regression-opencv-nul-byte.xml");  // OpenCV segfaults on it
+  EXPECT_NE(error_of([&] { images::parse_opencv_camera(nul, "nul"); }).find("a NUL byte at offset 14"), std::string::npos);
 }
 
 TEST(TargetFile, ReadsEveryKindAndNamesBadEntries) {

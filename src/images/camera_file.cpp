@@ -59,6 +59,12 @@ io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::strin
   const std::string hint = "OpenCV's camera file has camera_matrix (3 x 3) and distortion_coefficients "
                            "(write it with cv::FileStorage)";
   io::CameraInfoFile file;
+  // OpenCV 4.6's XML parser dereferences NULL on a NUL byte inside a tag
+  // (test/fuzz/corpus/files/regression-opencv-nul-byte.xml); a camera file is text.
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    throw HandEyeError(ErrorCode::MalformedFile, "a NUL byte at offset " + std::to_string(nul) + ": not a text file",
+                       source, hint);
+  }
   try {
     cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     if (!storage.isOpened()) throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it", source, hint);
