@@ -64,6 +64,7 @@ accuracy = open(f"{run}/accuracy.md").read()
 validation = open(f"{run}/validation.txt").read()
 systematic = open(f"{run}/systematic.txt").read()
 next_best_pose = open(f"{run}/next_best_pose.md").read()
+_, detectors = medians(f"{run}/detectors.json")
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 
 
@@ -189,6 +190,19 @@ lines += [
     "inverse Fisher information at the truth, on the same views). The ratios are printed above. The",
     "pairs estimator weights each pair by its marginal covariance; their correlation through the shared",
     "poses is in its covariance but not in its weights, so it stays near 0.9x.",
+    "",
+    "## Detectors per image (`handeye_bench_detectors`)",
+    "",
+    "What `target_detector` and `handeye images` do per image: rectify, detect, PnP with the covariance,",
+    "on a rendered view of each target at 0.5-0.6 m (blur, noise, lens distortion), median of 5 runs, one",
+    "process. The goal (issue 17) is 30 ms per image on this machine at both sizes; the last column is the",
+    "ratio to the chessboard at 640 x 480.",
+    "",
+    "| target | 640 x 480 [ms] | 1280 x 720 [ms] | 1280 x 720 / chessboard 640 |",
+    "|---|---:|---:|---:|",
+] + [f"| {kind} | {detectors[f'BM_DetectAndEstimate/{kind}/640'] / 1e3:.1f} | {detectors[f'BM_DetectAndEstimate/{kind}/1280'] / 1e3:.1f} | "
+     f"{detectors[f'BM_DetectAndEstimate/{kind}/1280'] / detectors['BM_DetectAndEstimate/chessboard/640']:.1f}x |"
+     for kind in ("chessboard", "charuco", "aruco", "apriltag")] + [
     "",
     "## Next-best pose: samples to a target sigma (`handeye_next_best_pose --seeds 30 --target-mm 0.3 --candidates 100`)",
     "",
