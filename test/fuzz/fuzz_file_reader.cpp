@@ -11,23 +11,11 @@
 #include <string>
 
 #include "handeye_covariance/core/errors.h"
+#include "named_errors_only.h"
 #include "handeye_covariance/io/yaml_io.h"
 #ifdef HANDEYE_FUZZ_CAMERA_FILES
 #include "handeye_covariance/images/image_folder.h"
 #endif
-
-namespace {
-
-template <typename F>
-void named_errors_only(F&& f) {
-  try {
-    f();
-  } catch (const handeye::HandEyeError&) {
-    // expected: a refusal with its reason
-  }
-}
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace handeye;

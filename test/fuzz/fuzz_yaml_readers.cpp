@@ -18,22 +18,10 @@
 #include <string>
 
 #include "handeye_covariance/core/errors.h"
+#include "named_errors_only.h"
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
-
-namespace {
-
-template <typename F>
-void named_errors_only(F&& f) {
-  try {
-    f();
-  } catch (const handeye::HandEyeError&) {
-    // expected: a refusal with its reason
-  }
-}
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace handeye;
