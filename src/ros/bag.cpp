@@ -170,6 +170,9 @@ HandEyeError no_data(const std::string& what, const std::string& path, const std
   return HandEyeError(ErrorCode::NoData, what, path, fix);
 }
 
+// Of the progress bar, the share of detecting in a bag's images (the rest feeds the session).
+constexpr double kImageReadShare = 0.8;
+
 struct ImageTopics {
   std::string image, info;
   bool compressed = false;
@@ -305,7 +308,7 @@ std::vector<Detection> detect_bag_images(rosbag::Bag& bag, const ImageTopics& to
       ++replay.refusals["no_target_pose"];
       replay.refusal_examples.emplace("no_target_pose", frame.why);
     }
-    if (progress && replay.images % 10 == 0) progress(0.8 * replay.images / total);
+    if (progress && replay.images % 10 == 0) progress(kImageReadShare * replay.images / total);
   }
   replay.pixel_sigma = detector.pixel_sigma();
   std::vector<Detection> detections;
@@ -383,54 +386,53 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, Calib
         feed(detection_of(pattern_transforms[i]));
         if (progress) progress(static_cast<double>(i + 1) / pattern_transforms.size());
       }
-    } else if (const std::optional<ImageTopics> images = image_topics(everything, config, path)) {
-      if (config.target_file.empty()) {
-        throw no_data("the bag has images on `" + images->image + "` and no detections on `" + config.detections_topic +
-                          "`, but no target to look for",
-                      path, "give the target: --target FILE (config/targets/), or target_file in --config");
-      }
-      replay.image_topic = images->image;
-      replay.camera_info_topic = images->info;
-      std::vector<Detection> detections =
-          detect_bag_images(bag, *images, io::read_target(config.target_file), path, replay, progress);
-      std::stable_sort(detections.begin(), detections.end(),
-                       [](const Detection& a, const Detection& b) { return a.stamp < b.stamp; });
-      replay.detections = static_cast<int>(detections.size());
-      for (std::size_t i = 0; i < detections.size(); ++i) {
-        feed(detections[i]);
-        if (progress && (i % 50 == 0 || i + 1 == detections.size())) progress(0.8 + 0.2 * (i + 1) / detections.size());
-      }
     } else {
-      if (!topics.count(config.detections_topic)) {
-        std::string list;
-        for (const std::string& t : topics) list += (list.empty() ? "" : ", ") + t;
-        throw no_data("the bag has no topic `" + config.detections_topic + "`; its topics are: " + list, path,
-                      "set detections_topic (in --config) to the topic the detector published");
-      }
-      rosbag::View view(bag, rosbag::TopicQuery(config.detections_topic));
-      const double total = std::max<double>(1.0, view.size());
+      // Detections recorded, or made here from the bag's images.
       std::vector<Detection> detections;
-      for (const rosbag::MessageInstance& m : view) {
-        ++replay.messages[m.getTopic()];
-        std::optional<Detection> detection;
-        if (const auto tags = m.instantiate<TagDetectionArray>()) {
-          std::optional<Refusal> refusal;
-          detection = select_detection(*tags, config.tag_ids, refusal);
-          if (refusal) ++replay.refusals[refusal->kind], replay.refusal_examples.emplace(refusal->kind, refusal->message);
-        } else if (const auto with_covariance = m.instantiate<geometry_msgs::PoseWithCovarianceStamped>()) {
-          detection = detection_of(*with_covariance);
-        } else if (const auto plain = m.instantiate<geometry_msgs::PoseStamped>()) {
-          detection = detection_of(*plain);
-        } else {
-          throw no_data("`" + config.detections_topic + "` carries " + m.getDataType() +
-                            ", not a TagDetectionArray, PoseWithCovarianceStamped or PoseStamped",
-                        path, "point detections_topic at the detector's output");
+      double read_share = 0.5;  // of the progress: reading (and detecting), then feeding the session
+      if (const std::optional<ImageTopics> images = image_topics(everything, config, path)) {
+        if (config.target_file.empty()) {
+          throw no_data("the bag has images on `" + images->image + "` and no detections on `" +
+                            config.detections_topic + "`, but no target to look for",
+                        path, "give the target: --target FILE (config/targets/), or target_file in --config");
         }
-        if (detection) {
-          if (!detections.empty() && detection->stamp < detections.back().stamp) ++replay.stamps_went_back;
-          detections.push_back(*detection);
+        replay.image_topic = images->image;
+        replay.camera_info_topic = images->info;
+        read_share = kImageReadShare;
+        detections = detect_bag_images(bag, *images, io::read_target(config.target_file), path, replay, progress);
+      } else {
+        if (!topics.count(config.detections_topic)) {
+          std::string list;
+          for (const std::string& t : topics) list += (list.empty() ? "" : ", ") + t;
+          throw no_data("the bag has no topic `" + config.detections_topic + "`; its topics are: " + list, path,
+                        "set detections_topic (in --config) to the topic the detector published");
         }
-        if (progress && replay.messages[m.getTopic()] % 50 == 0) progress(0.5 * replay.messages[m.getTopic()] / total);
+        rosbag::View view(bag, rosbag::TopicQuery(config.detections_topic));
+        const double total = std::max<double>(1.0, view.size());
+        for (const rosbag::MessageInstance& m : view) {
+          ++replay.messages[m.getTopic()];
+          std::optional<Detection> detection;
+          if (const auto tags = m.instantiate<TagDetectionArray>()) {
+            std::optional<Refusal> refusal;
+            detection = select_detection(*tags, config.tag_ids, refusal);
+            if (refusal) ++replay.refusals[refusal->kind], replay.refusal_examples.emplace(refusal->kind, refusal->message);
+          } else if (const auto with_covariance = m.instantiate<geometry_msgs::PoseWithCovarianceStamped>()) {
+            detection = detection_of(*with_covariance);
+          } else if (const auto plain = m.instantiate<geometry_msgs::PoseStamped>()) {
+            detection = detection_of(*plain);
+          } else {
+            throw no_data("`" + config.detections_topic + "` carries " + m.getDataType() +
+                              ", not a TagDetectionArray, PoseWithCovarianceStamped or PoseStamped",
+                          path, "point detections_topic at the detector's output");
+          }
+          if (detection) {
+            if (!detections.empty() && detection->stamp < detections.back().stamp) ++replay.stamps_went_back;
+            detections.push_back(*detection);
+          }
+          if (progress && replay.messages[m.getTopic()] % 50 == 0) {
+            progress(read_share * replay.messages[m.getTopic()] / total);
+          }
+        }
       }
       // The bag is ordered by receive time; the sampler needs capture (stamp) order.
       // A stamp seen twice is the same image (a looping or duplicated recording): used once.
@@ -443,7 +445,9 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, Calib
       replay.detections = static_cast<int>(detections.size());
       for (std::size_t i = 0; i < detections.size(); ++i) {
         feed(detections[i]);
-        if (progress && (i % 50 == 0 || i + 1 == detections.size())) progress(0.5 + 0.5 * (i + 1) / detections.size());
+        if (progress && (i % 50 == 0 || i + 1 == detections.size())) {
+          progress(read_share + (1.0 - read_share) * (i + 1) / detections.size());
+        }
       }
     }
     replay.samples = session.sample_set();
