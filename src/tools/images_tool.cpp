@@ -39,23 +39,15 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
              options, args, vm, out)) {
     return kOk;
   }
-  if (setup_name != "eye_in_hand" && setup_name != "eye_to_hand") {
-    throw HandEyeError(ErrorCode::MalformedFile, "unknown setup `" + setup_name + "`", "--setup",
-                       "eye_in_hand (camera on the robot) or eye_to_hand (camera fixed, target on the robot)");
-  }
-  const Setup setup = setup_name == "eye_in_hand" ? Setup::EyeInHand : Setup::EyeToHand;
+  const Setup setup = setup_from_string(setup_name, "--setup");
   if (output.empty()) output = default_result_path(std::filesystem::path(images_dir).lexically_normal().string());
   const CameraModel camera = images::read_camera(camera_path);
   const Target target = io::read_target(target_path);
   const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(images_dir, poses);
   out << inputs.size() << " images in " << images_dir << ", target: " << target.describe() << "\n";
-  const bool tty = ::isatty(STDERR_FILENO) && &err == &std::cerr;
+  ProgressBar bar(err, "detecting", ::isatty(STDERR_FILENO) && &err == &std::cerr);
   const auto progress = [&](std::size_t i, std::size_t n, const images::ImageReport&) {
-    if (!tty) return;
-    const int width = 30, done = static_cast<int>(width * (i + 1) / n);
-    err << "\r  detecting [" << std::string(static_cast<std::size_t>(done), '#')
-        << std::string(static_cast<std::size_t>(width - done), ' ') << "] " << i + 1 << "/" << n << std::flush;
-    if (i + 1 == n) err << "\n";
+    bar(static_cast<double>(i + 1) / static_cast<double>(n));
   };
   Rig rig;
   rig.setup = setup;
