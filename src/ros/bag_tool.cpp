@@ -15,25 +15,6 @@ namespace handeye {
 namespace cli {
 namespace {
 
-/// A progress bar on stderr, for bags longer than a few seconds.
-class ProgressBar {
- public:
-  ProgressBar(std::ostream& err, bool enabled) : err_(err), enabled_(enabled) {}
-  void operator()(double fraction) {
-    const int percent = static_cast<int>(100.0 * fraction);
-    if (!enabled_ || percent == last_) return;
-    last_ = percent;
-    const int filled = percent / 4;
-    err_ << "\rreading the bag [" << std::string(filled, '#') << std::string(25 - filled, '.') << "] " << percent << "%"
-         << (percent >= 100 ? "\n" : "") << std::flush;
-  }
-
- private:
-  std::ostream& err_;
-  bool enabled_;
-  int last_ = -1;
-};
-
 int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string bag_path, config_path, output, samples_out, target, image_topic, camera_info_topic;
   po::options_description options("bag: calibrate from a rosbag, without a roscore");
@@ -62,7 +43,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();  // the node's session file is the node's
   CalibrationSession session(settings);
-  ProgressBar progress(err, ::isatty(STDERR_FILENO) != 0);
+  ProgressBar progress(err, "reading the bag", ::isatty(STDERR_FILENO) != 0);
   const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });
   const SessionSnapshot snapshot = session.snapshot();
   const Calibration calibration = session.calibrate(snapshot);  // before writing anything

@@ -62,6 +62,15 @@ int run_commands(const CommandTable& commands, int argc, const char* const* argv
   }
 }
 
+void ProgressBar::operator()(double fraction) {
+  const int percent = static_cast<int>(100.0 * fraction);
+  if (!enabled_ || percent == last_) return;
+  last_ = percent;
+  const int filled = percent / 4;
+  err_ << "\r" << label_ << " [" << std::string(filled, '#') << std::string(25 - filled, '.') << "] " << percent << "%"
+       << (percent >= 100 ? "\n" : "") << std::flush;
+}
+
 Setup SimArgs::checked_setup() const {
   const Setup setup = setup_from_string(setup_name, "--setup");
   if (samples < 3) {

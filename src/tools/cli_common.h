@@ -1,7 +1,8 @@
-// What the two command-line programs share: `handeye` (no ROS library) and
-// `handeye_bag` (rosbag; `handeye bag` and `handeye sim --output x.bag` run it).
-// Option parsing, the command table with its exit codes, and the options of
-// `sim` that both kinds of output take.
+// What the command-line programs share: `handeye` (no ROS library), `handeye_bag`
+// (rosbag; `handeye bag` and `handeye sim --output x.bag` run it) and
+// `handeye_images` (OpenCV; `handeye images` runs it).
+// Option parsing, the command table with its exit codes, a progress bar, and the
+// options of `sim` that both kinds of output take.
 #pragma once
 
 #include <boost/program_options.hpp>
@@ -9,6 +10,7 @@
 #include <iosfwd>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "handeye_covariance/core/rig.h"
@@ -45,6 +47,21 @@ int run_commands(const CommandTable& commands, int argc, const char* const* argv
 
 /// "usage: handeye <command> ..." and the command list.
 void print_help(const CommandTable& commands, std::ostream& out);
+
+/// A progress bar on stderr ("<label> [#####....] 40%"), redrawn when the
+/// percentage changes; silent when disabled (stderr is not a terminal).
+class ProgressBar {
+ public:
+  ProgressBar(std::ostream& err, std::string label, bool enabled)
+      : err_(err), label_(std::move(label)), enabled_(enabled) {}
+  void operator()(double fraction);
+
+ private:
+  std::ostream& err_;
+  std::string label_;
+  bool enabled_;
+  int last_ = -1;
+};
 
 /// The options of `sim` common to a samples file and a bag.
 struct SimArgs {
