@@ -82,10 +82,10 @@ io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::strin
         }
       }
     }
-    if (!D.empty()) {
-      if (D.total() > 14 || D.channels() != 1) {
-        throw HandEyeError(ErrorCode::MalformedFile, "distortion_coefficients has " + std::to_string(D.total()) +
-                                                         " entries; OpenCV's models have at most 14",
+    if (!D.empty()) {  // at most 14 entries: small_matrix checked rows x cols
+      if (D.channels() != 1) {
+        throw HandEyeError(ErrorCode::MalformedFile, "distortion_coefficients has " + std::to_string(D.channels()) +
+                                                         " channels; it is one row or column of numbers",
                            source, hint);
       }
       D.convertTo(D, CV_64F);
