@@ -57,8 +57,7 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   }
   std::optional<PatternRenderer> renderer;
   if (images) {
-    // The views look at the middle of the printed face; a board's frame is target_face() away.
-    trajectory.T_world_pattern = trajectory.T_world_pattern * target_face(*o.target).inverse();
+    trajectory.look_at_face(target_face(*o.target));
     renderer.emplace(*o.target, simulated_camera());
   }
 

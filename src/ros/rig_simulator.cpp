@@ -72,9 +72,7 @@ class RigSimulator {
     std::optional<Target> target;
     if (output_ == "images") {
       target = target_from_params(pn);
-      // The views look at the middle of the printed face; a board's own frame
-      // (OpenCV's: a corner, z into the board) is target_face() away from it.
-      trajectory_.T_world_pattern = trajectory_.T_world_pattern * target_face(*target).inverse();
+      trajectory_.look_at_face(target_face(*target));
     }
     flange_T_tool_ = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
 

@@ -55,6 +55,11 @@ struct RigTrajectory {
   Eigen::Isometry3d effector_at(double t) const;
   /// The true T_camera_pattern at t.
   Eigen::Isometry3d pattern_at(double t) const;
+  /// The views were drawn looking at the pattern frame; make them look at a
+  /// target's printed face instead (core/target.h, target_face): the pattern
+  /// frame moves to T_pattern_face^-1 from where the views look (a board's own
+  /// frame is at a corner, z into the board).
+  void look_at_face(const Eigen::Isometry3d& T_pattern_face) { T_world_pattern = T_world_pattern * T_pattern_face.inverse(); }
   /// Time until the robot reaches its last pose, plus one pause.
   double duration() const { return static_cast<double>(poses.size()) * (pause + move) - move; }
 };
