@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
+#include <random>
+#include <utility>
+#include <vector>
 
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/simulation/simulation.h"
@@ -35,6 +39,28 @@ inline Vector6d pose_perturbation(const Eigen::Isometry3d& perturbed, const Eige
   d.head<3>() = perturbed.translation() - nominal.translation();
   d.tail<3>() = rotation_difference(perturbed.linear(), nominal.linear());
   return d;
+}
+
+/// The central `coverage` band of the mean of NEES over sessions whose covariances
+/// scale with a pixel variance estimated from dof[k] degrees of freedom and carry
+/// the Student-t factor nu / (nu - 2) (PixelNoise::covariance_variance): each
+/// NEES is chi2(dim) / (chi2(nu) / nu) x (nu - 2) / nu, with mean dim. For large nu
+/// this is the chi2 band; for 12 views of one marker (nu = 24) it is wider. By
+/// seeded Monte-Carlo, 20 000 draws of the mean.
+inline std::pair<double, double> nees_band_under_estimated_sigma(const std::vector<int>& dof, int dim, double coverage) {
+  Rng rng(20261123);
+  std::chi_squared_distribution<double> error(dim);
+  std::vector<double> means(20000);
+  for (double& mean : means) {
+    mean = 0.0;
+    for (const int nu : dof) {
+      const double variance_ratio = std::chi_squared_distribution<double>(nu)(rng) / nu;
+      mean += error(rng) / variance_ratio * (nu - 2.0) / nu / static_cast<double>(dof.size());
+    }
+  }
+  std::sort(means.begin(), means.end());
+  const auto quantile = [&](double p) { return means[static_cast<std::size_t>(p * (means.size() - 1))]; };
+  return {quantile((1.0 - coverage) / 2.0), quantile((1.0 + coverage) / 2.0)};
 }
 
 /// `handeye sim`'s default noise: pattern 0.5 mm / 0.05 deg, robot 0.05 mm / 0.01 deg (1 sigma per axis).

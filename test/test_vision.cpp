@@ -133,6 +133,34 @@ TEST(PixelNoise, PoolsOverTheWindowAndKeepsTheFloor) {
   EXPECT_EQ(noise.sigma(), 0.1);
   noise.add(1.0, 0);  // no residual dof (e.g. an exactly determined fit): ignored
   EXPECT_EQ(noise.degrees_of_freedom(), 6);
+  EXPECT_DOUBLE_EQ(noise.covariance_variance(), 0.01);  // the floor is not an estimate: no Student-t factor
+}
+
+// A sigma estimated from nu degrees of freedom: the covariance uses sigma^2 nu / (nu - 2),
+// the variance of the Student-t, so that 6-dof errors over it average 6 (and not 6 nu / (nu - 2)).
+TEST(PixelNoise, CovarianceVarianceCarriesTheUncertaintyOfAnEstimatedSigma) {
+  PixelNoise noise(0.01, 200);
+  noise.add(2.0, 2);  // one frame of one marker: 1 px^2 per dof, nu = 2, the factor stops at 3
+  EXPECT_NEAR(noise.covariance_variance(), 3.0, 1e-12);
+  for (int frame = 1; frame < 12; ++frame) noise.add(2.0, 2);  // 12 frames: nu = 24
+  EXPECT_NEAR(noise.sigma(), 1.0, 1e-12);
+  EXPECT_NEAR(noise.covariance_variance(), 24.0 / 22.0, 1e-12);
+  // Monte-Carlo of what the factor is for: e ~ N(0, I6), s^2 ~ chi2(24)/24,
+  // mean of e^T e / (s^2 nu / (nu - 2)) is 6 (and 6.55 without the factor).
+  Rng rng(3);
+  std::normal_distribution<double> gauss;
+  double nees = 0.0, nees_without = 0.0;
+  constexpr int kTrials = 200000;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    PixelNoise pooled(1e-6, 200);
+    for (int frame = 0; frame < 12; ++frame) pooled.add(std::pow(gauss(rng), 2) + std::pow(gauss(rng), 2), 2);
+    double e2 = 0.0;
+    for (int axis = 0; axis < 6; ++axis) e2 += std::pow(gauss(rng), 2);
+    nees += e2 / pooled.covariance_variance() / kTrials;
+    nees_without += e2 / std::pow(pooled.sigma(), 2) / kTrials;
+  }
+  EXPECT_NEAR(nees, 6.0, 0.05);
+  EXPECT_NEAR(nees_without, 6.0 * 24.0 / 22.0, 0.06);
 }
 
 TEST(PatternPose, RefusesUnknownTagsAndBadFits) {

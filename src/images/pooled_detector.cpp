@@ -32,9 +32,10 @@ const PooledDetector::Frame& PooledDetector::add(const cv::Mat& gray, const Came
 std::optional<PatternPose> PooledDetector::pooled(std::size_t i) const {
   std::optional<PatternPose> pose = frames_.at(i).pose;
   if (!pose) return pose;
-  const double sigma = noise_.sigma();
-  pose->covariance *= std::pow(sigma / pose->pixel_sigma, 2);
-  pose->pixel_sigma = sigma;
+  const double variance = noise_.covariance_variance();
+  pose->covariance *= variance / pose->covariance_variance;
+  pose->pixel_sigma = noise_.sigma();
+  pose->covariance_variance = variance;
   return pose;
 }
 

@@ -120,6 +120,13 @@ double PixelNoise::sigma() const {
   return std::max(floor_, std::sqrt(std::max(0.0, rss_) / dof_));
 }
 
+double PixelNoise::covariance_variance() const {
+  const double sigma2 = sigma() * sigma();
+  if (dof_ <= 0 || rss_ / dof_ <= floor_ * floor_) return sigma2;  // the floor, not an estimate
+  const double nu = std::max(dof_, 3);
+  return sigma2 * nu / (nu - 2.0);
+}
+
 Eigen::Matrix<double, 8, 8> edge_fit_corner_covariance(const std::array<Eigen::Vector2d, 4>& corners) {
   // d: the perpendicular displacement of each edge line at its two ends;
   // edge e runs from corner e to corner e + 1, so d(2e) is at corner e and
@@ -323,7 +330,8 @@ PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespond
   }
   noise.add(pose.residual_sum_of_squares, pose.degrees_of_freedom);
   pose.pixel_sigma = noise.sigma();
-  pose.covariance = pose.pixel_sigma * pose.pixel_sigma * information.inverse();
+  pose.covariance_variance = noise.covariance_variance();
+  pose.covariance = pose.covariance_variance * information.inverse();
   pose.covariance = 0.5 * (pose.covariance + pose.covariance.transpose());
   result.pose = pose;
   return result;

@@ -35,8 +35,10 @@ class PooledDetector {
 
   std::size_t size() const { return frames_.size(); }
   double pixel_sigma() const { return noise_.sigma(); }
+  int degrees_of_freedom() const { return noise_.degrees_of_freedom(); }  // pooled so far
   /// The i-th frame's pose with its covariance under the pooled sigma:
-  /// sigma^2 (J^T C^-1 J)^-1, so rescaling from the sigma it had is exact.
+  /// sigma^2 nu / (nu - 2) (J^T C^-1 J)^-1 (PixelNoise::covariance_variance),
+  /// so rescaling from the variance it had is exact.
   std::optional<PatternPose> pooled(std::size_t i) const;
 
  private:

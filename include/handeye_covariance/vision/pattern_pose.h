@@ -68,6 +68,14 @@ class PixelNoise {
   /// sqrt(pooled RSS / pooled dof), at least the floor; the floor alone
   /// until some frame had residual degrees of freedom.
   double sigma() const;
+  /// The variance a pose covariance uses (px^2): sigma^2 x nu / (nu - 2) for a
+  /// sigma estimated from nu pooled degrees of freedom, sigma^2 when the floor
+  /// holds. With sigma estimated, the error over the stated covariance is
+  /// Student-t, not Gaussian: its 6-dof NEES averages 6 nu / (nu - 2) under
+  /// sigma^2 alone (6.55 for 12 views of one marker, nu = 24; test_images), and
+  /// nu / (nu - 2) is the t's own variance. Below nu = 3 that variance is
+  /// infinite; the factor stops at 3.
+  double covariance_variance() const;
   int degrees_of_freedom() const { return dof_; }
   double floor() const { return floor_; }
 
@@ -114,7 +122,8 @@ struct PatternPose {
   double rms_px = 0.0;                     // this frame's reprojection RMS
   double residual_sum_of_squares = 0.0;    // weighted by the corner noise model (r^T C^-1 r)
   int degrees_of_freedom = 0;              // 2 * points - 6
-  double pixel_sigma = 0.0;                // px, the sigma the covariance uses (pooled, floored)
+  double pixel_sigma = 0.0;                // px, the pooled sigma (floored)
+  double covariance_variance = 0.0;        // px^2, what the covariance is scaled by (PixelNoise::covariance_variance)
 };
 
 struct PatternPoseResult {
