@@ -242,9 +242,9 @@ TEST(PatternPose, CalibrationFromRenderedImagesIsConsistent) {
   std::printf("outlier rejection dropped %d of %d real detections\n", false_rejections, 12 * sessions);
   EXPECT_LE(false_rejections, 12 * sessions / 100);  // at most 1%
   std::printf("calibration from rendered images: %d sessions of 12 views, 6-dof NEES mean %.2f\n", sessions, nees);
-  // 30 x chi2(6) = chi2(180): its 0.1% and 99.9% quantiles are 125 and 246.
-  EXPECT_GT(nees, 125.0 / sessions);
-  EXPECT_LT(nees, 246.0 / sessions);
+  // 30 x chi2(6) = chi2(180): its 0.05% and 99.95% quantiles (a 99.9% band) are 124 and 248.
+  EXPECT_GT(nees, 124.0 / sessions);
+  EXPECT_LT(nees, 248.0 / sessions);
 }
 
 // Why the detector rectifies first and models edge fits: without either, the

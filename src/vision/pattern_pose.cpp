@@ -121,10 +121,10 @@ double PixelNoise::sigma() const {
 }
 
 double PixelNoise::covariance_variance() const {
-  const double sigma2 = sigma() * sigma();
-  if (dof_ <= 0 || rss_ / dof_ <= floor_ * floor_) return sigma2;  // the floor, not an estimate
+  if (dof_ <= 0) return floor_ * floor_;
   const double nu = std::max(dof_, 3);
-  return sigma2 * nu / (nu - 2.0);
+  // The floor is a stated minimum, not an estimate: no factor on it (and none of a jump where it starts to hold).
+  return std::max(floor_ * floor_, std::max(0.0, rss_) / dof_ * nu / (nu - 2.0));
 }
 
 Eigen::Matrix<double, 8, 8> edge_fit_corner_covariance(const std::array<Eigen::Vector2d, 4>& corners) {

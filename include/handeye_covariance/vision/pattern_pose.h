@@ -68,13 +68,13 @@ class PixelNoise {
   /// sqrt(pooled RSS / pooled dof), at least the floor; the floor alone
   /// until some frame had residual degrees of freedom.
   double sigma() const;
-  /// The variance a pose covariance uses (px^2): sigma^2 x nu / (nu - 2) for a
-  /// sigma estimated from nu pooled degrees of freedom, sigma^2 when the floor
-  /// holds. With sigma estimated, the error over the stated covariance is
-  /// Student-t, not Gaussian: its 6-dof NEES averages 6 nu / (nu - 2) under
-  /// sigma^2 alone (6.55 for 12 views of one marker, nu = 24; test_images), and
-  /// nu / (nu - 2) is the t's own variance. Below nu = 3 that variance is
-  /// infinite; the factor stops at 3.
+  /// The variance a pose covariance uses (px^2): s^2 x nu / (nu - 2) for s^2 =
+  /// RSS / nu estimated from nu pooled degrees of freedom, and at least the
+  /// floor^2. With sigma estimated, the error over s^2 (J^T C^-1 J)^-1 is
+  /// Student-t, not Gaussian: its 6-dof NEES averages 6 nu / (nu - 2) (6.55 for
+  /// 12 views of one marker, nu = 24; test_images), and nu / (nu - 2) is the
+  /// covariance of that t (the posterior predictive under Jeffreys' prior on
+  /// sigma). Below nu = 3 it is infinite; the factor stops at 3.
   double covariance_variance() const;
   int degrees_of_freedom() const { return dof_; }
   double floor() const { return floor_; }
@@ -95,8 +95,8 @@ class PixelNoise {
 ///     corner covariance of a tag follows from its four lines; sigma is the
 ///     noise of one edge point, in px.
 ///   Independent: every corner coordinate independent with variance sigma^2.
-///     Simpler, but on rendered images its pose covariance is 2-3x too large
-///     (NEES about 1.3 instead of 3, test_vision).
+///     Simpler, but on rendered images its translation covariance is about 2x
+///     too large (NEES t 1.6 instead of 3; R 3.0, test_vision).
 enum class CornerNoiseModel { EdgeFit, Independent };
 
 struct PatternPoseOptions {
