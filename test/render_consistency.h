@@ -24,6 +24,7 @@ struct Consistency {
 };
 
 struct Pipeline {
+  CameraModel camera = simulated_camera();  // 640 x 480, f = 600 px
   bool rectify = true;
   CornerNoiseModel corner_noise = CornerNoiseModel::EdgeFit;
   ViewpointOptions views;
@@ -33,7 +34,7 @@ struct Pipeline {
 /// Renders `frames` random views of the target's face (after 20 that warm the
 /// pooled pixel noise), detects, and accumulates the NEES of each pose.
 inline Consistency consistency(const Target& target, int frames, std::uint64_t seed, const Pipeline& pipeline = {}) {
-  const CameraModel camera = simulated_camera();
+  const CameraModel& camera = pipeline.camera;
   const PatternRenderer renderer(target, camera, pipeline.render);
   const ImageRectifier rectifier(camera);
   TargetDetectorOptions options;

@@ -73,7 +73,6 @@ TagDetector::TagDetector(const TagDetectorOptions& options) : options_(options),
   impl_->family = make_family(options.family);
   impl_->detector = apriltag_detector_create();
   apriltag_detector_add_family_bits(impl_->detector, impl_->family.get(), std::max(0, options.max_hamming));
-  impl_->detector->quad_decimate = static_cast<float>(options.quad_decimate);
   impl_->detector->quad_sigma = static_cast<float>(options.quad_sigma);
   impl_->detector->nthreads = std::max(1, options.threads);
   impl_->detector->refine_edges = options.refine_edges;
@@ -90,6 +89,8 @@ std::vector<TagCorners> TagDetector::detect(const cv::Mat& gray) const {
   }
   cv::Mat contiguous = gray.isContinuous() ? gray : gray.clone();
   image_u8_t image{contiguous.cols, contiguous.rows, static_cast<int32_t>(contiguous.step), contiguous.data};
+  impl_->detector->quad_decimate = static_cast<float>(
+      options_.quad_decimate > 0.0 ? options_.quad_decimate : std::max(1, contiguous.cols / 640));
   zarray_t* found = apriltag_detector_detect(impl_->detector, &image);
   std::vector<TagCorners> tags;
   for (int i = 0; i < zarray_size(found); ++i) {

@@ -13,7 +13,12 @@ namespace handeye {
 
 struct TagDetectorOptions {
   std::string family = "tag36h11";
-  double quad_decimate = 1.0;  // > 1 is faster but finds small tags less well
+  /// The quad search runs on the image shrunk by this factor (the edges are then
+  /// refined on the full image, refine_edges). > 1 is faster but finds small tags
+  /// less well. 0: by the image, width / 640 rounded down (at least 1), so the search
+  /// sees about VGA: 1 at 640 x 480, 2 at 1280 x 720 (12 ms instead of 32 ms for
+  /// the 2 x 2 board, BENCHMARKS.md; the covariance stays honest, test_vision).
+  double quad_decimate = 0.0;
   double quad_sigma = 0.0;     // Gaussian blur before the quad search, px
   int threads = 2;
   bool refine_edges = true;    // fit the edges on the full-resolution image
