@@ -209,14 +209,25 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
 
   // Manual sampling: once the robot stands still (at most ~2 s away), one sample
   // may be taken; the same pose a second time is refused as a near duplicate.
+  // A call that fails in transport while polling is retried, counted and printed:
+  // a clean-clone run saw one (ArUco variant, 2026-11-23; no exception in the node,
+  // the next call succeeded; not reproduced in 3 reruns).
   TakeSample take;
+  int transport_failures = 0;
+  ASSERT_TRUE(ros::service::waitForService(kNs + "take_sample", ros::Duration(20.0)));
   ASSERT_TRUE(test::wait_for(
       [&] {
-        test::call(kNs + "take_sample", take);  // refused while moving or before fresh data
+        take = TakeSample();
+        if (!ros::service::call(kNs + "take_sample", take)) {  // refused while moving or before fresh data
+          ++transport_failures;
+          return false;
+        }
         return take.response.success || take.response.message.find("too close") != std::string::npos;
       },
       30.0))
-      << take.response.message;
+      << take.response.message << " (" << transport_failures << " call(s) failed in transport)";
+  if (transport_failures > 0) std::printf("take_sample: %d call(s) failed in transport and were retried\n", transport_failures);
+  EXPECT_LE(transport_failures, 2);
   TakeSample again_same_pose;
   ASSERT_TRUE(test::call(kNs + "take_sample", again_same_pose));
   EXPECT_FALSE(again_same_pose.response.success);
