@@ -52,15 +52,19 @@ inline Vector6d pose_perturbation(const Eigen::Isometry3d& perturbed, const Eige
 inline std::pair<double, double> nees_band_under_estimated_sigma(const std::vector<int>& dof, int dim, double coverage) {
   Rng rng(20261123);
   std::chi_squared_distribution<double> error(dim);
-  std::vector<std::chi_squared_distribution<double>> pooled;
-  for (const int nu : dof) pooled.emplace_back(std::max(nu, 1));
+  struct Session {
+    std::chi_squared_distribution<double> pooled;  // RSS / sigma^2, chi2(nu)
+    double scale;  // covariance_variance / sigma^2 = pooled x scale: nu / (nu - 2) / nu, capped as production
+  };
+  std::vector<Session> sessions;
+  for (const int dof_k : dof) {
+    const double nu = std::max(dof_k, 1), capped = std::max(nu, 3.0);  // as PixelNoise::covariance_variance
+    sessions.push_back({std::chi_squared_distribution<double>(nu), capped / (capped - 2.0) / nu});
+  }
   std::vector<double> means(200000);
   for (double& mean : means) {
     mean = 0.0;
-    for (std::size_t k = 0; k < dof.size(); ++k) {
-      const double nu = std::max(dof[k], 1), capped = std::max(nu, 3.0);  // as PixelNoise::covariance_variance
-      mean += error(rng) / (pooled[k](rng) / nu * capped / (capped - 2.0)) / static_cast<double>(dof.size());
-    }
+    for (Session& s : sessions) mean += error(rng) / (s.pooled(rng) * s.scale) / static_cast<double>(sessions.size());
   }
   std::sort(means.begin(), means.end());
   const auto quantile = [&](double p) { return means[static_cast<std::size_t>(p * (means.size() - 1))]; };

@@ -31,6 +31,16 @@ fs::path fresh_dir(const std::string& name) {
 
 void write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
 
+/// X from the samples as `handeye images` solves them: the session class, its
+/// settings from the samples, nothing written.
+Calibration calibrate_in_a_session(const SampleSet& set, const std::string& name) {
+  SessionSettings settings = session_settings(set);
+  settings.session_file.clear();
+  CalibrationSession session(settings);
+  session.replace(set.samples, name);
+  return session.calibrate(session.snapshot());
+}
+
 std::string error_of(const std::function<void()>& f) {
   try {
     f();
@@ -197,11 +207,7 @@ TEST(ImageFolder, RenderedSessionsOfEveryTargetKindCalibrate) {
       used += r.used;
       if (!r.used) ADD_FAILURE() << name << " " << r.image << ": " << r.why;
     }
-    SessionSettings settings = session_settings(found.samples);
-    settings.session_file.clear();
-    CalibrationSession session(settings);
-    session.replace(found.samples.samples, name);
-    const Calibration c = session.calibrate(session.snapshot());
+    const Calibration c = calibrate_in_a_session(found.samples, name);
     // The pattern frame the images show is the target's, T_face_pattern away from the simulated one.
     const Vector6d e = test::pose_perturbation(c.T_parent_camera, truth.X);
     const Vector6d sigma = c.pose_covariance.diagonal().cwiseSqrt();
@@ -261,11 +267,7 @@ TEST(ImageFolder, RenderedSessionsOfEveryKindGiveAnHonestCovarianceOfX) {
         sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(pose->covariance)};
         set.samples.push_back(sample);
       }
-      SessionSettings settings = session_settings(set);
-      settings.session_file.clear();
-      CalibrationSession session(settings);
-      session.replace(set.samples, name);
-      const Calibration c = session.calibrate(session.snapshot());
+      const Calibration c = calibrate_in_a_session(set, name);
       const Vector6d e = test::pose_perturbation(c.T_parent_camera, truth.X);
       nees += e.dot(c.pose_covariance.ldlt().solve(e)) / kSessions;
     }

@@ -218,10 +218,11 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ASSERT_TRUE(test::wait_for(
       [&] {
         take = TakeSample();
-        if (!ros::service::call(kNs + "take_sample", take)) {  // refused while moving or before fresh data
+        if (!ros::service::call(kNs + "take_sample", take)) {
           ++transport_failures;
           return false;
         }
+        // Refused while moving or before fresh data; then taken, or refused as too close.
         return take.response.success || take.response.message.find("too close") != std::string::npos;
       },
       30.0))
