@@ -84,6 +84,13 @@ void linearize(const Term& t, const Frame& f, Linear& out, bool with_robot = tru
   out.D.noalias() = chain.lazyProduct(t.dV_dE);
 }
 
+/// Whether a step (X then Y, each translation then rotation) is large enough to
+/// move the robot's share of S_i: more than 0.01 rad or 1 cm on either pose.
+bool moves_weights(const Vector12d& step) {
+  return std::max(step.segment<3>(3).norm(), step.segment<3>(9).norm()) > 1e-2 ||
+         std::max(step.segment<3>(0).norm(), step.segment<3>(6).norm()) > 1e-2;
+}
+
 Isometry3d apply(const Isometry3d& T, const Vector6d& d) {
   return se3::make_pose(so3::exp(d.tail<3>()) * T.linear(), T.translation() + d.head<3>());
 }
@@ -96,7 +103,10 @@ struct NoiseModel {
 
   Matrix6d covariance(const Term& t, const Matrix6d& D) const {
     Matrix6d S = camera_scale * t.camera + camera;
-    if (robot_free_or_given) S.noalias() += D.lazyProduct(t.robot + robot).lazyProduct(D.transpose());
+    if (robot_free_or_given) {
+      const Matrix6d D_robot = D * (t.robot + robot);  // evaluated once: a nested lazy product recomputes it per entry
+      S.noalias() += D_robot * D.transpose();
+    }
     return S;
   }
 };
@@ -108,10 +118,19 @@ double huber_rho(double d, double k_scaled) {
   return k_scaled <= 0.0 || d <= k_scaled ? 0.5 * d * d : k_scaled * d - 0.5 * k_scaled * k_scaled;
 }
 
+/// One sample's linearisation as a solve keeps it: the residual, its Jacobian
+/// whitened by the sample's S = L L^T (Jw = L^-1 J: what the information, the
+/// leverages and the sandwich use), and D.
+struct Linearized {
+  Vector6d e;
+  Matrix6x12 Jw;
+  Matrix6d D = Matrix6d::Zero();
+};
+
 /// The state of a solve at (X, Y): every sample's linearisation and weight.
 struct Solution {
   Isometry3d X, Y;
-  std::vector<Linear> lin;
+  std::vector<Linearized> lin;
   std::vector<Matrix6d> L_inverse;  // each sample's residual covariance S = L L^T: L^-1 whitens
   /// S_i^-1 = L^-T L^-1.
   Matrix6d weight_matrix(std::size_t i) const { return L_inverse[i].transpose().lazyProduct(L_inverse[i]); }
@@ -140,27 +159,36 @@ class JointProblem {
     const std::size_t n = terms_.size();
     s.lin.resize(n), s.L_inverse.resize(n), s.weight.assign(n, 1.0);
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
+    Linear l;
     for (std::size_t i = 0; i < n; ++i) {
-      linearize(terms_[i], f, s.lin[i], model.robot_free_or_given);
+      linearize(terms_[i], f, l, model.robot_free_or_given);
       if (reuse) {
         s.L_inverse[i] = reuse->L_inverse[i];
-      } else if (!inverse_cholesky(model.covariance(terms_[i], s.lin[i].D), s.L_inverse[i])) {
+      } else if (!inverse_cholesky(model.covariance(terms_[i], l.D), s.L_inverse[i])) {
         throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
                            "samples[" + std::to_string(i) + "]",
                            "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
                            "noise block to estimate it");
       }
-      // Whitened: r = L^-1 e, Jw = L^-1 J.
-      const Vector6d r = s.L_inverse[i] * s.lin[i].e;
-      const Matrix6x12 Jw = s.L_inverse[i].lazyProduct(s.lin[i].J);
+      // Whitened: r = L^-1 e, Jw = L^-1 J; the information's X-X, X-Y and Y-Y blocks
+      // only (the Y-X block is the X-Y block's transpose, filled after the loop).
+      Linearized& out = s.lin[i];
+      out.e = l.e, out.D = l.D;
+      out.Jw.noalias() = s.L_inverse[i].lazyProduct(l.J);
+      const Vector6d r = s.L_inverse[i] * l.e;
+      const Matrix6x12& Jw = out.Jw;
       const double d2 = r.squaredNorm();
       const double w = huber_weight(std::sqrt(d2), k_scaled);
+      const Matrix6x12 wJw = w * Jw;
       s.weight[i] = w;
-      s.information.noalias() += w * Jw.transpose().lazyProduct(Jw);
-      s.gradient.noalias() += w * Jw.transpose() * r;
+      s.information.topLeftCorner<6, 6>().noalias() += wJw.leftCols<6>().transpose().lazyProduct(Jw.leftCols<6>());
+      s.information.topRightCorner<6, 6>().noalias() += wJw.leftCols<6>().transpose().lazyProduct(Jw.rightCols<6>());
+      s.information.bottomRightCorner<6, 6>().noalias() += wJw.rightCols<6>().transpose().lazyProduct(Jw.rightCols<6>());
+      s.gradient.noalias() += wJw.transpose() * r;
       s.cost += huber_rho(std::sqrt(d2), k_scaled);
       s.chi2 += d2;
     }
+    s.information.bottomLeftCorner<6, 6>() = s.information.topRightCorner<6, 6>().transpose();
   }
 
   /// The robust cost at (X, Y) with the covariances of `at` held fixed.
@@ -191,7 +219,7 @@ class JointProblem {
       const double length = step.dot(s.information * step);
       if (!std::isfinite(length)) break;  // a singular information: reported by the caller
       if (length < o_.step_tolerance) {
-        // Below 1e-4 sigma: take it; the current linearisation is as good to first order.
+        // Below 0.01 sigma: take it; the current linearisation is as good to first order.
         s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
         s.diagnostics.stop_reason = StopReason::StepBelowTolerance;
         break;
@@ -199,9 +227,12 @@ class JointProblem {
       bool moved = false;
       for (int halving = 0; halving < 30 && !moved; ++halving, step *= 0.5) {
         trial.X = apply(s.X, step.head<6>()), trial.Y = apply(s.Y, step.tail<6>());
-        // The weights follow the estimate through its first step (the start may be
-        // far); after that they are kept, and the steps compare one cost function.
-        linearize_all(model, k_scaled, trial, iteration == 1 ? nullptr : &s);
+        // The weights follow the estimate through a first step that turns X or Y by
+        // more than 0.01 rad or moves them by more than 1 cm (the start may be far;
+        // the robot's term in S_i turns with them, by under 1% within those); after
+        // that they are kept, and the steps compare one cost function.
+        const bool weights_follow = iteration == 1 && model.robot_free_or_given && moves_weights(step);
+        linearize_all(model, k_scaled, trial, weights_follow ? nullptr : &s);
         moved = trial.cost <= s.cost * (1.0 + 1e-12) || cost_at(trial.X, trial.Y, s, k_scaled) <= s.cost * (1.0 + 1e-12);
       }
       if (!moved) {
@@ -372,9 +403,14 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Term& t = problem.terms()[i];
-    const Linear& l = s.lin[i];
+    const Linearized& l = s.lin[i];
     data.fixed[i] = fixed_model.covariance(t, l.D);
-    data.scatter[i] = l.e * l.e.transpose() + l.J.lazyProduct(covariance).lazyProduct(l.J.transpose());
+    // J Sigma J^T = L (Jw Sigma Jw^T) L^T, with L = (L^-1)^-1 (lower triangular).
+    const Matrix6d L = s.L_inverse[i].triangularView<Eigen::Lower>().solve(Matrix6d::Identity());
+    const Matrix6x12 Jw_covariance = l.Jw.lazyProduct(covariance);
+    const Matrix6d whitened = Jw_covariance.lazyProduct(l.Jw.transpose());
+    const Matrix6d L_whitened = L.lazyProduct(whitened);
+    data.scatter[i] = l.e * l.e.transpose() + L_whitened.lazyProduct(L.transpose());
     data.factors[i].resize(6, column);
     for (std::size_t k = 0; k < free.size(); ++k) {
       if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], t, l.D);
@@ -386,7 +422,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
 /// The starting values of the free components from the residual scatter.
 Eigen::VectorXd initial_components(const std::vector<Free>& free, const Solution& s, const NoiseModel& model, int dof) {
   Matrix6d scatter = Matrix6d::Zero();
-  for (const Linear& l : s.lin) scatter.noalias() += l.e * l.e.transpose();
+  for (const Linearized& l : s.lin) scatter.noalias() += l.e * l.e.transpose();
   scatter /= std::max(dof, 1);
   const double t_var = scatter.diagonal().head<3>().mean(), r_var = scatter.diagonal().tail<3>().mean();
   Eigen::VectorXd theta(free.size());
@@ -430,67 +466,97 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   for (std::size_t a = 0; a < K; ++a) {
     for (std::size_t b = 0; b < K; ++b) C(a, b) = fit.covariance(active[a], active[b]);
   }
-  std::vector<Matrix12d> K_sum(K, Matrix12d::Zero());
-  Matrix12d M = Matrix12d::Zero();
-  std::vector<Matrix6x12> V(K), W(K);
-  for (std::size_t i = 0; i < problem.size(); ++i) {
-    const Matrix6d A = s.weight_matrix(i);
-    const Matrix6x12 AJ = A.lazyProduct(s.lin[i].J);
-    for (std::size_t a = 0; a < K; ++a) {
-      const Free& c = free[active[a]];
-      if (rank_of(c.kind) > 0) {
-        const ComponentFactors F = factor(c, problem.terms()[i], s.lin[i].D);
-        V[a] = F.lazyProduct(F.transpose().lazyProduct(AJ));  // G_k A J
-      } else {  // G = e_a e_b^T + e_b e_a^T (or e_a e_a^T): two rows of A J
-        V[a].setZero();
-        V[a].row(c.a) = AJ.row(c.b);
-        V[a].row(c.b) = AJ.row(c.a);
-      }
-      W[a] = A.lazyProduct(V[a]);  // A G_k A J
-      K_sum[a].noalias() += s.weight[i] * AJ.transpose().lazyProduct(V[a]);
-    }
-    for (std::size_t a = 0; a < K; ++a) {
-      Matrix6x12 mixed = Matrix6x12::Zero();
-      for (std::size_t b = 0; b < K; ++b) mixed += C(a, b) * V[b];
-      M.noalias() += 2.0 * s.weight[i] * mixed.transpose().lazyProduct(W[a]);
+  // Per sample, with B = A J: K_k += w B^T G_k B, and M += 2 w B^T Q B with
+  // Q = sum_k H_k A G_k, H_k = sum_l C_kl G_l (the two orders of the sum in M
+  // differ by a transpose: M is symmetrised after the loop). An entry's G_k
+  // (e_a e_b^T + e_b e_a^T, or e_a e_a^T) touches two rows or columns only.
+  const auto is_entry = [&](std::size_t a) { return rank_of(free[active[a]].kind) == 0; };
+  std::vector<Matrix6d> H_entries(K, Matrix6d::Zero());  // the entries' share of H_k: the same for every sample
+  for (std::size_t a = 0; a < K; ++a) {
+    for (std::size_t b = 0; b < K; ++b) {
+      if (!is_entry(b)) continue;
+      const Free& c = free[active[b]];
+      H_entries[a](c.a, c.b) += C(a, b);
+      if (c.a != c.b) H_entries[a](c.b, c.a) += C(a, b);
     }
   }
+  std::vector<Matrix12d> K_sum(K, Matrix12d::Zero());
+  Matrix12d M = Matrix12d::Zero();
+  std::vector<Matrix6d> G(K);  // the factors' G_k = F F^T of this sample
+  for (std::size_t i = 0; i < problem.size(); ++i) {
+    const double w = s.weight[i];
+    const Matrix6d A = s.weight_matrix(i);
+    const Matrix6x12 B = s.L_inverse[i].transpose().lazyProduct(s.lin[i].Jw);  // A J = L^-T (L^-1 J)
+    for (std::size_t a = 0; a < K; ++a) {
+      const Free& c = free[active[a]];
+      if (is_entry(a)) {
+        const Eigen::Matrix<double, 12, 12> outer = B.row(c.a).transpose() * B.row(c.b);
+        K_sum[a].noalias() += c.a == c.b ? (w * outer).eval() : (w * (outer + outer.transpose())).eval();
+      } else {
+        const ComponentFactors F = factor(c, problem.terms()[i], s.lin[i].D);
+        G[a].noalias() = F * F.transpose();
+        const Eigen::Matrix<double, Eigen::Dynamic, 12, 0, 12, 12> FtB = F.transpose().lazyProduct(B);
+        K_sum[a].noalias() += w * FtB.transpose().lazyProduct(FtB);
+      }
+    }
+    Matrix6d Q = Matrix6d::Zero();
+    for (std::size_t a = 0; a < K; ++a) {
+      Matrix6d H = H_entries[a];
+      for (std::size_t b = 0; b < K; ++b) {
+        if (!is_entry(b)) H.noalias() += C(a, b) * G[b];
+      }
+      const Free& c = free[active[a]];
+      if (is_entry(a)) {  // H A G: column b gets H A(:, a), column a gets H A(:, b)
+        Q.col(c.b).noalias() += H * A.col(c.a);
+        if (c.a != c.b) Q.col(c.a).noalias() += H * A.col(c.b);
+      } else {
+        const Matrix6d AG = A.lazyProduct(G[a]);
+        Q.noalias() += H.lazyProduct(AG);
+      }
+    }
+    const Matrix6x12 QB = Q.lazyProduct(B);
+    M.noalias() += (2.0 * w) * B.transpose().lazyProduct(QB);
+  }
   M = 0.5 * (M + M.transpose());
-  std::vector<Matrix6d> dSx(K);
-  for (std::size_t a = 0; a < K; ++a) dSx[a] = (covariance * K_sum[a] * covariance).topLeftCorner<6, 6>();
+  // spread = sum_kl C_kl tr(P_k P_l), P_k = Sx^-1 dSx_k; mixed = sum_k K_k Sigma (sum_l C_kl K_l).
+  std::vector<Matrix6d> P(K);
+  for (std::size_t a = 0; a < K; ++a) {
+    const Eigen::Matrix<double, 6, 12> top = covariance.topRows<6>().lazyProduct(K_sum[a]);
+    const Matrix6d dSx = top.lazyProduct(covariance.leftCols<6>());
+    P[a].noalias() = Sx_inverse.lazyProduct(dSx);
+  }
   Matrix12d mixed = Matrix12d::Zero();
   double spread = 0.0;
   for (std::size_t a = 0; a < K; ++a) {
+    Matrix12d weighted = Matrix12d::Zero();
     for (std::size_t b = 0; b < K; ++b) {
-      spread += C(a, b) * (Sx_inverse * dSx[a] * Sx_inverse * dSx[b]).trace();
-      mixed.noalias() += C(a, b) * K_sum[a] * covariance * K_sum[b];
+      spread += C(a, b) * P[a].cwiseProduct(P[b].transpose()).sum();
+      weighted.noalias() += C(a, b) * K_sum[b];
     }
+    const Matrix12d covariance_weighted = covariance.lazyProduct(weighted);
+    mixed.noalias() += K_sum[a].lazyProduct(covariance_weighted);
   }
-  const Matrix12d bias = covariance * mixed * covariance - 0.5 * covariance * M * covariance;
+  const Matrix12d inner = mixed - 0.5 * M;
+  const Matrix12d inner_covariance = inner.lazyProduct(covariance);
+  const Matrix12d bias = covariance.lazyProduct(inner_covariance);
   const double q = std::clamp((spread - (Sx_inverse * bias.topLeftCorner<6, 6>()).trace()) / 6.0, 0.0, 0.5);
   return 1.0 / (1.0 - q);
 }
 
-/// Sample i whitened by its S_i = L L^T: r = L^-1 e_i, Jw = L^-1 J_i.
-struct Whitened {
-  Vector6d r;
-  Matrix6x12 Jw;
-};
-Whitened whitened(const Solution& s, std::size_t i) {
-  return {s.L_inverse[i] * s.lin[i].e, s.L_inverse[i].lazyProduct(s.lin[i].J)};
-}
+/// Sample i's residual whitened by its S_i = L L^T: r = L^-1 e_i.
+Vector6d whitened_residual(const Solution& s, std::size_t i) { return s.L_inverse[i] * s.lin[i].e; }
 
-/// Leverage-corrected squared Mahalanobis distances, each about chi2(6) under the
+/// Leverage-corrected squared Mahalanobis distances (covariance: s.information^-1), each about chi2(6) under the
 /// model: d_i^2 = |L^-1 e_i|^2 shrinks by the share of the sample's residual the
 /// fit absorbed, E d_i^2 = 6 - tr H_ii (H_ii = Jw Sigma Jw^T, its leverage; the
 /// traces add up to the 12 parameters), so d~_i^2 = 6 d_i^2 / (6 - tr H_ii).
-std::vector<double> corrected_distances(const Solution& s) {
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+std::vector<double> corrected_distances(const Solution& s, const Matrix12d& covariance) {
   std::vector<double> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto [r, Jw] = whitened(s, i);
-    const double leverage = s.weight[i] * covariance.cwiseProduct(Jw.transpose().lazyProduct(Jw)).sum();
-    out[i] = r.squaredNorm() * 6.0 / std::max(6.0 - leverage, 0.5);
+    const Matrix6x12& Jw = s.lin[i].Jw;
+    const Matrix6x12 Jw_covariance = Jw.lazyProduct(covariance);
+    const double leverage = s.weight[i] * Jw_covariance.cwiseProduct(Jw).sum();
+    out[i] = whitened_residual(s, i).squaredNorm() * 6.0 / std::max(6.0 - leverage, 0.5);
   }
   return out;
 }
@@ -501,7 +567,8 @@ std::vector<Vector6d> corrected_residuals(const Solution& s) {
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
   std::vector<Vector6d> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto [r, Jw] = whitened(s, i);
+    const Matrix6x12& Jw = s.lin[i].Jw;
+    const Vector6d r = whitened_residual(s, i);
     const Matrix6d H = s.weight[i] * Jw.lazyProduct(covariance).lazyProduct(Jw.transpose());
     const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(Matrix6d::Identity() - 0.5 * (H + H.transpose()));
     const Vector6d scale = eig.eigenvalues().cwiseMax(1e-6).cwiseSqrt().cwiseInverse();
@@ -533,7 +600,8 @@ Matrix12d sandwich(const Solution& s, double k_scaled) {
   Matrix12d A = Matrix12d::Zero(), B = Matrix12d::Zero();
   const std::vector<Vector6d> corrected = corrected_residuals(s);
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
-    const auto [r, Jw] = whitened(s, i);
+    const Matrix6x12& Jw = s.lin[i].Jw;
+    const Vector6d r = whitened_residual(s, i);
     const double d = r.norm(), w = s.weight[i];
     A.noalias() += w * Jw.transpose() * Jw;
     if (w < 1.0) {  // d/dx of (k/d) Jw^T r: the weight's own change
@@ -753,13 +821,14 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
 
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
-  Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity()) * inflation;
+  const Matrix12d information_inverse = s.information.ldlt().solve(Matrix12d::Identity());
+  Matrix12d covariance = information_inverse * inflation;
   bool robust = options.robust == JointOptions::Robust::On;
   // Residuals at round-off (noise-free input) have no tails to judge.
   double largest_residual = 0.0;
-  for (const Linear& l : s.lin) largest_residual = std::max(largest_residual, l.e.cwiseAbs().maxCoeff());
+  for (const Linearized& l : s.lin) largest_residual = std::max(largest_residual, l.e.cwiseAbs().maxCoeff());
   if (n >= 8 && options.robust != JointOptions::Robust::Off && largest_residual > 1e-10) {
-    const std::vector<double> d2 = corrected_distances(s);  // leverage-corrected squared Mahalanobis residuals
+    const std::vector<double> d2 = corrected_distances(s, information_inverse);  // leverage-corrected squared Mahalanobis residuals
     const double z = kurtosis_z(d2);
     const bool passed = z <= options.kurtosis_test_z;
     result.residual_checks.push_back({"kurtosis z of the Mahalanobis residuals", z, options.kurtosis_test_z, passed});
