@@ -40,6 +40,17 @@ std::pair<Matrix6d, Matrix6d> Rig::robot_motion_jacobians(const Isometry3d& E_i,
   return {compose_jacobian_right(E_j) * inverse_jacobian(E_i), compose_jacobian_left(E_j, E_i.inverse())};
 }
 
+Eigen::Matrix3d Rig::robot_motion_rotation_covariance(const Isometry3d& E_i, const Isometry3d& E_j,
+                                                      const Eigen::Matrix3d& rotation_covariance_i,
+                                                      const Eigen::Matrix3d& rotation_covariance_j) const {
+  if (eye_in_hand()) {
+    const Eigen::Matrix3d& R_j = E_j.linear();
+    return R_j.transpose() * (rotation_covariance_i + rotation_covariance_j) * R_j;
+  }
+  const Eigen::Matrix3d R_A = E_j.linear() * E_i.linear().transpose();
+  return rotation_covariance_j + R_A * rotation_covariance_i * R_A.transpose();
+}
+
 Isometry3d Rig::pattern_pose(const Isometry3d& E, const Isometry3d& X, const Isometry3d& P) const {
   return (eye_in_hand() ? E : E.inverse()) * X * P;  // V^-1 X P
 }

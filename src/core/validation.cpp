@@ -5,15 +5,24 @@
 
 namespace handeye {
 
+namespace {
+double orthonormality_error(const Eigen::Matrix3d& R) { return (R.transpose() * R - Eigen::Matrix3d::Identity()).norm(); }
+bool is_proper_rotation(double orthonormality, double det) { return orthonormality <= 1e-6 && std::abs(det - 1.0) <= 1e-6; }
+}  // namespace
+
+bool is_proper_pose(const Eigen::Isometry3d& pose) {
+  return pose.matrix().allFinite() && is_proper_rotation(orthonormality_error(pose.linear()), pose.linear().determinant());
+}
+
 void check_pose(const Eigen::Isometry3d& pose, const std::string& where) {
   if (!pose.matrix().allFinite()) {
     throw HandEyeError(ErrorCode::NonFinite, "pose contains NaN or Inf", where,
                        "drop this sample or fix the source that produced it");
   }
   const Eigen::Matrix3d& R = pose.linear();
-  const double orthonormality = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
+  const double orthonormality = orthonormality_error(R);
   const double det = R.determinant();
-  if (orthonormality > 1e-6 || std::abs(det - 1.0) > 1e-6) {
+  if (!is_proper_rotation(orthonormality, det)) {
     throw HandEyeError(ErrorCode::RotationNotOrthonormal,
                        "rotation is not orthonormal (|R^T R - I| = " + number_text(orthonormality, 6) +
                            ", det = " + number_text(det, 6) + ")",

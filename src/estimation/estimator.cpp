@@ -932,9 +932,8 @@ Eigen::Isometry3d checked_initial_guess(const SampleSet& samples, const SolverOp
     m.alpha[i] = so3::log(A[i].linear());
     m.beta[i] = so3::log(B[i].linear());
     if (!m.noise_given) continue;
-    const auto [J_from, J_to] = rig.robot_motion_jacobians(from.T_base_effector, to.T_base_effector);
-    const Matrix3d sigma_A = J_from.bottomRows<3>() * noise_of(i).robot.as_pose_covariance() * J_from.bottomRows<3>().transpose() +
-                             J_to.bottomRows<3>() * noise_of(i + 1).robot.as_pose_covariance() * J_to.bottomRows<3>().transpose();
+    const Matrix3d sigma_A = rig.robot_motion_rotation_covariance(from.T_base_effector, to.T_base_effector,
+                                                                  noise_of(i).robot.rotation, noise_of(i + 1).robot.rotation);
     const Matrix3d& R_B = B[i].linear();
     const Matrix3d sigma_B = noise_of(i + 1).camera.rotation + R_B * noise_of(i).camera.rotation * R_B.transpose();
     m.sigma[i] = std::hypot(angle_sigma(m.alpha[i], sigma_A), angle_sigma(m.beta[i], sigma_B));

@@ -84,6 +84,23 @@ void linearize(const Term& t, const Frame& f, Linear& out, bool with_robot = tru
   out.D.noalias() = chain.lazyProduct(t.dV_dE);
 }
 
+/// Jw = L^-1 J by 3x3 blocks: L^-1 is lower triangular and J (linearize) is
+/// [[T1, T2, T3, 0], [0, R2, 0, R4]], so seven 3x3 products instead of a 6x6 by 6x12.
+void whiten(const Matrix6d& L_inverse, const Matrix6x12& J, Matrix6x12& Jw) {
+  const Matrix3d P = L_inverse.topLeftCorner<3, 3>(), Q = L_inverse.bottomLeftCorner<3, 3>(),
+                 R = L_inverse.bottomRightCorner<3, 3>();
+  const auto T = [&](int column) { return J.block<3, 3>(0, column); };
+  const auto B = [&](int column) { return J.block<3, 3>(3, column); };
+  Jw.block<3, 3>(0, 0).noalias() = P * T(0);
+  Jw.block<3, 3>(0, 3).noalias() = P * T(3);
+  Jw.block<3, 3>(0, 6).noalias() = P * T(6);
+  Jw.block<3, 3>(0, 9).setZero();
+  Jw.block<3, 3>(3, 0).noalias() = Q * T(0);
+  Jw.block<3, 3>(3, 3).noalias() = Q * T(3) + R * B(3);
+  Jw.block<3, 3>(3, 6).noalias() = Q * T(6);
+  Jw.block<3, 3>(3, 9).noalias() = R * B(9);
+}
+
 /// Whether a step (X then Y, each translation then rotation) is large enough to
 /// move the robot's share of S_i: more than 0.01 rad or 1 cm on either pose.
 bool moves_weights(const Vector12d& step) {
@@ -174,7 +191,7 @@ class JointProblem {
       // only (the Y-X block is the X-Y block's transpose, filled after the loop).
       Linearized& out = s.lin[i];
       out.e = l.e, out.D = l.D;
-      out.Jw.noalias() = s.L_inverse[i].lazyProduct(l.J);
+      whiten(s.L_inverse[i], l.J, out.Jw);
       const Vector6d r = s.L_inverse[i] * l.e;
       const Matrix6x12& Jw = out.Jw;
       const double d2 = r.squaredNorm();
@@ -261,6 +278,9 @@ std::vector<Term> make_terms(const SampleSet& set, bool& given) {
   given = set.noise.has_value();
   if (set.noise) check_covariance(set.noise->robot, "noise.effector"), check_covariance(set.noise->camera, "noise.pattern");
   std::vector<Term> terms(set.samples.size());
+  // The global noise as 6x6 once; a sample's own noise replaces it.
+  const MeasurementNoise global = set.noise ? *set.noise : MeasurementNoise{};
+  const Matrix6d global_camera = global.camera.as_pose_covariance(), global_robot = global.robot.as_pose_covariance();
   for (std::size_t i = 0; i < set.samples.size(); ++i) {
     const PoseSample& sample = set.samples[i];
     const std::optional<MeasurementNoise>& own = sample.noise;
@@ -279,9 +299,8 @@ std::vector<Term> make_terms(const SampleSet& set, bool& given) {
     t.V = set.rig.robot_link(sample.T_base_effector);
     t.dV_dE = set.rig.robot_link_jacobian(sample.T_base_effector);
     t.P = sample.T_camera_pattern;
-    const MeasurementNoise& noise = own ? *own : (set.noise ? *set.noise : MeasurementNoise{});
-    t.camera = noise.camera.as_pose_covariance();
-    t.robot = noise.robot.as_pose_covariance();
+    t.camera = own ? own->camera.as_pose_covariance() : global_camera;
+    t.robot = own ? own->robot.as_pose_covariance() : global_robot;
     t.has_robot = !t.robot.isZero(0.0);
   }
   return terms;
@@ -640,9 +659,9 @@ Calibration estimate(const SampleSet& samples, Method method, const JointOptions
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   const int n = static_cast<int>(samples.samples.size());
   for (int i = 0; i < n; ++i) {
-    const std::string where = "samples[" + std::to_string(i) + "]";
-    check_pose(samples.samples[i].T_base_effector, where + ".effector");
-    check_pose(samples.samples[i].T_camera_pattern, where + ".pattern");
+    const auto where = [i](const char* field) { return [i, field] { return "samples[" + std::to_string(i) + "]." + field; }; };
+    check_pose_at(samples.samples[i].T_base_effector, where("effector"));
+    check_pose_at(samples.samples[i].T_camera_pattern, where("pattern"));
   }
   bool given = false;
   std::vector<Term> terms = make_terms(samples, given);
@@ -660,7 +679,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   std::vector<Isometry3d> loops;
   loops.reserve(samples.samples.size());
   for (const PoseSample& s : samples.samples) loops.push_back(samples.rig.pattern_pose(s.T_base_effector, X0, s.T_camera_pattern));
-  const Isometry3d Y0 = mean_pose(loops, 3);  // a start: Gauss-Newton refines it
+  const Isometry3d Y0 = mean_pose(loops, 1);  // a start (one step of the mean: the loops agree to a degree): Gauss-Newton refines it
   JointProblem problem(std::move(terms), options);
 
   Calibration result;

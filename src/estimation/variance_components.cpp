@@ -113,25 +113,28 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
 }  // namespace
 
 bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse) {
+  // One division per column (its diagonal's reciprocal), the rest multiplications.
   Matrix6d L = Matrix6d::Zero();
+  double reciprocal[6];
   for (int j = 0; j < 6; ++j) {
     double diagonal = S(j, j);
     for (int k = 0; k < j; ++k) diagonal -= L(j, k) * L(j, k);
     if (!(diagonal > 0.0)) return false;
     L(j, j) = std::sqrt(diagonal);
+    reciprocal[j] = 1.0 / L(j, j);
     for (int i = j + 1; i < 6; ++i) {
       double v = S(i, j);
       for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
-      L(i, j) = v / L(j, j);
+      L(i, j) = v * reciprocal[j];
     }
   }
   L_inverse.setZero();
   for (int j = 0; j < 6; ++j) {
-    L_inverse(j, j) = 1.0 / L(j, j);
+    L_inverse(j, j) = reciprocal[j];
     for (int i = j + 1; i < 6; ++i) {
       double v = 0.0;
       for (int k = j; k < i; ++k) v += L(i, k) * L_inverse(k, j);
-      L_inverse(i, j) = -v / L(i, i);
+      L_inverse(i, j) = -v * reciprocal[i];
     }
   }
   return true;

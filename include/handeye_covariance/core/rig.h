@@ -63,6 +63,13 @@ struct Rig {
   /// to the perturbations of E_i and E_j.
   Eigen::Isometry3d robot_motion(const Eigen::Isometry3d& E_i, const Eigen::Isometry3d& E_j) const;
   std::pair<Matrix6d, Matrix6d> robot_motion_jacobians(const Eigen::Isometry3d& E_i, const Eigen::Isometry3d& E_j) const;
+  /// The rotation block of A's covariance from the robot poses' rotation covariances
+  /// (the rotation rows of robot_motion_jacobians, written out: a pose's translation
+  /// does not move A's rotation). eye_in_hand R_A = R_j^T R_i: R_j^T (S_i + S_j) R_j;
+  /// eye_to_hand R_A = R_j R_i^T: S_j + R_A S_i R_A^T.
+  Eigen::Matrix3d robot_motion_rotation_covariance(const Eigen::Isometry3d& E_i, const Eigen::Isometry3d& E_j,
+                                                   const Eigen::Matrix3d& rotation_covariance_i,
+                                                   const Eigen::Matrix3d& rotation_covariance_j) const;
 
   /// Y = V^-1 X P: the pattern's pose as one sample and X see it.
   Eigen::Isometry3d pattern_pose(const Eigen::Isometry3d& T_base_effector, const Eigen::Isometry3d& X,

@@ -11,6 +11,14 @@ namespace handeye {
 
 /// Finite, orthonormal rotation with det +1 (tolerance 1e-6), finite translation.
 void check_pose(const Eigen::Isometry3d& pose, const std::string& where);
+/// What check_pose accepts, without building an error.
+bool is_proper_pose(const Eigen::Isometry3d& pose);
+/// check_pose with the location made by `where()` only when the pose fails: for
+/// loops over many samples, where building every location costs more than the check.
+template <typename Where>
+void check_pose_at(const Eigen::Isometry3d& pose, Where&& where) {
+  if (!is_proper_pose(pose)) check_pose(pose, where());
+}
 
 /// Finite, symmetric and positive semi-definite.
 void check_covariance(const Eigen::Matrix3d& covariance, const std::string& where);
