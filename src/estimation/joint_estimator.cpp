@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
@@ -26,7 +27,6 @@ struct Term {
   Isometry3d V, P;
   Matrix6d dV_dE;
   Matrix6d camera = Matrix6d::Zero(), robot = Matrix6d::Zero();
-  Matrix6d camera_root = Matrix6d::Zero();  // camera = root root^T (the factor of its scale component)
   bool has_robot = false;
 };
 
@@ -137,20 +137,24 @@ double huber_rho(double d, double k_scaled) {
 
 /// One sample's linearisation as a solve keeps it: the residual, its Jacobian
 /// whitened by the sample's S = L L^T (Jw = L^-1 J: what the information, the
-/// leverages and the sandwich use), and D.
+/// leverages and the sandwich use).
 struct Linearized {
   Vector6d e;
   Matrix6x12 Jw;
-  Matrix6d D = Matrix6d::Zero();
 };
 
 /// The state of a solve at (X, Y): every sample's linearisation and weight.
 struct Solution {
   Isometry3d X, Y;
   std::vector<Linearized> lin;
-  std::vector<Matrix6d> L_inverse;  // each sample's residual covariance S = L L^T: L^-1 whitens
+  /// Each sample's L^-1 (its residual covariance S = L L^T), shared with the
+  /// solutions that keep the same weights rather than copied.
+  std::shared_ptr<const std::vector<Matrix6d>> whitening;
+  const Matrix6d& L_inverse(std::size_t i) const { return (*whitening)[i]; }
   /// S_i^-1 = L^-T L^-1.
-  Matrix6d weight_matrix(std::size_t i) const { return L_inverse[i].transpose().lazyProduct(L_inverse[i]); }
+  Matrix6d weight_matrix(std::size_t i) const { return L_inverse(i).transpose().lazyProduct(L_inverse(i)); }
+  /// d P_hat / d xi_E per sample, kept only while the noise is estimated (JointProblem::keep_robot_jacobians).
+  std::vector<Matrix6d> D;
   std::vector<double> weight;          // robust weights (1 for the squared loss)
   Matrix12d information = Matrix12d::Zero();  // sum w J^T S^-1 J
   Vector12d gradient = Vector12d::Zero();
@@ -167,6 +171,18 @@ class JointProblem {
   const std::vector<Term>& terms() const { return terms_; }
   std::vector<Term>& terms() { return terms_; }
 
+  /// From now on each linearisation keeps D (the noise fit's robot factors need it).
+  void keep_robot_jacobians() { keep_D_ = true; }
+  /// The stated camera noise's square roots, for the fit of its scale.
+  void set_camera_roots() {
+    camera_roots_.resize(terms_.size());
+    for (std::size_t i = 0; i < terms_.size(); ++i) {
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(terms_[i].camera);
+      camera_roots_[i] = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
+    }
+  }
+  const Matrix6d& camera_root(std::size_t i) const { return camera_roots_.at(i); }
+
   /// Linearises every sample at (X, Y) under `model`, with Huber weights at
   /// threshold k_scaled (0: squared loss). Throws InvalidNoise on a singular S_i.
   /// `weights` (S_i^-1 = L^-T L^-1) from `reuse` when given: the robot's term moves
@@ -174,14 +190,17 @@ class JointProblem {
   void linearize_all(const NoiseModel& model, double k_scaled, Solution& s, const Solution* reuse = nullptr) const {
     const Frame f(s.X, s.Y);
     const std::size_t n = terms_.size();
-    s.lin.resize(n), s.L_inverse.resize(n), s.weight.assign(n, 1.0);
+    s.lin.resize(n), s.weight.assign(n, 1.0);
+    if (keep_D_) s.D.resize(n);
+    else s.D.clear();
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
+    std::shared_ptr<std::vector<Matrix6d>> fresh;
+    if (!reuse) fresh = std::make_shared<std::vector<Matrix6d>>(n);
     Linear l;
     for (std::size_t i = 0; i < n; ++i) {
       linearize(terms_[i], f, l, model.robot_free_or_given);
-      if (reuse) {
-        s.L_inverse[i] = reuse->L_inverse[i];
-      } else if (!inverse_cholesky(model.covariance(terms_[i], l.D), s.L_inverse[i])) {
+      if (keep_D_) s.D[i] = l.D;
+      if (!reuse && !inverse_cholesky(model.covariance(terms_[i], l.D), (*fresh)[i])) {
         throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
                            "samples[" + std::to_string(i) + "]",
                            "give a non-zero rotation and translation noise for the pattern (or the robot), or omit the "
@@ -189,10 +208,11 @@ class JointProblem {
       }
       // Whitened: r = L^-1 e, Jw = L^-1 J; the information's X-X, X-Y and Y-Y blocks
       // only (the Y-X block is the X-Y block's transpose, filled after the loop).
+      const Matrix6d& L_inverse = reuse ? reuse->L_inverse(i) : (*fresh)[i];
       Linearized& out = s.lin[i];
-      out.e = l.e, out.D = l.D;
-      whiten(s.L_inverse[i], l.J, out.Jw);
-      const Vector6d r = s.L_inverse[i] * l.e;
+      out.e = l.e;
+      whiten(L_inverse, l.J, out.Jw);
+      const Vector6d r = L_inverse * l.e;
       const Matrix6x12& Jw = out.Jw;
       const double d2 = r.squaredNorm();
       const double w = huber_weight(std::sqrt(d2), k_scaled);
@@ -206,6 +226,8 @@ class JointProblem {
       s.chi2 += d2;
     }
     s.information.bottomLeftCorner<6, 6>() = s.information.topRightCorner<6, 6>().transpose();
+    if (reuse) s.whitening = reuse->whitening;
+    else s.whitening = std::move(fresh);
   }
 
   /// The robust cost at (X, Y) with the covariances of `at` held fixed.
@@ -213,7 +235,7 @@ class JointProblem {
     const Frame f(X, Y);
     double cost = 0.0;
     for (std::size_t i = 0; i < terms_.size(); ++i) {
-      const Vector6d r = at.L_inverse[i] * residual(terms_[i], f);
+      const Vector6d r = at.L_inverse(i) * residual(terms_[i], f);
       cost += huber_rho(r.norm(), k_scaled);
     }
     return cost;
@@ -272,6 +294,8 @@ class JointProblem {
  private:
   std::vector<Term> terms_;
   const JointOptions& o_;
+  bool keep_D_ = false;
+  std::vector<Matrix6d> camera_roots_;
 };
 
 std::vector<Term> make_terms(const SampleSet& set, bool& given) {
@@ -304,14 +328,6 @@ std::vector<Term> make_terms(const SampleSet& set, bool& given) {
     t.has_robot = !t.robot.isZero(0.0);
   }
   return terms;
-}
-
-/// The stated camera noise's square roots, for the fit of its scale.
-void set_camera_roots(std::vector<Term>& terms) {
-  for (Term& t : terms) {
-    const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(t.camera);
-    t.camera_root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
-  }
 }
 
 /// The free noise numbers and how each enters S_i (variance_components.h).
@@ -371,14 +387,15 @@ int rank_of(Kind kind) {
   }
 }
 
-/// The factor of component `c` for a sample (6 x rank).
-ComponentFactors factor(const Free& c, const Term& t, const Matrix6d& D) {
+/// The factor of component `c` for sample i (6 x rank).
+ComponentFactors factor(const Free& c, const JointProblem& problem, const Solution& s, std::size_t i) {
+  const auto D = [&]() -> const Matrix6d& { return s.D.at(i); };
   switch (c.kind) {
-    case Kind::CameraScale: return t.camera_root;
+    case Kind::CameraScale: return problem.camera_root(i);
     case Kind::CameraTranslation: return Matrix6d::Identity().leftCols<3>();
     case Kind::CameraRotation: return Matrix6d::Identity().rightCols<3>();
-    case Kind::RobotTranslation: return D.leftCols<3>();
-    case Kind::RobotRotation: return D.rightCols<3>();
+    case Kind::RobotTranslation: return D().leftCols<3>();
+    case Kind::RobotRotation: return D().rightCols<3>();
     default: return ComponentFactors(6, 0);
   }
 }
@@ -423,16 +440,16 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   for (std::size_t i = 0; i < n; ++i) {
     const Term& t = problem.terms()[i];
     const Linearized& l = s.lin[i];
-    data.fixed[i] = fixed_model.covariance(t, l.D);
+    data.fixed[i] = fixed_model.covariance(t, s.D.at(i));
     // J Sigma J^T = L (Jw Sigma Jw^T) L^T, with L = (L^-1)^-1 (lower triangular).
-    const Matrix6d L = s.L_inverse[i].triangularView<Eigen::Lower>().solve(Matrix6d::Identity());
+    const Matrix6d L = s.L_inverse(i).triangularView<Eigen::Lower>().solve(Matrix6d::Identity());
     const Matrix6x12 Jw_covariance = l.Jw.lazyProduct(covariance);
     const Matrix6d whitened = Jw_covariance.lazyProduct(l.Jw.transpose());
     const Matrix6d L_whitened = L.lazyProduct(whitened);
     data.scatter[i] = l.e * l.e.transpose() + L_whitened.lazyProduct(L.transpose());
     data.factors[i].resize(6, column);
     for (std::size_t k = 0; k < free.size(); ++k) {
-      if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], t, l.D);
+      if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], problem, s, i);
     }
   }
   return data;
@@ -505,14 +522,14 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
   for (std::size_t i = 0; i < problem.size(); ++i) {
     const double w = s.weight[i];
     const Matrix6d A = s.weight_matrix(i);
-    const Matrix6x12 B = s.L_inverse[i].transpose().lazyProduct(s.lin[i].Jw);  // A J = L^-T (L^-1 J)
+    const Matrix6x12 B = s.L_inverse(i).transpose().lazyProduct(s.lin[i].Jw);  // A J = L^-T (L^-1 J)
     for (std::size_t a = 0; a < K; ++a) {
       const Free& c = free[active[a]];
       if (is_entry(a)) {
         const Eigen::Matrix<double, 12, 12> outer = B.row(c.a).transpose() * B.row(c.b);
         K_sum[a].noalias() += c.a == c.b ? (w * outer).eval() : (w * (outer + outer.transpose())).eval();
       } else {
-        const ComponentFactors F = factor(c, problem.terms()[i], s.lin[i].D);
+        const ComponentFactors F = factor(c, problem, s, i);
         G[a].noalias() = F * F.transpose();
         const Eigen::Matrix<double, Eigen::Dynamic, 12, 0, 12, 12> FtB = F.transpose().lazyProduct(B);
         K_sum[a].noalias() += w * FtB.transpose().lazyProduct(FtB);
@@ -563,7 +580,7 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
 }
 
 /// Sample i's residual whitened by its S_i = L L^T: r = L^-1 e_i.
-Vector6d whitened_residual(const Solution& s, std::size_t i) { return s.L_inverse[i] * s.lin[i].e; }
+Vector6d whitened_residual(const Solution& s, std::size_t i) { return s.L_inverse(i) * s.lin[i].e; }
 
 /// Leverage-corrected squared Mahalanobis distances (covariance: s.information^-1), each about chi2(6) under the
 /// model: d_i^2 = |L^-1 e_i|^2 shrinks by the share of the sample's residual the
@@ -724,9 +741,10 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   std::vector<std::string> inseparable;  // robot components the camera's can mimic
   double inflation = 1.0;
   if (!free.empty()) {
+    problem.keep_robot_jacobians();
     std::vector<VarianceComponent> components;
     if (std::any_of(free.begin(), free.end(), [](const Free& c) { return c.kind == Kind::CameraScale; })) {
-      set_camera_roots(problem.terms());
+      problem.set_camera_roots();
     }
     for (const Free& c : free) {
       components.push_back(c.component);
