@@ -92,5 +92,30 @@ TEST(VarianceComponents, RecoverCameraAndRobotNoiseWithAnHonestCovariance) {
   }
 }
 
+// inverse_cholesky (written out by fixed-size blocks): L^-1 S L^-T = I with L^-1
+// lower triangular and a positive diagonal, over covariances whose scales differ by
+// 1e10 (mm^2 beside rad^2 of 0.01 deg); a matrix that is not positive definite is refused.
+TEST(VarianceComponents, InverseCholeskyWhitensAndRefusesIndefinite) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 200; ++trial) {
+    Matrix6d F;
+    for (int r = 0; r < 6; ++r) for (int c = 0; c < 6; ++c) F(r, c) = normal(rng);
+    Vector6d scale;
+    scale << 1e-3, 1e-3, 3e-3, 2e-4, 2e-4, 1e-4;
+    const Matrix6d S = scale.asDiagonal() * (F * F.transpose() + 0.1 * Matrix6d::Identity()) * scale.asDiagonal();
+    Matrix6d L_inverse;
+    ASSERT_TRUE(inverse_cholesky(S, L_inverse)) << "trial " << trial;
+    EXPECT_LE((L_inverse * S * L_inverse.transpose() - Matrix6d::Identity()).norm(), 1e-9) << "trial " << trial;
+    EXPECT_EQ(L_inverse.triangularView<Eigen::StrictlyUpper>().toDenseMatrix().norm(), 0.0);
+    EXPECT_GT(L_inverse.diagonal().minCoeff(), 0.0);
+  }
+  Matrix6d indefinite = Matrix6d::Identity();
+  indefinite(4, 4) = -1e-12;
+  Matrix6d L_inverse;
+  EXPECT_FALSE(inverse_cholesky(indefinite, L_inverse));
+  EXPECT_FALSE(inverse_cholesky(Matrix6d::Zero(), L_inverse));
+}
+
 }  // namespace
 }  // namespace handeye

@@ -120,7 +120,7 @@ struct NoiseModel {
 
   Matrix6d covariance(const Term& t, const Matrix6d& D) const {
     Matrix6d S = camera_scale * t.camera + camera;
-    if (robot_free_or_given) {
+    if (robot_free_or_given && (t.has_robot || !robot.isZero(0.0))) {  // a zero robot part adds nothing
       const Matrix6d D_robot = D * (t.robot + robot);  // evaluated once: a nested lazy product recomputes it per entry
       S.noalias() += D_robot * D.transpose();
     }
@@ -258,7 +258,7 @@ class JointProblem {
       const double length = step.dot(s.information * step);
       if (!std::isfinite(length)) break;  // a singular information: reported by the caller
       if (length < o_.step_tolerance) {
-        // Below 0.01 sigma: take it; the current linearisation is as good to first order.
+        // Below 0.1 sigma: take it; the current linearisation is as good to first order.
         s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
         s.diagnostics.stop_reason = StopReason::StepBelowTolerance;
         break;
@@ -442,7 +442,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
     const Linearized& l = s.lin[i];
     data.fixed[i] = fixed_model.covariance(t, s.D.at(i));
     // J Sigma J^T = L (Jw Sigma Jw^T) L^T, with L = (L^-1)^-1 (lower triangular).
-    const Matrix6d L = s.L_inverse(i).triangularView<Eigen::Lower>().solve(Matrix6d::Identity());
+    const Matrix6d L = lower_triangular_inverse(s.L_inverse(i));
     const Matrix6x12 Jw_covariance = l.Jw.lazyProduct(covariance);
     const Matrix6d whitened = Jw_covariance.lazyProduct(l.Jw.transpose());
     const Matrix6d L_whitened = L.lazyProduct(whitened);
@@ -526,8 +526,9 @@ double noise_inflation(const JointProblem& problem, const std::vector<Free>& fre
     for (std::size_t a = 0; a < K; ++a) {
       const Free& c = free[active[a]];
       if (is_entry(a)) {
-        const Eigen::Matrix<double, 12, 12> outer = B.row(c.a).transpose() * B.row(c.b);
-        K_sum[a].noalias() += c.a == c.b ? (w * outer).eval() : (w * (outer + outer.transpose())).eval();
+        const Eigen::Matrix<double, 1, 12> weighted_row = w * B.row(c.a);
+        K_sum[a].noalias() += weighted_row.transpose() * B.row(c.b);
+        if (c.a != c.b) K_sum[a].noalias() += B.row(c.b).transpose() * weighted_row;
       } else {
         const ComponentFactors F = factor(c, problem, s, i);
         G[a].noalias() = F * F.transpose();
@@ -755,10 +756,12 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     for (int round = 0; round < options.max_noise_rounds; ++round) {
       apply_components(free, theta, model);
       problem.gauss_newton(model, 0.0, s);
-      // A few AI-REML steps per round: the residuals move with the next solve
-      // anyway, and the rounds stop when the numbers no longer move.
+      // A few AI-REML steps per round, each round's stopping within 5% of the
+      // numbers' own sigma: the residuals move with the next solve anyway, and the
+      // rounds stop when the numbers no longer move.
       VarianceComponentOptions per_round;
       per_round.max_iterations = 3;
+      per_round.tolerance = 0.05;
       fit = fit_variance_components(components, component_data(problem, free, model, s), theta, per_round);
       // A robot component the camera's can mimic (its sigma inflated 10x by the
       // others) is not separable: held at 0, the camera's numbers take its share.

@@ -40,38 +40,65 @@ struct Evaluation {
   MatrixXd average_information;  // AI-REML: 1/2 tr(A G_k A G_l A M), for the steps (near Newton's)
 };
 
+/// One (entry k, entry l <= k) pair of the information's entry block, with its
+/// indices read once per evaluation rather than per sample.
+struct EntryPair {
+  int k, l, a, b, c, d;
+  double half;
+};
+
 Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bool derivatives) {
   const int K = static_cast<int>(data.columns.size());
   const VectorXd w = column_weights(data, theta);
   const Matrix6d shared = shared_entries(data, theta);
   std::vector<int> factor_components, entry_components;
   for (int k = 0; k < K; ++k) (data.ranks[k] > 0 ? factor_components : entry_components).push_back(k);
+  std::vector<EntryPair> pairs;
+  for (int k : entry_components) {
+    for (int l : entry_components) {
+      if (l > k) continue;
+      const auto [a, b] = data.entries[k];
+      const auto [c, d] = data.entries[l];
+      pairs.push_back({k, l, a, b, c, d, (a == b ? 0.5 : 1.0) * (c == d ? 0.5 : 1.0)});
+    }
+  }
+  std::vector<double> pair_information(pairs.size(), 0.0), pair_average(pairs.size(), 0.0);
   Evaluation ev;
   double log_likelihood = 0.0;
   if (derivatives) {
     ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
   }
+  // The factors are handled column by column (fixed 6-vectors), so that no
+  // product runs through Eigen's dynamic-size kernels.
+  Eigen::Matrix<double, 6, 12> AF, QF;
+  Eigen::Matrix<double, 12, 12> Z, W;  // F^T A F, F^T Q F
   for (std::size_t i = 0; i < data.fixed.size(); ++i) {
     const ComponentFactors& F = data.factors[i];
-    const ComponentFactors Fw = F * w.head(F.cols()).asDiagonal();
-    const Matrix6d S = data.fixed[i] + shared + Fw.lazyProduct(F.transpose());
+    const int width = static_cast<int>(F.cols());
+    Matrix6d S = data.fixed[i] + shared;
+    for (int c = 0; c < width; ++c) S.noalias() += (w[c] * F.col(c)) * F.col(c).transpose();
     Matrix6d L_inverse;
     if (!inverse_cholesky(S, L_inverse)) return ev;
     const Matrix6d A = L_inverse.transpose().lazyProduct(L_inverse);
-    log_likelihood -= 0.5 * (-2.0 * L_inverse.diagonal().array().log().sum() + A.cwiseProduct(data.scatter[i]).sum());
+    // log det S = -2 log prod diag(L^-1): one log per sample (the product of six
+    // reciprocal standard deviations stays far inside double's range).
+    log_likelihood -= 0.5 * (-2.0 * std::log(L_inverse.diagonal().prod()) + A.cwiseProduct(data.scatter[i]).sum());
     if (!derivatives) continue;
-    const Matrix6d Q = A.lazyProduct(data.scatter[i]).lazyProduct(A);  // A M A; the score's kernel is Q - A
+    const Matrix6d AM = A.lazyProduct(data.scatter[i]);  // evaluated: a nested lazy product recomputes it per entry
+    const Matrix6d Q = AM.lazyProduct(A);                // A M A; the score's kernel is Q - A
     const Matrix6d B = Q - A;
-    using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 12, 12>;
-    const ComponentFactors AF = A.lazyProduct(F), QF = Q.lazyProduct(F);
-    const Square Z = F.transpose().lazyProduct(AF), W = F.transpose().lazyProduct(QF);  // F^T A F, F^T Q F
-    const ComponentFactors BF = QF - AF;
+    for (int c = 0; c < width; ++c) AF.col(c).noalias() = A * F.col(c), QF.col(c).noalias() = Q * F.col(c);
+    for (int c1 = 0; c1 < width; ++c1) {
+      for (int c2 = 0; c2 < width; ++c2) Z(c1, c2) = F.col(c1).dot(AF.col(c2)), W(c1, c2) = F.col(c1).dot(QF.col(c2));
+    }
     // Score 1/2 tr(B G_k), information 1/2 tr(A G_k A G_l), average information
     // 1/2 tr(A G_k A G_l Q), by the kind of G. G_ab = e_a e_b^T + e_b e_a^T, or
     // e_a e_a^T when a == b (each diagonal counts half).
     for (int k : factor_components) {
       const int ck = data.columns[k], rk = data.ranks[k];
-      ev.score[k] += 0.5 * F.middleCols(ck, rk).cwiseProduct(BF.middleCols(ck, rk)).sum();
+      double score = 0.0;
+      for (int c = ck; c < ck + rk; ++c) score += F.col(c).dot(QF.col(c) - AF.col(c));
+      ev.score[k] += 0.5 * score;
       for (int l : factor_components) {
         if (l > k) continue;
         const auto z = Z.block(ck, data.columns[l], rk, data.ranks[l]);
@@ -82,27 +109,30 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
     for (int k : entry_components) {
       const auto [a, b] = data.entries[k];
       ev.score[k] += a == b ? 0.5 * B(a, a) : B(a, b);
-      for (int l : entry_components) {
-        if (l > k) continue;
-        const auto [c, d] = data.entries[l];
-        const double half = (a == b ? 0.5 : 1.0) * (c == d ? 0.5 : 1.0);
-        ev.information(k, l) += half * (A(a, c) * A(b, d) + A(a, d) * A(b, c));
-        ev.average_information(k, l) +=
-            0.5 * half * (A(b, c) * Q(d, a) + A(b, d) * Q(c, a) + A(a, c) * Q(d, b) + A(a, d) * Q(c, b));
-      }
       for (int l : factor_components) {
         const int cl = data.columns[l], rl = data.ranks[l];
         const double half = a == b ? 0.5 : 1.0;
-        const double e = half * 2.0 * 0.5 * AF.row(a).segment(cl, rl).dot(AF.row(b).segment(cl, rl));
-        const double ai = half * 0.5 * (AF.row(b).segment(cl, rl).dot(QF.row(a).segment(cl, rl)) +
-                                        AF.row(a).segment(cl, rl).dot(QF.row(b).segment(cl, rl)));
-        const int r = std::max(k, l), c = std::min(k, l);
-        ev.information(r, c) += e;
-        ev.average_information(r, c) += ai;
+        double e = 0.0, ai = 0.0;
+        for (int c = cl; c < cl + rl; ++c) {
+          e += AF(a, c) * AF(b, c);
+          ai += AF(b, c) * QF(a, c) + AF(a, c) * QF(b, c);
+        }
+        const int r = std::max(k, l), col = std::min(k, l);
+        ev.information(r, col) += half * e;
+        ev.average_information(r, col) += half * 0.5 * ai;
       }
+    }
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      const auto& [k, l, a, b, c, d, half] = pairs[p];
+      pair_information[p] += half * (A(a, c) * A(b, d) + A(a, d) * A(b, c));
+      pair_average[p] += 0.5 * half * (A(b, c) * Q(d, a) + A(b, d) * Q(c, a) + A(a, c) * Q(d, b) + A(a, d) * Q(c, b));
     }
   }
   if (derivatives) {
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      ev.information(pairs[p].k, pairs[p].l) += pair_information[p];
+      ev.average_information(pairs[p].k, pairs[p].l) += pair_average[p];
+    }
     ev.information = ev.information.selfadjointView<Eigen::Lower>();
     ev.average_information = ev.average_information.selfadjointView<Eigen::Lower>();
   }
@@ -112,32 +142,57 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
 
 }  // namespace
 
+namespace {
+
+// Column J of L (S = L L^T), by fixed-size blocks so that every product unrolls.
+template <int J>
+bool cholesky_columns(const Matrix6d& S, Matrix6d& L, double* reciprocal) {
+  if constexpr (J == 6) {
+    return true;
+  } else {
+    double diagonal = S(J, J);
+    if constexpr (J > 0) diagonal -= L.template block<1, J>(J, 0).squaredNorm();
+    if (!(diagonal > 0.0)) return false;
+    L(J, J) = std::sqrt(diagonal);
+    reciprocal[J] = 1.0 / L(J, J);  // one division per column, the rest multiplications
+    if constexpr (J < 5) {
+      auto below = L.template block<5 - J, 1>(J + 1, J);
+      below = S.template block<5 - J, 1>(J + 1, J);
+      if constexpr (J > 0) below.noalias() -= L.template block<5 - J, J>(J + 1, 0) * L.template block<1, J>(J, 0).transpose();
+      below *= reciprocal[J];
+    }
+    return cholesky_columns<J + 1>(S, L, reciprocal);
+  }
+}
+
+// Row I of L^-1 by forward substitution: L(I, :I) X(:I, :) + L(I, I) X(I, :) = e_I^T.
+template <int I>
+void inverse_rows(const Matrix6d& L, const double* reciprocal, Matrix6d& L_inverse) {
+  if constexpr (I < 6) {
+    Eigen::Matrix<double, 1, 6> row = Eigen::Matrix<double, 1, 6>::Zero();
+    row(I) = 1.0;
+    if constexpr (I > 0) row.noalias() -= L.template block<1, I>(I, 0) * L_inverse.template topRows<I>();
+    L_inverse.row(I) = row * reciprocal[I];
+    inverse_rows<I + 1>(L, reciprocal, L_inverse);
+  }
+}
+
+}  // namespace
+
 bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse) {
-  // One division per column (its diagonal's reciprocal), the rest multiplications.
   Matrix6d L = Matrix6d::Zero();
   double reciprocal[6];
-  for (int j = 0; j < 6; ++j) {
-    double diagonal = S(j, j);
-    for (int k = 0; k < j; ++k) diagonal -= L(j, k) * L(j, k);
-    if (!(diagonal > 0.0)) return false;
-    L(j, j) = std::sqrt(diagonal);
-    reciprocal[j] = 1.0 / L(j, j);
-    for (int i = j + 1; i < 6; ++i) {
-      double v = S(i, j);
-      for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
-      L(i, j) = v * reciprocal[j];
-    }
-  }
-  L_inverse.setZero();
-  for (int j = 0; j < 6; ++j) {
-    L_inverse(j, j) = reciprocal[j];
-    for (int i = j + 1; i < 6; ++i) {
-      double v = 0.0;
-      for (int k = j; k < i; ++k) v += L(i, k) * L_inverse(k, j);
-      L_inverse(i, j) = -v * reciprocal[i];
-    }
-  }
+  if (!cholesky_columns<0>(S, L, reciprocal)) return false;
+  inverse_rows<0>(L, reciprocal, L_inverse);
   return true;
+}
+
+Matrix6d lower_triangular_inverse(const Matrix6d& lower) {
+  double reciprocal[6];
+  for (int i = 0; i < 6; ++i) reciprocal[i] = 1.0 / lower(i, i);
+  Matrix6d inverse;
+  inverse_rows<0>(lower, reciprocal, inverse);
+  return inverse;
 }
 
 void add_factor_component(VarianceComponentData& data, int rank) {
@@ -211,12 +266,14 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
         const int k = free[a];
         theta[k] = std::max(components[k].lower, theta[k] + alpha * step[a]);
       }
-      const Evaluation next = evaluate(data, theta, false);
+      // With its derivatives at once: the full step is nearly always taken, and
+      // the next iteration needs them at the point taken.
+      Evaluation next = evaluate(data, theta, true);
       if (next.log_likelihood >= current.log_likelihood - 1e-12 * std::abs(current.log_likelihood)) {
         // A rise of 1e-6 in log-likelihood is nothing statistically: converged.
         small = small || next.log_likelihood - current.log_likelihood < 1e-6;
         fit.theta = theta;
-        current = evaluate(data, theta, true);
+        current = std::move(next);
         moved = true;
         break;
       }

@@ -62,10 +62,10 @@ namespace handeye {
 
 struct JointOptions {
   int max_iterations = 50;
-  /// Stop when the step's squared Mahalanobis length falls below this (< 0.01 sigma): the
+  /// Stop when the step's squared Mahalanobis length falls below this (< 0.1 sigma): the
   /// step is taken, without a linearisation to confirm it (Gauss-Newton's error after it is
-  /// second order in it, and the information moves by a negligible share within 0.01 sigma).
-  double step_tolerance = 1e-4;
+  /// second order in it, and the information moves by a negligible share within 0.1 sigma).
+  double step_tolerance = 1e-2;
   /// Noise estimation: stop when the estimated 6x6 changes by less than this (relative, Frobenius).
   double noise_tolerance = 1e-4;
   int max_noise_rounds = 20;

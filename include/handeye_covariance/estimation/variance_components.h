@@ -77,6 +77,8 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
 /// right-hand sides through its large-matrix kernels, which cost more than the
 /// arithmetic at this size; the estimators call this for every sample.
 bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse);
+/// The inverse of a lower-triangular 6x6 with a non-zero diagonal (forward substitution).
+Matrix6d lower_triangular_inverse(const Matrix6d& lower);
 
 /// Adds a component to `data` (factor columns, or a shared covariance entry).
 void add_factor_component(VarianceComponentData& data, int rank);
