@@ -22,12 +22,25 @@ using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
 namespace {
 
 /// One sample, as the solver needs it: the robot's link in the loop with its
-/// Jacobian, the view, and the stated noise (zero when none).
+/// Jacobian, the view, and the stated noise (zero when none). The noise points
+/// into its Terms' storage: most samples share the global one, and a copy per
+/// sample is memory that every pass over 10^4 samples streams through.
 struct Term {
+  Term() {}  // user-provided: a vector of 10^4 terms is not zero-filled before it is written
   Isometry3d V, P;
   Matrix6d dV_dE;
-  Matrix6d camera = Matrix6d::Zero(), robot = Matrix6d::Zero();
+  const Matrix6d* camera_noise = nullptr;
+  const Matrix6d* robot_noise = nullptr;
   bool has_robot = false;
+  const Matrix6d& camera() const { return *camera_noise; }
+  const Matrix6d& robot() const { return *robot_noise; }
+};
+
+/// The terms and the noise matrices they point to (reserved up front, so the
+/// pointers stay valid; moving the vector keeps its buffer).
+struct Terms {
+  std::vector<Term> terms;
+  std::vector<Matrix6d> noises;
 };
 
 /// X and Y as the residuals use them.
@@ -119,9 +132,9 @@ struct NoiseModel {
   bool robot_free_or_given = false;  // D_i enters S_i
 
   Matrix6d covariance(const Term& t, const Matrix6d& D) const {
-    Matrix6d S = camera_scale * t.camera + camera;
+    Matrix6d S = camera_scale * t.camera() + camera;
     if (robot_free_or_given && (t.has_robot || !robot.isZero(0.0))) {  // a zero robot part adds nothing
-      const Matrix6d D_robot = D * (t.robot + robot);  // evaluated once: a nested lazy product recomputes it per entry
+      const Matrix6d D_robot = D * (t.robot() + robot);  // evaluated once: a nested lazy product recomputes it per entry
       S.noalias() += D_robot * D.transpose();
     }
     return S;
@@ -139,6 +152,7 @@ double huber_rho(double d, double k_scaled) {
 /// whitened by the sample's S = L L^T (Jw = L^-1 J: what the information, the
 /// leverages and the sandwich use).
 struct Linearized {
+  Linearized() {}  // as Term: resize() does not zero-fill what linearize_all writes
   Vector6d e;
   Matrix6x12 Jw;
 };
@@ -165,11 +179,10 @@ struct Solution {
 
 class JointProblem {
  public:
-  JointProblem(std::vector<Term> terms, const JointOptions& o) : terms_(std::move(terms)), o_(o) {}
+  JointProblem(Terms terms, const JointOptions& o) : terms_(std::move(terms.terms)), noises_(std::move(terms.noises)), o_(o) {}
 
   std::size_t size() const { return terms_.size(); }
   const std::vector<Term>& terms() const { return terms_; }
-  std::vector<Term>& terms() { return terms_; }
 
   /// From now on each linearisation keeps D (the noise fit's robot factors need it).
   void keep_robot_jacobians() { keep_D_ = true; }
@@ -177,7 +190,7 @@ class JointProblem {
   void set_camera_roots() {
     camera_roots_.resize(terms_.size());
     for (std::size_t i = 0; i < terms_.size(); ++i) {
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(terms_[i].camera);
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(terms_[i].camera());
       camera_roots_[i] = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
     }
   }
@@ -293,18 +306,27 @@ class JointProblem {
 
  private:
   std::vector<Term> terms_;
+  std::vector<Matrix6d> noises_;  // what the terms' noise pointers point to
   const JointOptions& o_;
   bool keep_D_ = false;
   std::vector<Matrix6d> camera_roots_;
 };
 
-std::vector<Term> make_terms(const SampleSet& set, bool& given) {
+Terms make_terms(const SampleSet& set, bool& given) {
   given = set.noise.has_value();
   if (set.noise) check_covariance(set.noise->robot, "noise.effector"), check_covariance(set.noise->camera, "noise.pattern");
-  std::vector<Term> terms(set.samples.size());
+  Terms out;
+  std::vector<Term>& terms = out.terms;
+  terms.resize(set.samples.size());
+  std::size_t own_count = 0;
+  for (const PoseSample& sample : set.samples) own_count += sample.noise.has_value();
+  out.noises.reserve(2 + 2 * own_count);  // no reallocation below: the terms point into it
   // The global noise as 6x6 once; a sample's own noise replaces it.
   const MeasurementNoise global = set.noise ? *set.noise : MeasurementNoise{};
-  const Matrix6d global_camera = global.camera.as_pose_covariance(), global_robot = global.robot.as_pose_covariance();
+  out.noises.push_back(global.camera.as_pose_covariance());
+  out.noises.push_back(global.robot.as_pose_covariance());
+  const Matrix6d* global_camera = &out.noises[0];
+  const Matrix6d* global_robot = &out.noises[1];
   for (std::size_t i = 0; i < set.samples.size(); ++i) {
     const PoseSample& sample = set.samples[i];
     const std::optional<MeasurementNoise>& own = sample.noise;
@@ -323,11 +345,16 @@ std::vector<Term> make_terms(const SampleSet& set, bool& given) {
     t.V = set.rig.robot_link(sample.T_base_effector);
     t.dV_dE = set.rig.robot_link_jacobian(sample.T_base_effector);
     t.P = sample.T_camera_pattern;
-    t.camera = own ? own->camera.as_pose_covariance() : global_camera;
-    t.robot = own ? own->robot.as_pose_covariance() : global_robot;
-    t.has_robot = !t.robot.isZero(0.0);
+    t.camera_noise = global_camera, t.robot_noise = global_robot;
+    if (own) {
+      out.noises.push_back(own->camera.as_pose_covariance());
+      t.camera_noise = &out.noises.back();
+      out.noises.push_back(own->robot.as_pose_covariance());
+      t.robot_noise = &out.noises.back();
+    }
+    t.has_robot = !t.robot().isZero(0.0);
   }
-  return terms;
+  return out;
 }
 
 /// The free noise numbers and how each enters S_i (variance_components.h).
@@ -682,9 +709,9 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     check_pose_at(samples.samples[i].T_camera_pattern, where("pattern"));
   }
   bool given = false;
-  std::vector<Term> terms = make_terms(samples, given);
+  Terms terms = make_terms(samples, given);
   bool any_camera_stated = false, any_robot_stated = false;
-  for (const Term& t : terms) any_camera_stated = any_camera_stated || !t.camera.isZero(0.0), any_robot_stated = any_robot_stated || t.has_robot;
+  for (const Term& t : terms.terms) any_camera_stated = any_camera_stated || !t.camera().isZero(0.0), any_robot_stated = any_robot_stated || t.has_robot;
   // The start throws the degeneracy errors. With a robust stage behind it, only a
   // gross angle mismatch (a flipped tag, a wrong pairing) is refused there: smaller
   // ones are what Huber's loss is for.
@@ -855,7 +882,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
   if (!free.empty()) {
     Matrix6d camera_mean = Matrix6d::Zero(), robot_mean = Matrix6d::Zero();
-    for (const Term& t : problem.terms()) camera_mean += t.camera / n, robot_mean += t.robot / n;
+    for (const Term& t : problem.terms()) camera_mean += t.camera() / n, robot_mean += t.robot() / n;
     result.noise.camera = PoseNoise::from_pose_covariance(model.camera_scale * camera_mean + model.camera);
     result.noise.robot = PoseNoise::from_pose_covariance(robot_mean + model.robot);
   }
