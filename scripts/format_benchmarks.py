@@ -138,10 +138,14 @@ lines += [
 ]
 lines += [
     "",
-    "Where the time goes at 31 poses (perf): three linearisations of 31 samples (the residual's log,",
-    "each sample's 6x6 Cholesky inverse, the 12x12 information), the O(n) start with its degeneracy",
-    "checks (16 us) and the kurtosis test. The estimated-noise mode adds REML rounds, each a",
-    "Gauss-Newton run and a variance-component fit.",
+    "Where the time goes at 31 poses (perf): two linearisations of the 31 samples (the residual's log,",
+    "the whitened Jacobian and the 12x12 information; the first also each sample's 6x6 Cholesky",
+    "inverse, which the second keeps: a step under 0.1 sigma is taken without a confirming",
+    "linearisation), the O(n) start with its degeneracy checks, and the leverages of the kurtosis",
+    "test. The estimated-noise mode adds two REML rounds, each a Gauss-Newton run, every sample's",
+    "REML scatter and three or four AI-REML evaluations (a 6x6 Cholesky and A M A per sample each),",
+    "then the second-order inflation for the noise estimate's own uncertainty. What is left there is",
+    "arithmetic per sample and evaluation; 3x would need fewer rounds, i.e. a different fit.",
     "",
     "### Why two columns",
     "",
