@@ -93,28 +93,37 @@ TEST(Rig, RobotLinkJacobianMatchesNumeric) {
   }
 }
 
-TEST(Rig, RobotMotionJacobiansMatchNumeric) {
+/// Every setup, and robot poses E_i, E_j whose rotation angles run through kAngles.
+using MotionCheck = std::function<void(Setup, const Rig&, double angle_i, double angle_j, const Isometry3d& E_i,
+                                       const Isometry3d& E_j)>;
+void for_each_motion(const MotionCheck& check) {
   for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
     const Rig rig = rig_of(setup);
     for (double angle_i : kAngles) {
       for (double angle_j : kAngles) {
-        const Isometry3d E_i = pose_with_angle(angle_i, Vector3d(0.4, -0.2, 0.7));
-        const Isometry3d E_j = pose_with_angle(-angle_j, Vector3d(0.1, 0.3, 0.5));
-        const Isometry3d A = rig.robot_motion(E_i, E_j);
-        const auto [dA_dEi, dA_dEj] = rig.robot_motion_jacobians(E_i, E_j);
-        const std::function<Vector6d(const Vector6d&)> fi = [&](const Vector6d& d) {
-          return test::pose_perturbation(rig.robot_motion(test::apply(E_i, d), E_j), A);
-        };
-        const std::function<Vector6d(const Vector6d&)> fj = [&](const Vector6d& d) {
-          return test::pose_perturbation(rig.robot_motion(E_i, test::apply(E_j, d)), A);
-        };
-        EXPECT_LE((dA_dEi - test::numeric_jacobian<6, 6>(fi)).norm(), 1e-7)
-            << to_string(setup) << " angles " << angle_i << ", " << angle_j;
-        EXPECT_LE((dA_dEj - test::numeric_jacobian<6, 6>(fj)).norm(), 1e-7)
-            << to_string(setup) << " angles " << angle_i << ", " << angle_j;
+        check(setup, rig, angle_i, angle_j, pose_with_angle(angle_i, Vector3d(0.4, -0.2, 0.7)),
+              pose_with_angle(-angle_j, Vector3d(0.1, 0.3, 0.5)));
       }
     }
   }
+}
+
+TEST(Rig, RobotMotionJacobiansMatchNumeric) {
+  for_each_motion([](handeye::Setup setup, const Rig& rig, double angle_i, double angle_j, const Isometry3d& E_i,
+                         const Isometry3d& E_j) {
+    const Isometry3d A = rig.robot_motion(E_i, E_j);
+    const auto [dA_dEi, dA_dEj] = rig.robot_motion_jacobians(E_i, E_j);
+    const std::function<Vector6d(const Vector6d&)> fi = [&](const Vector6d& d) {
+      return test::pose_perturbation(rig.robot_motion(test::apply(E_i, d), E_j), A);
+    };
+    const std::function<Vector6d(const Vector6d&)> fj = [&](const Vector6d& d) {
+      return test::pose_perturbation(rig.robot_motion(E_i, test::apply(E_j, d)), A);
+    };
+    EXPECT_LE((dA_dEi - test::numeric_jacobian<6, 6>(fi)).norm(), 1e-7)
+        << to_string(setup) << " angles " << angle_i << ", " << angle_j;
+    EXPECT_LE((dA_dEj - test::numeric_jacobian<6, 6>(fj)).norm(), 1e-7)
+        << to_string(setup) << " angles " << angle_i << ", " << angle_j;
+  });
 }
 
 // The written-out rotation block against the Jacobians' propagation of full 6x6
@@ -127,22 +136,16 @@ TEST(Rig, RobotMotionRotationCovarianceMatchesTheJacobians) {
     for (int r = 0; r < 6; ++r) for (int c = 0; c < 6; ++c) F(r, c) = normal(rng);
     return Matrix6d(F * F.transpose());
   };
-  for (handeye::Setup setup : {Setup::EyeInHand, Setup::EyeToHand}) {
-    const Rig rig = rig_of(setup);
-    for (double angle_i : kAngles) {
-      for (double angle_j : kAngles) {
-        const Isometry3d E_i = pose_with_angle(angle_i, Vector3d(0.4, -0.2, 0.7));
-        const Isometry3d E_j = pose_with_angle(-angle_j, Vector3d(0.1, 0.3, 0.5));
-        const Matrix6d S_i = random_covariance(), S_j = random_covariance();
-        const auto [dA_dEi, dA_dEj] = rig.robot_motion_jacobians(E_i, E_j);
-        const Matrix6d propagated = dA_dEi * S_i * dA_dEi.transpose() + dA_dEj * S_j * dA_dEj.transpose();
-        const Eigen::Matrix3d written_out = rig.robot_motion_rotation_covariance(
-            E_i, E_j, S_i.bottomRightCorner<3, 3>(), S_j.bottomRightCorner<3, 3>());
-        EXPECT_LE((written_out - propagated.bottomRightCorner<3, 3>()).norm(), 1e-9 * propagated.norm())
-            << to_string(setup) << " angles " << angle_i << ", " << angle_j;
-      }
-    }
-  }
+  for_each_motion([&](handeye::Setup setup, const Rig& rig, double angle_i, double angle_j, const Isometry3d& E_i,
+                         const Isometry3d& E_j) {
+    const Matrix6d S_i = random_covariance(), S_j = random_covariance();
+    const auto [dA_dEi, dA_dEj] = rig.robot_motion_jacobians(E_i, E_j);
+    const Matrix6d propagated = dA_dEi * S_i * dA_dEi.transpose() + dA_dEj * S_j * dA_dEj.transpose();
+    const Eigen::Matrix3d written_out = rig.robot_motion_rotation_covariance(
+        E_i, E_j, S_i.bottomRightCorner<3, 3>(), S_j.bottomRightCorner<3, 3>());
+    EXPECT_LE((written_out - propagated.bottomRightCorner<3, 3>()).norm(), 1e-9 * propagated.norm())
+        << to_string(setup) << " angles " << angle_i << ", " << angle_j;
+  });
 }
 
 }  // namespace
