@@ -47,7 +47,9 @@ struct EntryPair {
   double half;
 };
 
-Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bool derivatives) {
+/// The REML criterion at theta with its score, expected and average information
+/// (every caller needs the derivatives at the point it evaluates).
+Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
   const int K = static_cast<int>(data.columns.size());
   const VectorXd w = column_weights(data, theta);
   const Matrix6d shared = shared_entries(data, theta);
@@ -65,9 +67,7 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
   std::vector<double> pair_information(pairs.size(), 0.0), pair_average(pairs.size(), 0.0);
   Evaluation ev;
   double log_likelihood = 0.0;
-  if (derivatives) {
-    ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
-  }
+  ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
   // The factors are handled column by column (fixed 6-vectors), so that no
   // product runs through Eigen's dynamic-size kernels.
   Eigen::Matrix<double, 6, 12> AF, QF;
@@ -83,7 +83,6 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
     // log det S = -2 log prod diag(L^-1): one log per sample (the product of six
     // reciprocal standard deviations stays far inside double's range).
     log_likelihood -= 0.5 * (-2.0 * std::log(L_inverse.diagonal().prod()) + A.cwiseProduct(data.scatter[i]).sum());
-    if (!derivatives) continue;
     const Matrix6d AM = A.lazyProduct(data.scatter[i]);  // evaluated: a nested lazy product recomputes it per entry
     const Matrix6d Q = AM.lazyProduct(A);                // A M A; the score's kernel is Q - A
     const Matrix6d B = Q - A;
@@ -128,14 +127,12 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
       pair_average[p] += 0.5 * half * (A(b, c) * Q(d, a) + A(b, d) * Q(c, a) + A(a, c) * Q(d, b) + A(a, d) * Q(c, b));
     }
   }
-  if (derivatives) {
-    for (std::size_t p = 0; p < pairs.size(); ++p) {
-      ev.information(pairs[p].k, pairs[p].l) += pair_information[p];
-      ev.average_information(pairs[p].k, pairs[p].l) += pair_average[p];
-    }
-    ev.information = ev.information.selfadjointView<Eigen::Lower>();
-    ev.average_information = ev.average_information.selfadjointView<Eigen::Lower>();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    ev.information(pairs[p].k, pairs[p].l) += pair_information[p];
+    ev.average_information(pairs[p].k, pairs[p].l) += pair_average[p];
   }
+  ev.information = ev.information.selfadjointView<Eigen::Lower>();
+  ev.average_information = ev.average_information.selfadjointView<Eigen::Lower>();
   ev.log_likelihood = log_likelihood;
   return ev;
 }
@@ -219,7 +216,7 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
   const int K = static_cast<int>(components.size());
   VarianceComponentFit fit;
   fit.theta = theta0;
-  Evaluation current = evaluate(data, fit.theta, true);
+  Evaluation current = evaluate(data, fit.theta);
   for (int iteration = 1; iteration <= options.max_iterations && std::isfinite(current.log_likelihood); ++iteration) {
     fit.iterations = iteration;
     // Active set: a component at its bound stays there when its score, or its
@@ -268,7 +265,7 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
       }
       // With its derivatives at once: the full step is nearly always taken, and
       // the next iteration needs them at the point taken.
-      Evaluation next = evaluate(data, theta, true);
+      Evaluation next = evaluate(data, theta);
       if (next.log_likelihood >= current.log_likelihood - 1e-12 * std::abs(current.log_likelihood)) {
         // A rise of 1e-6 in log-likelihood is nothing statistically: converged.
         small = small || next.log_likelihood - current.log_likelihood < 1e-6;
