@@ -626,9 +626,8 @@ std::vector<double> corrected_distances(const Solution& s, const Matrix12d& cova
 }
 
 /// The same residuals as vectors, r~_i = (I - H_ii)^-1/2 r (HC2's symmetric root),
-/// each N(0, I) under the model: for the sandwich.
-std::vector<Vector6d> corrected_residuals(const Solution& s) {
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+/// each N(0, I) under the model: for the sandwich (covariance: s.information^-1).
+std::vector<Vector6d> corrected_residuals(const Solution& s, const Matrix12d& covariance) {
   std::vector<Vector6d> out(s.lin.size());
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
     const Matrix6x12& Jw = s.lin[i].Jw;
@@ -660,14 +659,13 @@ double median(std::vector<double> v) {
 
 /// The sandwich A^-1 B A^-1 of the Huber M-estimate (joint_estimator.h).
 Matrix12d sandwich(const Solution& s, double k_scaled) {
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
-  Matrix12d A = Matrix12d::Zero(), B = Matrix12d::Zero();
-  const std::vector<Vector6d> corrected = corrected_residuals(s);
+  // A starts as sum w Jw^T Jw, which linearize_all has already summed: the information.
+  Matrix12d A = s.information, B = Matrix12d::Zero();
+  const std::vector<Vector6d> corrected = corrected_residuals(s, s.information.ldlt().solve(Matrix12d::Identity()));
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
     const Matrix6x12& Jw = s.lin[i].Jw;
     const Vector6d r = whitened_residual(s, i);
     const double d = r.norm(), w = s.weight[i];
-    A.noalias() += w * Jw.transpose() * Jw;
     if (w < 1.0) {  // d/dx of (k/d) Jw^T r: the weight's own change
       const Vector12d g = Jw.transpose() * r;
       A.noalias() -= (k_scaled / (d * d * d)) * g * g.transpose();
@@ -675,7 +673,6 @@ Matrix12d sandwich(const Solution& s, double k_scaled) {
     const Vector12d psi = w * Jw.transpose() * corrected[i];
     B.noalias() += psi * psi.transpose();
   }
-  (void)covariance;
   const Eigen::LDLT<Matrix12d> ldlt(0.5 * (A + A.transpose()));
   const Matrix12d A_inverse = ldlt.solve(Matrix12d::Identity());
   return A_inverse * B * A_inverse;
