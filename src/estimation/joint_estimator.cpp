@@ -175,6 +175,13 @@ struct Solution {
   double cost = 0.0;  // sum rho(d_i)
   double chi2 = 0.0;  // sum d_i^2
   StageDiagnostics diagnostics;
+
+  /// sum e_i e_i^T at the linearisation point.
+  Matrix6d scatter() const {
+    Matrix6d out = Matrix6d::Zero();
+    for (const Linearized& l : lin) out.noalias() += l.e * l.e.transpose();
+    return out;
+  }
 };
 
 class JointProblem {
@@ -243,6 +250,17 @@ class JointProblem {
     else s.whitening = std::move(fresh);
   }
 
+  /// sum e_i e_i^T at (X, Y): the noise fit's first values, with no weights to solve under.
+  Matrix6d residual_scatter(const Isometry3d& X, const Isometry3d& Y) const {
+    const Frame f(X, Y);
+    Matrix6d out = Matrix6d::Zero();
+    for (const Term& t : terms_) {
+      const Vector6d e = residual(t, f);
+      out.noalias() += e * e.transpose();
+    }
+    return out;
+  }
+
   /// The robust cost at (X, Y) with the covariances of `at` held fixed.
   double cost_at(const Isometry3d& X, const Isometry3d& Y, const Solution& at, double k_scaled) const {
     const Frame f(X, Y);
@@ -252,6 +270,25 @@ class JointProblem {
       cost += huber_rho(r.norm(), k_scaled);
     }
     return cost;
+  }
+
+  /// One Gauss-Newton step from s.X, s.Y, taken without a second linearisation:
+  /// the residuals move by their linear prediction e + J step, which is off by
+  /// the step's square. For a solve whose only use is the noise fit's residuals
+  /// (the next round linearises afresh and checks the fit). False, with nothing
+  /// taken, when the step would move the weights (moves_weights): solve then.
+  bool predicted_step(const NoiseModel& model, Solution& s) const {
+    linearize_all(model, 0.0, s);
+    const Vector12d step = -s.information.ldlt().solve(s.gradient);
+    if (!step.allFinite() || moves_weights(step)) return false;
+    s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
+    for (std::size_t i = 0; i < s.lin.size(); ++i) {  // e + J step, J = L (L^-1 J)
+      s.lin[i].e.noalias() += lower_triangular_inverse(s.L_inverse(i)) * (s.lin[i].Jw * step);
+    }
+    s.chi2 -= step.dot(s.information * step);  // |r + Jw step|^2 at the Gauss-Newton step
+    s.diagnostics.iterations += 1;
+    s.diagnostics.stop_reason = StopReason::StepBelowTolerance;
+    return true;
   }
 
   /// Gauss-Newton (iteratively reweighted: the robot's term and the Huber
@@ -445,9 +482,16 @@ void apply_components(const std::vector<Free>& free, const Eigen::VectorXd& thet
   }
 }
 
+/// Whether the model's camera 6x6 is a covariance (a full one is fitted entry by
+/// entry and may come out indefinite where every S_i is not).
+bool model_is_covariance(const NoiseModel& model) {
+  if (model.camera.isDiagonal(0.0)) return (model.camera.diagonal().array() >= 0.0).all();
+  return Eigen::SelfAdjointEigenSolver<Matrix6d>(model.camera, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() >= 1e-18;
+}
+
 /// The fit's data at a solution: fixed part, REML-completed scatter, factors.
 VarianceComponentData component_data(const JointProblem& problem, const std::vector<Free>& free, const NoiseModel& model,
-                                     const Solution& s) {
+                                     const Solution& s, double covariance_scale = 1.0) {
   VarianceComponentData data;
   for (const Free& c : free) {
     if (rank_of(c.kind) > 0) add_factor_component(data, rank_of(c.kind));
@@ -461,7 +505,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   bool scale_free = false;
   for (const Free& c : free) scale_free = scale_free || c.kind == Kind::CameraScale;
   fixed_model.camera_scale = scale_free ? 0.0 : model.camera_scale;
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity()) * covariance_scale;
   const std::size_t n = problem.size();
   data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -482,10 +526,8 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   return data;
 }
 
-/// The starting values of the free components from the residual scatter.
-Eigen::VectorXd initial_components(const std::vector<Free>& free, const Solution& s, const NoiseModel& model, int dof) {
-  Matrix6d scatter = Matrix6d::Zero();
-  for (const Linearized& l : s.lin) scatter.noalias() += l.e * l.e.transpose();
+/// The starting values of the free components from the residual scatter (sum e e^T).
+Eigen::VectorXd initial_components(const std::vector<Free>& free, Matrix6d scatter, const NoiseModel& model, int dof) {
   scatter /= std::max(dof, 1);
   const double t_var = scatter.diagonal().head<3>().mean(), r_var = scatter.diagonal().tail<3>().mean();
   Eigen::VectorXd theta(free.size());
@@ -507,104 +549,163 @@ Eigen::VectorXd initial_components(const std::vector<Free>& free, const Solution
   return theta;
 }
 
-/// 1 / (1 - q): the mean NEES of X over the noise estimate's error, per 6, to
-/// second order (joint_estimator.h). With Sigma = I(theta)^-1, K_k = dI/dtheta_k
-/// (up to sign) and C = Cov(theta_hat):
+/// What one pass over the samples at a solution says about the noise fit behind it.
+struct NoisePass {
+  /// 1 / (1 - q): the covariance's inflation for the noise estimate's own error.
+  double inflation = 1.0;
+  /// The largest REML step from the fit's theta on this solution's residuals, in
+  /// each number's own sigma: the fit is a fixed point of the rounds when it is small.
+  double step = 0.0;
+};
+
+/// The inflation 1 / (1 - q) is the mean NEES of X over the noise estimate's
+/// error, per 6, to second order (joint_estimator.h). With Sigma = I(theta)^-1,
+/// K_k = dI/dtheta_k (up to sign) and C = Cov(theta_hat):
 ///   E NEES ~ 6 + sum_kl C_kl tr(Sx^-1 dSx_k Sx^-1 dSx_l) - tr(Sx^-1 E[Delta]),
 ///   dSigma_k = Sigma K_k Sigma,   K_k = sum_i J^T A G_k A J,
 ///   E[Delta] = 1/2 sum_kl C_kl d2Sigma_kl = Sigma (sum_kl C_kl K_k Sigma K_l) Sigma - 1/2 Sigma M Sigma,
 ///   M = sum_kl C_kl sum_i J^T (A G_l A G_k A + A G_k A G_l A) J,
 /// the second term being the bias of Sigma(theta_hat), which is not linear in theta
 /// (for one scale of every variance it is, and q = 2 / nu exactly).
-double noise_inflation(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
-                       const Solution& s) {
+/// Every trace is taken through V = Sigma_{:,x} Lx^-T (Sx = Lx Lx^T), so that a
+/// sample adds 12x6 products, not 12x12 ones: Sx^-1 dSx_k is similar to
+/// P_k = V^T K_k V, tr(Sx^-1 [Sigma N Sigma]_xx) = tr(V^T N V), and with B = A J,
+/// U = (B V)(B V)^T: tr(V^T M V) = sum_i 2 w sum_kl C_kl tr(G_l A G_k U).
+/// The step is C times the REML score 1/2 sum_i tr((A M_i A - A) G_k) with the
+/// round's scatter M_i = e e^T + J Sigma J^T (component_data), A M A = (A e)(A e)^T +
+/// B Sigma B^T (through V and the Y block's conditional root); a number at its bound counts only when its score points inwards
+/// (by score / sqrt(information)). s must be linearised under the fit's theta.
+NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
+                     const Solution& s) {
+  NoisePass out;
   const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
-  const Matrix6d Sx_inverse = covariance.topLeftCorner<6, 6>().ldlt().solve(Matrix6d::Identity());
-  std::vector<int> active;
-  for (std::size_t k = 0; k < free.size(); ++k) {
+  const Eigen::LLT<Matrix6d> Sx(covariance.topLeftCorner<6, 6>());
+  if (Sx.info() != Eigen::Success || free.empty()) return out;
+  const Eigen::Matrix<double, 6, 12> Vt = Sx.matrixL().solve(covariance.topRows<6>());  // V^T = Lx^-1 Sigma_{x,:}
+  const Eigen::Matrix<double, 12, 6> V = Vt.transpose();
+  // Sigma = V V^T + [0; Ly] [0; Ly]^T, Ly Ly^T = Sigma_{y|x} = Syy - Syx Sx^-1 Sxy (the
+  // rest of Sigma lives in the Y block): B Sigma B^T = U + (By Ly)(By Ly)^T.
+  const Eigen::LLT<Matrix6d> conditional(covariance.bottomRightCorner<6, 6>() - Vt.rightCols<6>().transpose() * Vt.rightCols<6>());
+  const Matrix6d Ly = conditional.info() == Eigen::Success ? Matrix6d(conditional.matrixL()) : Matrix6d::Zero();
+  const std::size_t K = free.size();
+  std::vector<int> active;  // the numbers off their bounds, with a covariance
+  for (std::size_t k = 0; k < K; ++k) {
     if (!fit.at_bound[k] && fit.covariance(k, k) > 0.0) active.push_back(static_cast<int>(k));
   }
-  const std::size_t K = active.size();
-  Eigen::MatrixXd C(K, K);
-  for (std::size_t a = 0; a < K; ++a) {
-    for (std::size_t b = 0; b < K; ++b) C(a, b) = fit.covariance(active[a], active[b]);
-  }
-  // Per sample, with B = A J: K_k += w B^T G_k B, and M += 2 w B^T Q B with
-  // Q = sum_k H_k A G_k, H_k = sum_l C_kl G_l (the two orders of the sum in M
-  // differ by a transpose: M is symmetrised after the loop). An entry's G_k
-  // (e_a e_b^T + e_b e_a^T, or e_a e_a^T) touches two rows or columns only.
-  const auto is_entry = [&](std::size_t a) { return rank_of(free[active[a]].kind) == 0; };
-  std::vector<Matrix6d> H_entries(K, Matrix6d::Zero());  // the entries' share of H_k: the same for every sample
-  for (std::size_t a = 0; a < K; ++a) {
-    for (std::size_t b = 0; b < K; ++b) {
-      if (!is_entry(b)) continue;
-      const Free& c = free[active[b]];
-      H_entries[a](c.a, c.b) += C(a, b);
-      if (c.a != c.b) H_entries[a](c.b, c.a) += C(a, b);
+  // Each G_k as a sum of p q^T over the columns of E = [I_6 | F_1 | F_2 ...]:
+  // an entry (e_a e_b^T + e_b e_a^T, or e_a e_a^T) by two terms or one, a factor
+  // F F^T by one term per column.
+  struct Outer {
+    int p, q;
+  };
+  std::vector<std::vector<Outer>> outers(K);
+  std::vector<int> factor_column(K, -1);
+  int columns = 6;
+  for (std::size_t k = 0; k < K; ++k) {
+    const Free& c = free[k];
+    const int r = rank_of(c.kind);
+    if (r == 0) {
+      outers[k].push_back({c.a, c.b});
+      if (c.a != c.b) outers[k].push_back({c.b, c.a});
+    } else {
+      factor_column[k] = columns;
+      for (int j = 0; j < r; ++j) outers[k].push_back({columns + j, columns + j});
+      columns += r;
     }
   }
-  std::vector<Matrix12d> K_sum(K, Matrix12d::Zero());
-  Matrix12d M = Matrix12d::Zero();
-  std::vector<Matrix6d> G(K);  // the factors' G_k = F F^T of this sample
+  // The factor columns, handled one 6-vector at a time (fixed sizes, no dynamic kernels).
+  const int width = columns - 6;
+  using FactorColumns = Eigen::Matrix<double, 6, 12>;
+  FactorColumns F = FactorColumns::Zero();
+  // Entries of E^T X E, from X, X F and F^T X F.
+  struct Gram {
+    Matrix6d X;
+    FactorColumns XF;
+    Eigen::Matrix<double, 12, 12> FXF;
+    double operator()(int i, int j) const {
+      return i < 6 ? (j < 6 ? X(i, j) : XF(i, j - 6)) : (j < 6 ? XF(j, i - 6) : FXF(i - 6, j - 6));
+    }
+  };
+  const auto gram = [&F, width](const Matrix6d& X) {
+    Gram g;
+    g.X = X;
+    for (int c = 0; c < width; ++c) g.XF.col(c).noalias() = X * F.col(c);
+    for (int a = 0; a < width; ++a) {
+      for (int b = 0; b < width; ++b) g.FXF(a, b) = F.col(a).dot(g.XF.col(b));
+    }
+    return g;
+  };
+  // P_k = V^T K_k V and Q_k = V^T K_k Wy, Wy = [0; Ly] (active k only).
+  std::vector<Matrix6d> P(K, Matrix6d::Zero()), Q(K, Matrix6d::Zero());
+  Eigen::VectorXd score = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K));
+  double traced_M = 0.0;  // tr(V^T M V)
   for (std::size_t i = 0; i < problem.size(); ++i) {
     const double w = s.weight[i];
+    for (std::size_t k = 0; k < K; ++k) {
+      if (factor_column[k] >= 0) F.middleCols(factor_column[k] - 6, rank_of(free[k].kind)) = factor(free[k], problem, s, i);
+    }
     const Matrix6d A = s.weight_matrix(i);
     const Matrix6x12 B = s.L_inverse(i).transpose().lazyProduct(s.lin[i].Jw);  // A J = L^-T (L^-1 J)
-    for (std::size_t a = 0; a < K; ++a) {
-      const Free& c = free[active[a]];
-      if (is_entry(a)) {
-        const Eigen::Matrix<double, 1, 12> weighted_row = w * B.row(c.a);
-        K_sum[a].noalias() += weighted_row.transpose() * B.row(c.b);
-        if (c.a != c.b) K_sum[a].noalias() += B.row(c.b).transpose() * weighted_row;
-      } else {
-        const ComponentFactors F = factor(c, problem, s, i);
-        G[a].noalias() = F * F.transpose();
-        const Eigen::Matrix<double, Eigen::Dynamic, 12, 0, 12, 12> FtB = F.transpose().lazyProduct(B);
-        K_sum[a].noalias() += w * FtB.transpose().lazyProduct(FtB);
+    const Matrix6d BV = B.lazyProduct(V);
+    const Matrix6d U = BV.lazyProduct(BV.transpose());
+    // The score's kernel A M A - A.
+    const Matrix6d W = B.rightCols<6>().lazyProduct(Ly);
+    const Vector6d Ae = A * s.lin[i].e;
+    const Gram Z = gram(Ae * Ae.transpose() + U + W.lazyProduct(W.transpose()) - A);
+    for (std::size_t k = 0; k < K; ++k) {
+      for (const Outer& o : outers[k]) score[static_cast<Eigen::Index>(k)] += 0.5 * Z(o.q, o.p);
+    }
+    if (active.empty()) continue;
+    const Gram AG = gram(A), UG = gram(U);
+    // Rows q^T B V and q^T W for the columns q of E.
+    FactorColumns FBV, FW;
+    for (int c = 0; c < width; ++c) FBV.col(c).noalias() = BV.transpose() * F.col(c), FW.col(c).noalias() = W.transpose() * F.col(c);
+    const auto row = [](const Matrix6d& X, const FactorColumns& XtF, int j) -> Vector6d {
+      return j < 6 ? Vector6d(X.row(j).transpose()) : Vector6d(XtF.col(j - 6));
+    };
+    for (int k : active) {
+      for (const Outer& o : outers[k]) {  // K_k += w B^T p q^T B, seen through V and Wy (B Wy = W)
+        const Vector6d left = w * row(BV, FBV, o.p);
+        P[k].noalias() += left * row(BV, FBV, o.q).transpose();
+        Q[k].noalias() += left * row(W, FW, o.q).transpose();
       }
     }
-    Matrix6d Q = Matrix6d::Zero();
-    for (std::size_t a = 0; a < K; ++a) {
-      Matrix6d H = H_entries[a];
-      for (std::size_t b = 0; b < K; ++b) {
-        if (!is_entry(b)) H.noalias() += C(a, b) * G[b];
-      }
-      const Free& c = free[active[a]];
-      if (is_entry(a)) {  // H A G: column b gets H A(:, a), column a gets H A(:, b)
-        Q.col(c.b).noalias() += H * A.col(c.a);
-        if (c.a != c.b) Q.col(c.a).noalias() += H * A.col(c.b);
-      } else {
-        const Matrix6d AG = A.lazyProduct(G[a]);
-        Q.noalias() += H.lazyProduct(AG);
+    double sample_M = 0.0;
+    for (int k : active) {
+      for (int l : active) {
+        double t = 0.0;  // tr(G_l A G_k U) = sum over l's (p, q) and k's (p', q') of (q^T A p') (q'^T U p)
+        for (const Outer& ol : outers[l]) {
+          for (const Outer& ok : outers[k]) t += AG(ol.q, ok.p) * UG(ok.q, ol.p);
+        }
+        sample_M += fit.covariance(k, l) * t;
       }
     }
-    const Matrix6x12 QB = Q.lazyProduct(B);
-    M.noalias() += (2.0 * w) * B.transpose().lazyProduct(QB);
+    traced_M += 2.0 * w * sample_M;
   }
-  M = 0.5 * (M + M.transpose());
-  // spread = sum_kl C_kl tr(P_k P_l), P_k = Sx^-1 dSx_k; mixed = sum_k K_k Sigma (sum_l C_kl K_l).
-  std::vector<Matrix6d> P(K);
-  for (std::size_t a = 0; a < K; ++a) {
-    const Eigen::Matrix<double, 6, 12> top = covariance.topRows<6>().lazyProduct(K_sum[a]);
-    const Matrix6d dSx = top.lazyProduct(covariance.leftCols<6>());
-    P[a].noalias() = Sx_inverse.lazyProduct(dSx);
-  }
-  Matrix12d mixed = Matrix12d::Zero();
-  double spread = 0.0;
-  for (std::size_t a = 0; a < K; ++a) {
-    Matrix12d weighted = Matrix12d::Zero();
-    for (std::size_t b = 0; b < K; ++b) {
-      spread += C(a, b) * P[a].cwiseProduct(P[b].transpose()).sum();
-      weighted.noalias() += C(a, b) * K_sum[b];
+  // The step: C score over the free numbers; one at its bound by its own information.
+  for (std::size_t k = 0; k < K; ++k) {
+    const Eigen::Index kk = static_cast<Eigen::Index>(k);
+    if (std::find(active.begin(), active.end(), static_cast<int>(k)) != active.end()) {
+      double step = 0.0;
+      for (int l : active) step += fit.covariance(kk, l) * score[l];
+      out.step = std::max(out.step, std::abs(step) / std::sqrt(fit.covariance(kk, kk)));
+    } else if (score[kk] > 0.0 && fit.information(kk, kk) > 0.0) {
+      out.step = std::max(out.step, score[kk] / std::sqrt(fit.information(kk, kk)));
     }
-    const Matrix12d covariance_weighted = covariance.lazyProduct(weighted);
-    mixed.noalias() += K_sum[a].lazyProduct(covariance_weighted);
   }
-  const Matrix12d inner = mixed - 0.5 * M;
-  const Matrix12d inner_covariance = inner.lazyProduct(covariance);
-  const Matrix12d bias = covariance.lazyProduct(inner_covariance);
-  const double q = std::clamp((spread - (Sx_inverse * bias.topLeftCorner<6, 6>()).trace()) / 6.0, 0.0, 0.5);
-  return 1.0 / (1.0 - q);
+  // spread = sum_kl C_kl tr(P_k P_l); mixed = sum_kl C_kl tr(V^T K_k Sigma K_l V)
+  // = sum_kl C_kl (tr(P_k P_l) + tr(Q_k Q_l^T)), Sigma = V V^T + Wy Wy^T.
+  double spread = 0.0, mixed = 0.0;
+  for (int k : active) {
+    for (int l : active) {
+      const double PP = P[k].cwiseProduct(P[l].transpose()).sum();
+      spread += fit.covariance(k, l) * PP;
+      mixed += fit.covariance(k, l) * (PP + Q[k].cwiseProduct(Q[l]).sum());
+    }
+  }
+  const double q = std::clamp((spread - (mixed - 0.5 * traced_M)) / 6.0, 0.0, 0.5);
+  out.inflation = 1.0 / (1.0 - q);
+  return out;
 }
 
 /// Sample i's residual whitened by its S_i = L L^T: r = L^-1 e_i.
@@ -756,10 +857,6 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
                        "no noise was given and " + std::to_string(n) +
                            " samples are too few to estimate the noise from the residuals (need >= 4)",
                        "input", "add a `noise` block with the pose covariances, or record more samples");
-  } else {
-    // A start of 1 mm and 0.1 deg per axis for the first solve.
-    model.camera.diagonal() << Vector3d::Constant(1e-6), Vector3d::Constant(std::pow(0.1 * M_PI / 180.0, 2));
-    problem.gauss_newton(model, 0.0, s);
   }
 
   std::vector<Free> free = free_components(given, chi2_failed, any_camera_stated, dof, options);
@@ -775,18 +872,41 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       components.push_back(c.component);
       model.robot_free_or_given = model.robot_free_or_given || c.kind == Kind::RobotTranslation || c.kind == Kind::RobotRotation;
     }
-    Eigen::VectorXd theta = initial_components(free, s, model, dof);
+    Eigen::VectorXd theta = initial_components(free, given ? s.scatter() : problem.residual_scatter(s.X, s.Y), model, dof);
     VarianceComponentFit fit;
+    bool fitted = false;  // fit is a REML fit of the current free numbers, at theta
+    NoisePass pass;
+    bool settled = false;  // s was solved under theta = fit.theta, a fixed point of the rounds
+    const bool homogeneous = !given && !any_camera_stated && !any_robot_stated;
     for (int round = 0; round < options.max_noise_rounds; ++round) {
       apply_components(free, theta, model);
-      problem.gauss_newton(model, 0.0, s);
-      // A few AI-REML steps per round, each round's stopping within 5% of the
-      // numbers' own sigma: the residuals move with the next solve anyway, and the
-      // rounds stop when the numbers no longer move.
+      // The first round's solve only feeds the fit: one step, checked by the next.
+      if (!(round == 0 && problem.predicted_step(model, s))) problem.gauss_newton(model, 0.0, s);
+      if (fitted && model_is_covariance(model)) {
+        // The last round's fit holds when a REML step from it on this solve's
+        // residuals is under a tenth of each number's sigma: X no longer moves it.
+        pass = noise_pass(problem, free, fit, s);
+        if (pass.step < 0.1) {
+          settled = true;
+          break;
+        }
+      }
+      double covariance_scale = 1.0;
+      if (round == 0 && homogeneous && s.chi2 > 0.0) {
+        // S_i is linear in theta with no fixed part: scaling theta by chi2 / dof
+        // leaves the solve as it is (its covariance scales with it) and starts
+        // the fit at the residuals' own size.
+        covariance_scale = s.chi2 / (6.0 * n - 12.0);
+        for (Eigen::Index k = 0; k < theta.size(); ++k) theta[k] = std::max(theta[k] * covariance_scale, free[k].component.lower);
+        apply_components(free, theta, model);
+      }
+      // A few AI-REML steps per round, each stopping within a tenth of the
+      // numbers' own sigma: the residuals move with the next solve anyway.
       VarianceComponentOptions per_round;
       per_round.max_iterations = 3;
-      per_round.tolerance = 0.05;
-      fit = fit_variance_components(components, component_data(problem, free, model, s), theta, per_round);
+      per_round.tolerance = 0.1;
+      fit = fit_variance_components(components, component_data(problem, free, model, s, covariance_scale), theta, per_round);
+      fitted = true;
       // A robot component the camera's can mimic (its sigma inflated 10x by the
       // others) is not separable: held at 0, the camera's numbers take its share.
       int confounded = -1;
@@ -804,28 +924,27 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
           if (k != confounded) kept[j++] = theta[k];
         }
         theta = kept;
+        fitted = false;
         if (free.empty()) break;
         continue;
       }
-      double change = 0.0;
-      for (Eigen::Index k = 0; k < theta.size(); ++k) {
-        const double scale = fit.covariance(k, k) > 0.0 ? std::sqrt(fit.covariance(k, k)) : std::max(std::abs(theta[k]), 1e-300);
-        change = std::max(change, std::abs(fit.theta[k] - theta[k]) / scale);
+      theta = fit.theta;
+    }
+    if (!settled) {  // out of rounds, or the last one dropped a number
+      if (!fitted && !free.empty()) {
+        apply_components(free, theta, model);
+        fit = fit_variance_components(components, component_data(problem, free, model, s), theta);
+        theta = fit.theta;
       }
-      theta = fit.theta;
-      if (change < 0.1) break;  // a tenth of each number's own sigma: X no longer moves
+      apply_components(free, theta, model);
+      if (!model_is_covariance(model)) {  // a full 6x6 may come out indefinite where S_i is not: keep it a covariance
+        const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(model.camera);
+        model.camera = eig.eigenvectors() * eig.eigenvalues().cwiseMax(1e-18).asDiagonal() * eig.eigenvectors().transpose();
+      }
+      problem.gauss_newton(model, 0.0, s);
+      if (!free.empty()) pass = noise_pass(problem, free, fit, s);
     }
-    if (fit.theta.size() != theta.size() && !free.empty()) {  // the last round dropped a component
-      fit = fit_variance_components(components, component_data(problem, free, model, s), theta);
-      theta = fit.theta;
-    }
-    apply_components(free, theta, model);
-    if (!model.camera.isZero(0.0)) {  // a full 6x6 may come out indefinite where S_i is not: keep it a covariance
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(model.camera);
-      model.camera = eig.eigenvectors() * eig.eigenvalues().cwiseMax(1e-18).asDiagonal() * eig.eigenvectors().transpose();
-    }
-    problem.gauss_newton(model, 0.0, s);
-    inflation = noise_inflation(problem, free, fit, s);
+    inflation = pass.inflation;
 
     result.noise_origin = given ? NoiseOrigin::Given : NoiseOrigin::EstimatedFromResiduals;
     std::string text;

@@ -255,6 +255,16 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
     for (std::size_t a = 0; a < free.size(); ++a) {
       small = small && std::abs(step[a]) <= options.tolerance * std::sqrt(std::max(variance[a], 0.0));
     }
+    if (small) {
+      // Within the tolerance of each number's sigma: taken without an evaluation to
+      // confirm it (the likelihood is flat there to second order), as Gauss-Newton does.
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        const int k = free[a];
+        fit.theta[k] = std::max(components[k].lower, fit.theta[k] + step[a]);
+      }
+      fit.converged = true;
+      break;
+    }
     double alpha = 1.0;
     bool moved = false;
     for (int halving = 0; halving < 30; ++halving, alpha *= 0.5) {
