@@ -35,13 +35,15 @@
 //   - noise given, and the residuals pass chi2 at 99.9%: nothing;
 //   - noise given, and they fail: the missing part, c and R (C when no camera
 //     noise was stated). A warning says so.
-// The numbers are fitted by REML, alternating with the solve, and reported with
+// The numbers are fitted by REML, alternating with the solve until a REML step
+// from the last fit on the new solve's residuals is under 0.1 sigma (the first
+// solve is one Gauss-Newton step from the AX = XB start), and reported with
 // their uncertainty (Calibration::noise_components); one at its bound (0) is one
 // the residuals do not support, and a robot number whose sigma the camera's
 // numbers inflate tenfold is dropped as not separable. A noise estimated from
 // few residuals is itself uncertain: the covariance is multiplied by 1 / (1 - q),
 // q the second-order excess of the NEES of X over the noise estimate's error (its
-// spread and the bias of Sigma_X(theta_hat); noise_inflation), exactly 2 / nu
+// spread and the bias of Sigma_X(theta_hat); noise_pass), exactly 2 / nu
 // for one scale from nu dof, so the NEES of X stays about 6.
 //
 // Robust mode. The Mahalanobis residuals d_i (leverage-corrected, so each is
@@ -66,8 +68,6 @@ struct JointOptions {
   /// step is taken, without a linearisation to confirm it (Gauss-Newton's error after it is
   /// second order in it, and the information moves by a negligible share within 0.1 sigma).
   double step_tolerance = 1e-2;
-  /// Noise estimation: stop when the estimated 6x6 changes by less than this (relative, Frobenius).
-  double noise_tolerance = 1e-4;
   int max_noise_rounds = 20;
   /// The estimated noise model by the residuals' dof (n - 2): the full 6x6 from this many,
   /// else per-axis variances from 6, else one translation and one rotation variance.
