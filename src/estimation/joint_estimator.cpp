@@ -588,18 +588,14 @@ Eigen::VectorXd moment_components(const std::vector<Free>& free, const JointProb
       const auto F = free[k].kind == Kind::RobotRotation ? l.D.rightCols<3>() : l.D.leftCols<3>();
       G[k].noalias() = F * F.transpose();
       b[k] += (F.transpose() * l.e).squaredNorm();
-      for (std::size_t j : camera) N(k, j) += G[k].cwiseProduct(G[j]).sum();
-      for (std::size_t j : robot) {
-        if (j <= k) N(k, j) += G[k].cwiseProduct(G[j]).sum();
-      }
+    }
+    for (std::size_t k : robot) {  // after every robot G of this sample is set
+      for (std::size_t j = 0; j < K; ++j) N(k, j) += G[k].cwiseProduct(G[j]).sum();
     }
   }
   for (std::size_t k : camera) b[k] = scatter.cwiseProduct(G[k]).sum();
   for (std::size_t k : robot) {
     for (std::size_t j : camera) N(j, k) = N(k, j);
-    for (std::size_t j : robot) {
-      if (j < k) N(j, k) = N(k, j);
-    }
   }
   const Eigen::VectorXd scale = N.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   Eigen::VectorXd theta = scale.asDiagonal() * (scale.asDiagonal() * N * scale.asDiagonal()).ldlt().solve(scale.asDiagonal() * b);

@@ -255,30 +255,32 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
     for (std::size_t a = 0; a < free.size(); ++a) {
       small = small && std::abs(step[a]) <= options.tolerance * std::sqrt(std::max(variance[a], 0.0));
     }
+    // theta + alpha step, each number kept within its bound.
+    const auto stepped = [&](double alpha) {
+      VectorXd theta = fit.theta;
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        const int k = free[a];
+        theta[k] = std::max(components[k].lower, theta[k] + alpha * step[a]);
+      }
+      return theta;
+    };
     if (small) {
       // Within the tolerance of each number's sigma: taken without an evaluation to
       // confirm it (the likelihood is flat there to second order), as Gauss-Newton does.
-      for (std::size_t a = 0; a < free.size(); ++a) {
-        const int k = free[a];
-        fit.theta[k] = std::max(components[k].lower, fit.theta[k] + step[a]);
-      }
+      fit.theta = stepped(1.0);
       fit.converged = true;
       break;
     }
     double alpha = 1.0;
     bool moved = false;
     for (int halving = 0; halving < 30; ++halving, alpha *= 0.5) {
-      VectorXd theta = fit.theta;
-      for (std::size_t a = 0; a < free.size(); ++a) {
-        const int k = free[a];
-        theta[k] = std::max(components[k].lower, theta[k] + alpha * step[a]);
-      }
+      VectorXd theta = stepped(alpha);
       // With its derivatives at once: the full step is nearly always taken, and
       // the next iteration needs them at the point taken.
       Evaluation next = evaluate(data, theta);
       if (next.log_likelihood >= current.log_likelihood - 1e-12 * std::abs(current.log_likelihood)) {
         // A rise of 1e-6 in log-likelihood is nothing statistically: converged.
-        small = small || next.log_likelihood - current.log_likelihood < 1e-6;
+        small = next.log_likelihood - current.log_likelihood < 1e-6;
         fit.theta = theta;
         current = std::move(next);
         moved = true;
