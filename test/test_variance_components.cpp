@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <array>
+#include <limits>
 #include <random>
 
 #include "handeye_covariance/estimation/variance_components.h"
@@ -90,6 +91,44 @@ TEST(VarianceComponents, RecoverCameraAndRobotNoiseWithAnHonestCovariance) {
     EXPECT_LT(spread[k] / predicted[k], 1.33) << k;
     EXPECT_LE(at_bound[k], M / 20) << k;  // a true component is rarely unsupported
   }
+}
+
+// A step taken without a confirming evaluation (confirm_last_step = false, as the
+// joint estimator's rounds take their last one) never leaves the positive definite
+// S_i: with a full camera 6x6 the off-diagonal entries are unbounded, and from a
+// start far off the AI-REML step overshoots into an indefinite matrix.
+TEST(VarianceComponents, AnUnconfirmedStepStaysPositiveDefinite) {
+  Rng rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(-0.95, 0.95);
+  int moved = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    // Camera x and y correlated at -0.9 (a full 6x6's entry), the other axes independent.
+    VarianceComponentData data;
+    std::vector<VarianceComponent> components;
+    for (int a = 0; a < 6; ++a) add_entry_component(data, a, a), components.push_back({"camera", 1e-18});
+    add_entry_component(data, 0, 1), components.push_back({"camera xy", -std::numeric_limits<double>::infinity()});
+    Eigen::VectorXd truth(7), start(7);
+    truth << 1.0, 1.0, 4.0, 0.5, 0.5, 0.2, -0.9;
+    for (int i = 0; i < 12; ++i) {
+      data.factors.push_back(ComponentFactors(6, 0));
+      data.fixed.push_back(Matrix6d::Zero());
+      const Eigen::LLT<Matrix6d> llt(component_covariance(data, data.fixed.size() - 1, truth));
+      Vector6d z;
+      for (int k = 0; k < 6; ++k) z[k] = normal(rng);
+      const Vector6d e = llt.matrixL() * z;
+      data.scatter.push_back(e * e.transpose());
+    }
+    start << 1.0, 1.0, 4.0, 0.5, 0.5, 0.2, uniform(rng);  // any start inside: |correlation| < 1
+    VarianceComponentOptions one;
+    one.max_iterations = 1;
+    one.confirm_last_step = false;
+    const VarianceComponentFit fit = fit_variance_components(components, data, start, one);
+    ASSERT_EQ(Eigen::LLT<Matrix6d>(component_covariance(data, 0, fit.theta)).info(), Eigen::Success)
+        << "trial " << trial << ": theta " << fit.theta.transpose();
+    moved += !(fit.theta - start).isZero(0.0);
+  }
+  EXPECT_GE(moved, 190);  // a step is taken (shortened where it must be), not refused
 }
 
 // inverse_cholesky (written out by fixed-size blocks): L^-1 S L^-T = I with L^-1

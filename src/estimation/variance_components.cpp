@@ -55,15 +55,23 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
   const Matrix6d shared = shared_entries(data, theta);
   std::vector<int> factor_components, entry_components;
   for (int k = 0; k < K; ++k) (data.ranks[k] > 0 ? factor_components : entry_components).push_back(k);
-  std::vector<EntryPair> pairs;
+  // Pairs of diagonal entries (the per-axis variances) are summed as whole 6x6
+  // matrices, A o A and A o Q, and read out after the loop; the others per pair.
+  std::vector<EntryPair> pairs, diagonal_pairs;
   for (int k : entry_components) {
     for (int l : entry_components) {
       if (l > k) continue;
       const auto [a, b] = data.entries[k];
       const auto [c, d] = data.entries[l];
-      pairs.push_back({k, l, a, b, c, d, (a == b ? 0.5 : 1.0) * (c == d ? 0.5 : 1.0)});
+      (a == b && c == d ? diagonal_pairs : pairs).push_back({k, l, a, b, c, d, (a == b ? 0.5 : 1.0) * (c == d ? 0.5 : 1.0)});
     }
   }
+  // A diagonal entry k = (a, a) against a factor l: 1/2 sum_c (A F)_ac^2 and
+  // 1/2 sum_c (A F)_ac (Q F)_ac over l's columns, summed per row a.
+  std::vector<int> diagonal_entries, other_entries;
+  for (int k : entry_components) (data.entries[k].first == data.entries[k].second ? diagonal_entries : other_entries).push_back(k);
+  Matrix6d sum_AA = Matrix6d::Zero(), sum_AQ = Matrix6d::Zero(), sum_B = Matrix6d::Zero();
+  Eigen::Matrix<double, 6, 12> rows_AA = Eigen::Matrix<double, 6, 12>::Zero(), rows_AQ = Eigen::Matrix<double, 6, 12>::Zero();
   std::vector<double> pair_information(pairs.size(), 0.0), pair_average(pairs.size(), 0.0);
   Evaluation ev;
   double log_likelihood = 0.0;
@@ -105,9 +113,16 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
         ev.average_information(k, l) += 0.5 * z.cwiseProduct(W.block(ck, data.columns[l], rk, data.ranks[l])).sum();
       }
     }
-    for (int k : entry_components) {
+    sum_B += B;
+    if (!diagonal_pairs.empty()) sum_AA.noalias() += A.cwiseProduct(A), sum_AQ.noalias() += A.cwiseProduct(Q);
+    if (!diagonal_entries.empty()) {
+      for (int c = 0; c < width; ++c) {
+        rows_AA.col(c).noalias() += AF.col(c).cwiseProduct(AF.col(c));
+        rows_AQ.col(c).noalias() += AF.col(c).cwiseProduct(QF.col(c));
+      }
+    }
+    for (int k : other_entries) {
       const auto [a, b] = data.entries[k];
-      ev.score[k] += a == b ? 0.5 * B(a, a) : B(a, b);
       for (int l : factor_components) {
         const int cl = data.columns[l], rl = data.ranks[l];
         const double half = a == b ? 0.5 : 1.0;
@@ -131,10 +146,44 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
     ev.information(pairs[p].k, pairs[p].l) += pair_information[p];
     ev.average_information(pairs[p].k, pairs[p].l) += pair_average[p];
   }
+  // The whole-matrix sums: for (a, a) and (c, c), 1/2 A_ac^2 and 1/2 A_ac Q_ca.
+  for (const EntryPair& p : diagonal_pairs) {
+    ev.information(p.k, p.l) += 0.5 * sum_AA(p.a, p.c);
+    ev.average_information(p.k, p.l) += 0.5 * sum_AQ(p.a, p.c);
+  }
+  for (int k : entry_components) {
+    const auto [a, b] = data.entries[k];
+    ev.score[k] += a == b ? 0.5 * sum_B(a, a) : sum_B(a, b);
+  }
+  for (int k : diagonal_entries) {
+    const int a = data.entries[k].first;
+    for (int l : factor_components) {
+      const int r = std::max(k, l), col = std::min(k, l);
+      ev.information(r, col) += 0.5 * rows_AA.row(a).segment(data.columns[l], data.ranks[l]).sum();
+      ev.average_information(r, col) += 0.5 * rows_AQ.row(a).segment(data.columns[l], data.ranks[l]).sum();
+    }
+  }
   ev.information = ev.information.selfadjointView<Eigen::Lower>();
   ev.average_information = ev.average_information.selfadjointView<Eigen::Lower>();
   ev.log_likelihood = log_likelihood;
   return ev;
+}
+
+/// Whether every S_i(theta) is positive definite (what an evaluation would find
+/// first), for a step taken without one.
+bool positive_definite(const VarianceComponentData& data, const VectorXd& theta) {
+  const VectorXd w = column_weights(data, theta);
+  const Matrix6d shared = shared_entries(data, theta);
+  // A positive diagonal shared part plus covariances (the fixed part, factors
+  // with non-negative weights) is positive definite: no need to look further.
+  if (shared.isDiagonal(0.0) && (shared.diagonal().array() > 0.0).all() && (w.array() >= 0.0).all()) return true;
+  for (std::size_t i = 0; i < data.fixed.size(); ++i) {
+    const ComponentFactors& F = data.factors[i];
+    Matrix6d S = data.fixed[i] + shared;
+    for (int c = 0; c < static_cast<int>(F.cols()); ++c) S.noalias() += (w[c] * F.col(c)) * F.col(c).transpose();
+    if (Eigen::LLT<Matrix6d>(S).info() != Eigen::Success) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -269,6 +318,15 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
       // confirm it (the likelihood is flat there to second order), as Gauss-Newton does.
       fit.theta = stepped(1.0);
       fit.converged = true;
+      break;
+    }
+    if (iteration == options.max_iterations && !options.confirm_last_step) {
+      // Unconfirmed, but never out of the positive definite S_i (an entry of a full
+      // 6x6 is unbounded): halved until every S_i takes a Cholesky factor.
+      double alpha = 1.0;
+      bool inside = positive_definite(data, stepped(alpha));
+      for (int halving = 0; halving < 30 && !inside; ++halving) alpha *= 0.5, inside = positive_definite(data, stepped(alpha));
+      if (inside) fit.theta = stepped(alpha);
       break;
     }
     double alpha = 1.0;

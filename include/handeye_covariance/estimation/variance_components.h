@@ -64,6 +64,10 @@ struct VarianceComponentFit {
 struct VarianceComponentOptions {
   int max_iterations = 30;
   double tolerance = 1e-3;  // stop when every |step_k| < tolerance * sqrt(covariance_kk)
+  /// Take the last iteration's step without an evaluation to confirm it (within
+  /// bounds; the covariance is then the one at the point it started from): for a
+  /// caller that checks the fit by other means.
+  bool confirm_last_step = true;
 };
 
 /// Fisher scoring from theta0 (within the bounds). Throws nothing; a component
