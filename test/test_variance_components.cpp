@@ -95,8 +95,9 @@ TEST(VarianceComponents, RecoverCameraAndRobotNoiseWithAnHonestCovariance) {
 
 // A step taken without a confirming evaluation (confirm_last_step = false, as the
 // joint estimator's rounds take their last one) never leaves the positive definite
-// S_i: with a full camera 6x6 the off-diagonal entries are unbounded, and from a
-// start far off the AI-REML step overshoots into an indefinite matrix.
+// S_i, nor lands on a variance's bound: with a full camera 6x6 the off-diagonal
+// entries are unbounded, and the AI-REML step overshoots into an indefinite matrix
+// or past a variance's bound (clamped there, S_i is nearly singular).
 TEST(VarianceComponents, AnUnconfirmedStepStaysPositiveDefinite) {
   Rng rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -126,6 +127,8 @@ TEST(VarianceComponents, AnUnconfirmedStepStaysPositiveDefinite) {
     const VarianceComponentFit fit = fit_variance_components(components, data, start, one);
     ASSERT_EQ(Eigen::LLT<Matrix6d>(component_covariance(data, 0, fit.theta)).info(), Eigen::Success)
         << "trial " << trial << ": theta " << fit.theta.transpose();
+    // Nor onto a variance's bound, where S_i would be nearly singular (unseen without an evaluation).
+    for (int k = 0; k < 6; ++k) ASSERT_GT(fit.theta[k], 1e-18) << "trial " << trial << ", number " << k;
     moved += !(fit.theta - start).isZero(0.0);
   }
   EXPECT_GE(moved, 190);  // a step is taken (shortened where it must be), not refused

@@ -114,6 +114,20 @@ void whiten(const Matrix6d& L_inverse, const Matrix6x12& J, Matrix6x12& Jw) {
   Jw.block<3, 3>(3, 9).noalias() = R * B(9);
 }
 
+/// J Sigma J^T for J of linearize's shape [[T1, T2, T3, 0], [0, R2, 0, R4]] (3x3
+/// blocks): the zero blocks skipped, about half the products of a dense 6x12.
+Matrix6d projected_covariance(const Matrix6x12& J, const Matrix12d& Sigma) {
+  Matrix6x12 JS;
+  JS.topRows<3>().noalias() = J.block<3, 9>(0, 0).lazyProduct(Sigma.topRows<9>());
+  JS.bottomRows<3>().noalias() = J.block<3, 3>(3, 3).lazyProduct(Sigma.middleRows<3>(3));
+  JS.bottomRows<3>().noalias() += J.block<3, 3>(3, 9).lazyProduct(Sigma.bottomRows<3>());
+  Matrix6d out;
+  out.leftCols<3>().noalias() = JS.leftCols<9>().lazyProduct(J.block<3, 9>(0, 0).transpose());
+  out.rightCols<3>().noalias() = JS.middleCols<3>(3).lazyProduct(J.block<3, 3>(3, 3).transpose());
+  out.rightCols<3>().noalias() += JS.rightCols<3>().lazyProduct(J.block<3, 3>(3, 9).transpose());
+  return out;
+}
+
 /// Whether a step (X then Y, each translation then rotation) is large enough to
 /// move the robot's share of S_i: more than 0.01 rad or 1 cm on either pose.
 bool moves_weights(const Vector12d& step) {
@@ -180,8 +194,10 @@ struct Solution {
   const Matrix6d& L_inverse(std::size_t i) const { return (*whitening)[i]; }
   /// S_i^-1 = L^-T L^-1.
   Matrix6d weight_matrix(std::size_t i) const { return L_inverse(i).transpose().lazyProduct(L_inverse(i)); }
-  /// d P_hat / d xi_E per sample, kept only while the noise is estimated (JointProblem::keep_robot_jacobians).
+  /// d P_hat / d xi_E and the unwhitened J per sample, kept only while the noise is
+  /// estimated (JointProblem::keep_robot_jacobians).
   std::vector<Matrix6d> D;
+  std::vector<Matrix6x12> J;
   std::vector<double> weight;          // robust weights (1 for the squared loss)
   Matrix12d information = Matrix12d::Zero();  // sum w J^T S^-1 J
   Vector12d gradient = Vector12d::Zero();
@@ -226,8 +242,8 @@ class JointProblem {
     const Frame f(s.X, s.Y);
     const std::size_t n = terms_.size();
     s.lin.resize(n), s.weight.assign(n, 1.0);
-    if (keep_D_) s.D.resize(n);
-    else s.D.clear();
+    if (keep_D_) s.D.resize(n), s.J.resize(n);
+    else s.D.clear(), s.J.clear();
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
     std::shared_ptr<std::vector<Matrix6d>> fresh;
     if (!reuse) fresh = std::make_shared<std::vector<Matrix6d>>(n);
@@ -235,7 +251,7 @@ class JointProblem {
     for (std::size_t i = 0; i < n; ++i) {
       if (!at) linearize(terms_[i], f, fresh_l, model.robot_free_or_given);
       const Linear& l = at ? (*at)[i] : fresh_l;
-      if (keep_D_) s.D[i] = l.D;
+      if (keep_D_) s.D[i] = l.D, s.J[i] = l.J;
       if (!reuse && !inverse_cholesky(model.covariance(terms_[i], l.D), (*fresh)[i])) {
         throw HandEyeError(ErrorCode::InvalidNoise, "the combined robot + camera noise of this sample is singular",
                            "samples[" + std::to_string(i) + "]",
@@ -298,8 +314,9 @@ class JointProblem {
     const Vector12d step = -s.information.ldlt().solve(s.gradient);
     if (!step.allFinite() || moves_weights(step) || !(step.dot(s.information * step) <= max_sigmas * max_sigmas)) return false;
     s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
-    for (std::size_t i = 0; i < s.lin.size(); ++i) {  // e + J step, J = L (L^-1 J)
-      s.lin[i].e.noalias() += lower_triangular_inverse(s.L_inverse(i)) * (s.lin[i].Jw * step);
+    for (std::size_t i = 0; i < s.lin.size(); ++i) {  // e + J step, J = L (L^-1 J) when not kept
+      if (s.J.empty()) s.lin[i].e.noalias() += lower_triangular_inverse(s.L_inverse(i)) * (s.lin[i].Jw * step);
+      else s.lin[i].e.noalias() += s.J[i] * step;
     }
     s.chi2 -= step.dot(s.information * step);  // |r + Jw step|^2 at the Gauss-Newton step
     s.diagnostics.iterations += 1;
@@ -530,12 +547,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
     const Term& t = problem.terms()[i];
     const Linearized& l = s.lin[i];
     data.fixed[i] = fixed_model.covariance(t, s.D.at(i));
-    // J Sigma J^T = L (Jw Sigma Jw^T) L^T, with L = (L^-1)^-1 (lower triangular).
-    const Matrix6d L = lower_triangular_inverse(s.L_inverse(i));
-    const Matrix6x12 Jw_covariance = l.Jw.lazyProduct(covariance);
-    const Matrix6d whitened = Jw_covariance.lazyProduct(l.Jw.transpose());
-    const Matrix6d L_whitened = L.lazyProduct(whitened);
-    data.scatter[i] = l.e * l.e.transpose() + L_whitened.lazyProduct(L.transpose());
+    data.scatter[i] = l.e * l.e.transpose() + projected_covariance(s.J.at(i), covariance);
     data.factors[i].resize(6, column);
     for (std::size_t k = 0; k < free.size(); ++k) {
       if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], problem, s, i);

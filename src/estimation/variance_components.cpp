@@ -321,9 +321,16 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
       break;
     }
     if (iteration == options.max_iterations && !options.confirm_last_step) {
-      // Unconfirmed, but never out of the positive definite S_i (an entry of a full
-      // 6x6 is unbounded): halved until every S_i takes a Cholesky factor.
+      // Unconfirmed, so kept where the quadratic model holds: no number loses more
+      // than half of its distance to its bound (clamped onto a variance's bound,
+      // S_i can come out nearly singular, which only an evaluation would see), and
+      // no S_i leaves the positive definite (an entry of a full 6x6 is unbounded):
+      // halved until every S_i takes a Cholesky factor.
       double alpha = 1.0;
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        const double room = fit.theta[free[a]] - components[free[a]].lower;
+        if (step[a] < 0.0 && std::isfinite(room)) alpha = std::min(alpha, 0.5 * room / -step[a]);
+      }
       bool inside = positive_definite(data, stepped(alpha));
       for (int halving = 0; halving < 30 && !inside; ++halving) alpha *= 0.5, inside = positive_definite(data, stepped(alpha));
       if (inside) fit.theta = stepped(alpha);
