@@ -36,8 +36,11 @@
 //   - noise given, and they fail: the missing part, c and R (C when no camera
 //     noise was stated). A warning says so.
 // The numbers are fitted by REML, alternating with the solve until a REML step
-// from the last fit on the new solve's residuals is under 0.1 sigma (the first
-// solve is one Gauss-Newton step from the AX = XB start), and reported with
+// from the last fit on the new solve's residuals is under 0.1 sigma of each
+// number, or would move X_hat by under 0.1 sigma and Sigma_X by under 0.1 of the
+// spread the noise estimate's error gives it (NoisePass::settled; a solve is one
+// Gauss-Newton step, the first from the AX = XB start, a later one when it moves
+// by under 1 sigma), and reported with
 // their uncertainty (Calibration::noise_components); one at its bound (0) is one
 // the residuals do not support, and a robot number whose sigma the camera's
 // numbers inflate tenfold is dropped as not separable. A noise estimated from
