@@ -665,7 +665,8 @@ struct NoisePass {
   /// What that step would do to X, to first order: the change of Sigma_X it makes
   /// (|Sx^-1/2 dSx Sx^-T/2|_F) in units of the change that the noise estimate's own
   /// error makes (its RMS, sqrt(spread) below), and the shift of X_hat in X's own
-  /// sigma (Mahalanobis length). Infinite when a number at its bound would move.
+  /// sigma (Mahalanobis length); the shift is infinite when a number at its bound
+  /// would move by 0.1 of its sigma or more (that number has no P_k, h_k).
   double x_change = 0.0, x_shift = 0.0;
   /// Whether the fit is settled: its step is under 0.1 sigma of each number, or, as
   /// X sees it, under 0.1 sigma of Sigma_X and of X_hat (a step along the
