@@ -308,16 +308,14 @@ class JointProblem {
   /// the residuals move by their linear prediction e + J step, which is off by
   /// the step's square (in radians: under 1e-4 for a step that moves_weights
   /// passes). False, with nothing taken, when the step would move the weights, or
-  /// is longer than `max_sigmas` in its own Mahalanobis length: solve then.
+  /// is longer than `max_sigmas` in its own Mahalanobis length: solve then. For the
+  /// noise rounds, which keep J (keep_robot_jacobians).
   bool predicted_step(const NoiseModel& model, Solution& s, double max_sigmas, const std::vector<Linear>* at = nullptr) const {
     linearize_all(model, 0.0, s, nullptr, at);
     const Vector12d step = -s.information.ldlt().solve(s.gradient);
     if (!step.allFinite() || moves_weights(step) || !(step.dot(s.information * step) <= max_sigmas * max_sigmas)) return false;
     s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
-    for (std::size_t i = 0; i < s.lin.size(); ++i) {  // e + J step, J = L (L^-1 J) when not kept
-      if (s.J.empty()) s.lin[i].e.noalias() += lower_triangular_inverse(s.L_inverse(i)) * (s.lin[i].Jw * step);
-      else s.lin[i].e.noalias() += s.J[i] * step;
-    }
+    for (std::size_t i = 0; i < s.lin.size(); ++i) s.lin[i].e.noalias() += s.J.at(i) * step;
     s.chi2 -= step.dot(s.information * step);  // |r + Jw step|^2 at the Gauss-Newton step
     s.diagnostics.iterations += 1;
     s.diagnostics.stop_reason = StopReason::StepBelowTolerance;

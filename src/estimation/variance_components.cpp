@@ -33,6 +33,15 @@ Matrix6d shared_entries(const VarianceComponentData& data, const VectorXd& theta
   return C;
 }
 
+/// S_i(theta) = fixed_i + shared + F_i diag(w) F_i^T, from theta's column weights
+/// and shared entries (read once per evaluation, not per sample).
+Matrix6d sample_covariance(const VarianceComponentData& data, std::size_t i, const VectorXd& w, const Matrix6d& shared) {
+  const ComponentFactors& F = data.factors[i];
+  Matrix6d S = data.fixed[i] + shared;
+  for (int c = 0; c < static_cast<int>(F.cols()); ++c) S.noalias() += (w[c] * F.col(c)) * F.col(c).transpose();
+  return S;
+}
+
 struct Evaluation {
   double log_likelihood = -std::numeric_limits<double>::infinity();  // -inf: some S_i not positive definite
   VectorXd score;
@@ -83,10 +92,8 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
   for (std::size_t i = 0; i < data.fixed.size(); ++i) {
     const ComponentFactors& F = data.factors[i];
     const int width = static_cast<int>(F.cols());
-    Matrix6d S = data.fixed[i] + shared;
-    for (int c = 0; c < width; ++c) S.noalias() += (w[c] * F.col(c)) * F.col(c).transpose();
     Matrix6d L_inverse;
-    if (!inverse_cholesky(S, L_inverse)) return ev;
+    if (!inverse_cholesky(sample_covariance(data, i, w, shared), L_inverse)) return ev;
     const Matrix6d A = L_inverse.transpose().lazyProduct(L_inverse);
     // log det S = -2 log prod diag(L^-1): one log per sample (the product of six
     // reciprocal standard deviations stays far inside double's range).
@@ -178,10 +185,7 @@ bool positive_definite(const VarianceComponentData& data, const VectorXd& theta)
   // with non-negative weights) is positive definite: no need to look further.
   if (shared.isDiagonal(0.0) && (shared.diagonal().array() > 0.0).all() && (w.array() >= 0.0).all()) return true;
   for (std::size_t i = 0; i < data.fixed.size(); ++i) {
-    const ComponentFactors& F = data.factors[i];
-    Matrix6d S = data.fixed[i] + shared;
-    for (int c = 0; c < static_cast<int>(F.cols()); ++c) S.noalias() += (w[c] * F.col(c)) * F.col(c).transpose();
-    if (Eigen::LLT<Matrix6d>(S).info() != Eigen::Success) return false;
+    if (Eigen::LLT<Matrix6d>(sample_covariance(data, i, w, shared)).info() != Eigen::Success) return false;
   }
   return true;
 }
@@ -233,14 +237,6 @@ bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse) {
   return true;
 }
 
-Matrix6d lower_triangular_inverse(const Matrix6d& lower) {
-  double reciprocal[6];
-  for (int i = 0; i < 6; ++i) reciprocal[i] = 1.0 / lower(i, i);
-  Matrix6d inverse;
-  inverse_rows<0>(lower, reciprocal, inverse);
-  return inverse;
-}
-
 void add_factor_component(VarianceComponentData& data, int rank) {
   int column = 0;
   for (std::size_t k = 0; k < data.columns.size(); ++k) column = std::max(column, data.columns[k] + data.ranks[k]);
@@ -254,9 +250,7 @@ void add_entry_component(VarianceComponentData& data, int a, int b) {
 }
 
 Matrix6d component_covariance(const VarianceComponentData& data, std::size_t i, const VectorXd& theta) {
-  const VectorXd w = column_weights(data, theta);
-  const ComponentFactors Fw = data.factors[i] * w.head(data.factors[i].cols()).asDiagonal();
-  return data.fixed[i] + shared_entries(data, theta) + Fw.lazyProduct(data.factors[i].transpose());
+  return sample_covariance(data, i, column_weights(data, theta), shared_entries(data, theta));
 }
 
 VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent>& components,

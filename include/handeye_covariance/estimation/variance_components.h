@@ -64,9 +64,10 @@ struct VarianceComponentFit {
 struct VarianceComponentOptions {
   int max_iterations = 30;
   double tolerance = 1e-3;  // stop when every |step_k| < tolerance * sqrt(covariance_kk)
-  /// Take the last iteration's step without an evaluation to confirm it (within
-  /// bounds; the covariance is then the one at the point it started from): for a
-  /// caller that checks the fit by other means.
+  /// Take the last iteration's step without an evaluation to confirm it, for a
+  /// caller that checks the fit by other means. The step is shortened so that no
+  /// number loses more than half of its distance to its bound and every S_i stays
+  /// positive definite; the covariance is the one at the point it started from.
   bool confirm_last_step = true;
 };
 
@@ -81,8 +82,6 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
 /// right-hand sides through its large-matrix kernels, which cost more than the
 /// arithmetic at this size; the estimators call this for every sample.
 bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse);
-/// The inverse of a lower-triangular 6x6 with a non-zero diagonal (forward substitution).
-Matrix6d lower_triangular_inverse(const Matrix6d& lower);
 
 /// Adds a component to `data` (factor columns, or a shared covariance entry).
 void add_factor_component(VarianceComponentData& data, int rank);
