@@ -168,6 +168,25 @@ struct NoiseModel {
   }
 };
 
+/// Sigma = I^-1 for a 12x12 information I: by its Cholesky factor, I = L L^T and
+/// Sigma = L^-T L^-1, with L^-1 by forward substitution (a quarter of the work of
+/// solving against the identity); by LDLT when I is not positive definite.
+Matrix12d inverse_information(const Matrix12d& information) {
+  const Eigen::LLT<Matrix12d> llt(information);
+  if (llt.info() != Eigen::Success) return information.ldlt().solve(Matrix12d::Identity());
+  const Matrix12d& L = llt.matrixLLT();  // L in the lower triangle
+  Matrix12d L_inverse = Matrix12d::Zero();
+  for (int j = 0; j < 12; ++j) {
+    L_inverse(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < 12; ++i) {
+      double sum = 0.0;
+      for (int k = j; k < i; ++k) sum += L(i, k) * L_inverse(k, j);
+      L_inverse(i, j) = -sum / L(i, i);
+    }
+  }
+  return L_inverse.transpose().lazyProduct(L_inverse);
+}
+
 /// Huber's loss on a Mahalanobis distance d (s: the robust scale; k: threshold in
 /// units of s; k = 0 for the squared loss). Returns the IRLS weight; rho is the loss.
 double huber_weight(double d, double k_scaled) { return k_scaled <= 0.0 || d <= k_scaled ? 1.0 : k_scaled / d; }
@@ -538,7 +557,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   bool scale_free = false;
   for (const Free& c : free) scale_free = scale_free || c.kind == Kind::CameraScale;
   fixed_model.camera_scale = scale_free ? 0.0 : model.camera_scale;
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity()) * covariance_scale;
+  const Matrix12d covariance = inverse_information(s.information) * covariance_scale;
   const std::size_t n = problem.size();
   data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -655,8 +674,9 @@ Eigen::VectorXd moment_components(const std::vector<Free>& free, const JointProb
 
 /// What one pass over the samples at a solution says about the noise fit behind it.
 struct NoisePass {
-  /// 1 / (1 - q): the covariance's inflation for the noise estimate's own error.
-  double inflation = 1.0;
+  /// 1 / (1 - q): the inflation of X's covariance and of Y's for the noise
+  /// estimate's own error (the X-Y block takes their geometric mean).
+  double inflation_x = 1.0, inflation_y = 1.0;
   /// The largest REML step from the fit's theta on this solution's residuals, in
   /// each number's own sigma: the fit is a fixed point of the rounds when it is small.
   double step = 0.0;
@@ -680,7 +700,9 @@ struct NoisePass {
 ///   E[Delta] = 1/2 sum_kl C_kl d2Sigma_kl = Sigma (sum_kl C_kl K_k Sigma K_l) Sigma - 1/2 Sigma M Sigma,
 ///   M = sum_kl C_kl sum_i J^T (A G_l A G_k A + A G_k A G_l A) J,
 /// the second term being the bias of Sigma(theta_hat), which is not linear in theta
-/// (for one scale of every variance it is, and q = 2 / nu exactly).
+/// (for one scale of every variance it is, and q = 2 / nu exactly). Y's q is the
+/// same figure for Y: its traces through Vy = S T (below), its Q_k the part of
+/// K'_k T = S^T K_k Vy off T's columns, K'_k = [P Q; Q^T R] in the root S = [V | Wy].
 /// Every trace is taken through V = Sigma_{:,x} Lx^-T (Sx = Lx Lx^T), so that a
 /// sample adds 12x6 products, not 12x12 ones: Sx^-1 dSx_k is similar to
 /// P_k = V^T K_k V, tr(Sx^-1 [Sigma N Sigma]_xx) = tr(V^T N V), and with B = A J,
@@ -692,7 +714,7 @@ struct NoisePass {
 NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
                      const Solution& s) {
   NoisePass out;
-  const Matrix12d covariance = s.information.ldlt().solve(Matrix12d::Identity());
+  const Matrix12d covariance = inverse_information(s.information);
   const Eigen::LLT<Matrix6d> Sx(covariance.topLeftCorner<6, 6>());
   if (Sx.info() != Eigen::Success || free.empty()) return out;
   const Eigen::Matrix<double, 6, 12> Vt = Sx.matrixL().solve(covariance.topRows<6>());  // V^T = Lx^-1 Sigma_{x,:}
@@ -701,6 +723,17 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   // rest of Sigma lives in the Y block): B Sigma B^T = U + (By Ly)(By Ly)^T.
   const Eigen::LLT<Matrix6d> conditional(covariance.bottomRightCorner<6, 6>() - Vt.rightCols<6>().transpose() * Vt.rightCols<6>());
   const Matrix6d Ly = conditional.info() == Eigen::Success ? Matrix6d(conditional.matrixL()) : Matrix6d::Zero();
+  // Y's traces go through the same root S = [V | Wy] of Sigma: Y's whitened columns
+  // are Vy = Sigma_{:,y} Lyy^-T = S T, T = S_y^T Lyy^-T (S_y: S's Y rows, Syy = Lyy Lyy^T, T^T T = I).
+  const Eigen::LLT<Matrix6d> Syy(covariance.bottomRightCorner<6, 6>());
+  Eigen::Matrix<double, 12, 6> T = Eigen::Matrix<double, 12, 6>::Zero(), Vy = T;
+  if (Syy.info() == Eigen::Success) {
+    Eigen::Matrix<double, 6, 12> Sy;
+    Sy << V.bottomRows<6>(), Ly;
+    T = Syy.matrixL().solve(Sy).transpose();
+    Vy = Syy.matrixL().solve(covariance.bottomRows<6>()).transpose();
+  }
+  const Matrix6d Tx = T.topRows<6>(), Ty = T.bottomRows<6>();
   const std::size_t K = free.size();
   std::vector<int> active;  // the numbers off their bounds, with a covariance
   for (std::size_t k = 0; k < K; ++k) {
@@ -745,12 +778,13 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
     }
   };
   const auto at = [](int row, int col) { return row + kColumns * col; };  // Gram's column-major offset
-  // The second-order term, tr(V^T M V) = sum_i 2 w sum_kl C_kl tr(G_l A G_k U), with
-  // tr(G_l A G_k U) = sum over l's (p, q) and k's (p', q') of (q^T A p') (q'^T U p):
-  // one (C_kl, offset in E^T A E, offset in E^T U E) per pair of outer products.
+  // The second-order term, tr(V^T M V) = sum_i 2 w tr(N_i U_i), U = (B V)(B V)^T,
+  // N_i = sum_kl C_kl G_l A G_k = E Nh E^T: over l's outers (p, q) and k's (p', q'),
+  // Nh's entry (q', p) gathers C_kl (q^T A p'), one (C_kl, offset in E^T A E, offset
+  // in Nh) per pair of outer products. The same N_i gives Y's, through B Vy.
   struct Traced {
     double c;
-    int a, u;
+    int a, n;
   };
   std::vector<Traced> traced;
   struct ActiveOuter {
@@ -766,16 +800,17 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
       }
     }
   }
-  // P_k = V^T K_k V and Q_k = V^T K_k Wy, Wy = [0; Ly] (active k only).
-  std::vector<Matrix6d> P(K, Matrix6d::Zero()), Q(K, Matrix6d::Zero());
+  // P_k = V^T K_k V, Q_k = V^T K_k Wy and R_k = Wy^T K_k Wy, Wy = [0; Ly]: the blocks
+  // of K'_k = S^T K_k S (active k only).
+  std::vector<Matrix6d> P(K, Matrix6d::Zero()), Q(K, Matrix6d::Zero()), R(K, Matrix6d::Zero());
   // h_k = sum_i (B V)^T G_k A e_i: dX_hat / dtheta_k in X's whitened coordinates,
   // from the normal equations sum_i J^T A(theta) e_i = 0 (dA / dtheta_k = -A G_k A;
   // e_i falls as X_hat moves along J). Over 300 simulated sessions the shift it
   // predicts matched the next round's solve to a few hundredths of a sigma.
   std::vector<Vector6d> h(K, Vector6d::Zero());
   Eigen::VectorXd score = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K));
-  double traced_M = 0.0;  // tr(V^T M V)
-  Gram Z, AG, UG;
+  double traced_M = 0.0, traced_My = 0.0;  // tr(V^T M V), tr(Vy^T M Vy)
+  Gram AG, Nh;
   // Rows q^T B V and q^T W, and q^T A e, for the columns q of E.
   Eigen::Matrix<double, kColumns, 6, Eigen::RowMajor> EBV, EW;
   Eigen::Matrix<double, kColumns, 1> EAe;
@@ -786,32 +821,42 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
     }
     const Matrix6d A = s.weight_matrix(i);
     const Matrix6x12 B = s.L_inverse(i).transpose().lazyProduct(s.lin[i].Jw);  // A J = L^-T (L^-1 J)
-    const Matrix6d BV = B.lazyProduct(V);
-    const Matrix6d U = BV.lazyProduct(BV.transpose());
-    // The score's kernel A M A - A.
-    const Matrix6d W = B.rightCols<6>().lazyProduct(Ly);
+    const Matrix6d BV = B.lazyProduct(V), W = B.rightCols<6>().lazyProduct(Ly), BVy = B.lazyProduct(Vy);  // B Wy = W
     const Vector6d Ae = A * s.lin[i].e;
-    gram(Ae * Ae.transpose() + U + W.lazyProduct(W.transpose()) - A, Z);
-    for (std::size_t k = 0; k < K; ++k) {
-      for (const Outer& o : outers[k]) score[static_cast<Eigen::Index>(k)] += 0.5 * Z.data()[at(o.q, o.p)];
-    }
-    if (active.empty()) continue;
-    gram(A, AG), gram(U, UG);
+    gram(A, AG);
     EBV.topRows<6>() = BV, EW.topRows<6>() = W, EAe.head<6>() = Ae;
     for (int c = 0; c < width; ++c) {
       EBV.row(6 + c).noalias() = F.col(c).transpose() * BV;
       EW.row(6 + c).noalias() = F.col(c).transpose() * W;
       EAe[6 + c] = F.col(c).dot(Ae);
     }
+    // The score's kernel A M A - A = (A e)(A e)^T + (B V)(B V)^T + W W^T - A, read at
+    // each outer's (q, p) in E's columns.
+    for (std::size_t k = 0; k < K; ++k) {
+      double sum = 0.0;
+      for (const Outer& o : outers[k]) {
+        sum += EAe[o.q] * EAe[o.p] + EBV.row(o.q).dot(EBV.row(o.p)) + EW.row(o.q).dot(EW.row(o.p)) - AG.data()[at(o.q, o.p)];
+      }
+      score[static_cast<Eigen::Index>(k)] += 0.5 * sum;
+    }
+    if (active.empty()) continue;
     for (const ActiveOuter& ao : active_outers) {  // K_k += w B^T p q^T B, seen through V and Wy (B Wy = W)
       const Vector6d left = w * EBV.row(ao.o.p).transpose();
       P[ao.k].noalias() += left * EBV.row(ao.o.q);
       Q[ao.k].noalias() += left * EW.row(ao.o.q);
+      R[ao.k].noalias() += (w * EW.row(ao.o.p).transpose()) * EW.row(ao.o.q);
       h[ao.k].noalias() += left * EAe[ao.o.q];
     }
-    double sample_M = 0.0;
-    for (const Traced& t : traced) sample_M += t.c * AG.data()[t.a] * UG.data()[t.u];
-    traced_M += 2.0 * w * sample_M;
+    Nh.setZero();
+    for (const Traced& t : traced) Nh.data()[t.n] += t.c * AG.data()[t.a];
+    Matrix6d N = Nh.topLeftCorner<6, 6>();  // E Nh E^T, E = [I | F]
+    for (int c = 0; c < width; ++c) {
+      Vector6d column = Nh.block<6, 1>(0, 6 + c);  // (Nh_12 + F Nh_22) e_c
+      for (int a = 0; a < width; ++a) column += Nh(6 + a, 6 + c) * F.col(a);
+      N.noalias() += F.col(c) * Nh.block<1, 6>(6 + c, 0) + column * F.col(c).transpose();
+    }
+    traced_M += 2.0 * w * N.lazyProduct(BV).cwiseProduct(BV).sum();
+    traced_My += 2.0 * w * N.lazyProduct(BVy).cwiseProduct(BVy).sum();
   }
   // The step: C score over the free numbers; one at its bound by its own information
   // (that one has no P_k, h_k: it is judged by its own sigma alone).
@@ -833,19 +878,32 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   out.step = std::max(out.step, bound_step);
   out.x_shift = bound_step < 0.1 ? shift.norm() : std::numeric_limits<double>::infinity();
   // spread = sum_kl C_kl tr(P_k P_l); mixed = sum_kl C_kl tr(V^T K_k Sigma K_l V)
-  // = sum_kl C_kl (tr(P_k P_l) + tr(Q_k Q_l^T)), Sigma = V V^T + Wy Wy^T.
-  double spread = 0.0, mixed = 0.0;
+  // = sum_kl C_kl (tr(P_k P_l) + tr(Q_k Q_l^T)), Sigma = V V^T + Wy Wy^T, so that
+  // spread - mixed = -sum_kl C_kl tr(Q_k Q_l^T). For Y, through T: its Q_k is
+  // (I - T T^T) K'_k T, the part of K'_k T off Y's own columns.
+  using Columns = Eigen::Matrix<double, 12, 6>;
+  std::vector<Columns> Qy(K);
   for (int k : active) {
-    for (int l : active) {
-      const double PP = P[k].cwiseProduct(P[l].transpose()).sum();
-      spread += fit.covariance(k, l) * PP;
-      mixed += fit.covariance(k, l) * (PP + Q[k].cwiseProduct(Q[l]).sum());
+    Columns KT;
+    KT.topRows<6>().noalias() = P[k] * Tx + Q[k] * Ty;
+    KT.bottomRows<6>().noalias() = Q[k].transpose() * Tx + R[k] * Ty;
+    Qy[k].noalias() = KT - T * (T.transpose() * KT);
+  }
+  double spread = 0.0, crossed = 0.0, crossed_y = 0.0;  // crossed = mixed - spread
+  for (std::size_t x = 0; x < active.size(); ++x) {
+    for (std::size_t y = x; y < active.size(); ++y) {
+      const int k = active[x], l = active[y];
+      const double c = (x == y ? 1.0 : 2.0) * fit.covariance(k, l);
+      spread += c * P[k].cwiseProduct(P[l]).sum();
+      crossed += c * Q[k].cwiseProduct(Q[l]).sum();
+      crossed_y += c * Qy[k].cwiseProduct(Qy[l]).sum();
     }
   }
   // E |sum_k dtheta_k P_k|_F^2 = spread over the noise estimate's error.
   out.x_change = spread > 0.0 ? change.norm() / std::sqrt(spread) : (change.isZero(0.0) ? 0.0 : std::numeric_limits<double>::infinity());
-  const double q = std::clamp((spread - (mixed - 0.5 * traced_M)) / 6.0, 0.0, 0.5);
-  out.inflation = 1.0 / (1.0 - q);
+  const double q = std::clamp((0.5 * traced_M - crossed) / 6.0, 0.0, 0.5);
+  const double q_y = std::clamp((0.5 * traced_My - crossed_y) / 6.0, 0.0, 0.5);
+  out.inflation_x = 1.0 / (1.0 - q), out.inflation_y = 1.0 / (1.0 - q_y);
   return out;
 }
 
@@ -903,7 +961,7 @@ double median(std::vector<double> v) {
 Matrix12d sandwich(const Solution& s, double k_scaled) {
   // A starts as sum w Jw^T Jw, which linearize_all has already summed: the information.
   Matrix12d A = s.information, B = Matrix12d::Zero();
-  const std::vector<Vector6d> corrected = corrected_residuals(s, s.information.ldlt().solve(Matrix12d::Identity()));
+  const std::vector<Vector6d> corrected = corrected_residuals(s, inverse_information(s.information));
   for (std::size_t i = 0; i < s.lin.size(); ++i) {
     const Matrix6x12& Jw = s.lin[i].Jw;
     const Vector6d r = whitened_residual(s, i);
@@ -1002,7 +1060,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
 
   std::vector<Free> free = free_components(given, chi2_failed, any_camera_stated, dof, options);
   std::vector<std::string> inseparable;  // robot components the camera's can mimic
-  double inflation = 1.0;
+  double inflation = 1.0, pattern_inflation = 1.0;  // X's and Y's
   if (!free.empty()) {
     problem.keep_robot_jacobians();
     std::vector<VarianceComponent> components;
@@ -1094,7 +1152,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       problem.gauss_newton(model, 0.0, s);
       if (!free.empty()) pass = noise_pass(problem, free, fit, s);
     }
-    inflation = pass.inflation;
+    inflation = pass.inflation_x, pattern_inflation = pass.inflation_y;
 
     result.noise_origin = given ? NoiseOrigin::Given : NoiseOrigin::EstimatedFromResiduals;
     std::string text;
@@ -1137,7 +1195,8 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     }
     if (!given) text += "; the robot's translation noise cannot be told from the camera's and is part of it";
     for (const std::string& name : inseparable) text += "; " + name + " not separable from the camera's: part of it";
-    result.noise_model = text + "; covariance x" + number_text(inflation, 3) + " for the noise estimate's own uncertainty";
+    result.noise_model = text + "; covariance x" + number_text(inflation, 3) + " (X), x" + number_text(pattern_inflation, 3) +
+                         " (pattern) for the noise estimate's own uncertainty";
     if (given) {
       result.warnings.push_back("the stated noise is too small: residuals are " +
                                 number_text(std::sqrt(result.residual_checks.back().statistic), 2) +
@@ -1154,8 +1213,11 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
 
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
-  const Matrix12d information_inverse = s.information.ldlt().solve(Matrix12d::Identity());
-  Matrix12d covariance = information_inverse * inflation;
+  const Matrix12d information_inverse = inverse_information(s.information);
+  // X's block by X's inflation, Y's by Y's, X-Y by their geometric mean: D Sigma D stays a covariance.
+  Eigen::Matrix<double, 12, 1> root_inflation;
+  root_inflation << Vector6d::Constant(std::sqrt(inflation)), Vector6d::Constant(std::sqrt(pattern_inflation));
+  Matrix12d covariance = root_inflation.asDiagonal() * information_inverse * root_inflation.asDiagonal();
   bool robust = options.robust == JointOptions::Robust::On;
   // Residuals at round-off (noise-free input) have no tails to judge.
   double largest_residual = 0.0;
@@ -1178,13 +1240,14 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       }
       const double small_sample = n / (n - 7.0);  // n > 12 here
       covariance = sandwich(s, k_scaled) * small_sample;
-      inflation = small_sample;
+      inflation = pattern_inflation = small_sample;
       result.loss = "huber";
       result.covariance_kind = "sandwich";
       result.downweighted = static_cast<int>(std::count_if(s.weight.begin(), s.weight.end(), [](double w) { return w < 1.0; }));
     }
   }
   result.covariance_inflation = inflation;
+  result.pattern_covariance_inflation = pattern_inflation;
 
   if (!covariance.allFinite() || !(covariance.diagonal().array() > 0.0).all()) {
     throw HandEyeError(ErrorCode::PoorlyConstrained, "the samples do not determine X and the pattern pose together",

@@ -121,7 +121,8 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     out += c.covariance_kind == "sandwich"
                ? line("  covariance            ROBUST: Huber loss (%d sample(s) down-weighted), sandwich x%.2f", c.downweighted,
                       c.covariance_inflation)
-               : line("  covariance            inverse information x%.3f", c.covariance_inflation);
+               : line("  covariance            inverse information x%.3f (X), x%.3f (pattern)", c.covariance_inflation,
+                      c.pattern_covariance_inflation);
   }
   if (c.method == Method::Joint) {
     out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,

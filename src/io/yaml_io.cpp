@@ -574,6 +574,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "covariance" << YAML::Value << calibration.covariance_kind;
     out << YAML::Key << "downweighted" << YAML::Value << calibration.downweighted;
     out << YAML::Key << "covariance_inflation" << YAML::Value << calibration.covariance_inflation;
+    out << YAML::Key << "pattern_covariance_inflation" << YAML::Value << calibration.pattern_covariance_inflation;
     out << YAML::EndMap;
   }
 

@@ -139,7 +139,10 @@ struct Calibration {
   std::string loss = "squared";              // or "huber": samples far out weigh less (robust mode)
   std::string covariance_kind = "information";  // or "sandwich": model-robust (robust mode)
   int downweighted = 0;                      // robust mode: samples the Huber loss weighed below 1
-  double covariance_inflation = 1.0;         // the factor for the noise estimate's (or the sandwich's) own uncertainty
+  /// Joint: the factors on the inverse information for the noise estimate's (or the
+  /// sandwich's) own uncertainty, X's and the pattern pose's (the X-pattern block
+  /// takes their geometric mean).
+  double covariance_inflation = 1.0, pattern_covariance_inflation = 1.0;
   std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
 
   /// Samples left out by solve_robust (outliers.h), indices into its input.

@@ -44,10 +44,12 @@
 // their uncertainty (Calibration::noise_components); one at its bound (0) is one
 // the residuals do not support, and a robot number whose sigma the camera's
 // numbers inflate tenfold is dropped as not separable. A noise estimated from
-// few residuals is itself uncertain: the covariance is multiplied by 1 / (1 - q),
-// q the second-order excess of the NEES of X over the noise estimate's error (its
+// few residuals is itself uncertain: X's covariance is multiplied by 1 / (1 - q_x),
+// q_x the second-order excess of the NEES of X over the noise estimate's error (its
 // spread and the bias of Sigma_X(theta_hat); noise_pass), exactly 2 / nu
-// for one scale from nu dof, so the NEES of X stays about 6.
+// for one scale from nu dof, so the NEES of X stays about 6; Y's by its own
+// 1 / (1 - q_y), the same figure for Y, and the X-Y block by their geometric mean
+// (one factor for both left Y's NEES at 6.50, above its F bound 6.43).
 //
 // Robust mode. The Mahalanobis residuals d_i (leverage-corrected, so each is
 // chi2(6) under the model) are tested for heavy tails (Mardia's kurtosis, z
