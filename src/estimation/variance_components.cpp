@@ -176,6 +176,47 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
   return ev;
 }
 
+/// The inverse of a small symmetric matrix from its LDLT, P^T L^-T D^-1 L^-1 P, with a
+/// zero pivot's reciprocal taken as 0 as LDLT::solve does. Solving against the
+/// identity takes Eigen's blocked solver, several times the work at a fit's size.
+MatrixXd inverse_of(const Eigen::LDLT<MatrixXd>& ldlt) {
+  const Eigen::Index n = ldlt.rows();
+  const MatrixXd& factors = ldlt.matrixLDLT();  // unit L below the diagonal
+  MatrixXd L_inverse = MatrixXd::Identity(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      double sum = 0.0;
+      for (Eigen::Index k = j; k < i; ++k) sum += factors(i, k) * L_inverse(k, j);
+      L_inverse(i, j) = -sum;
+    }
+  }
+  VectorXd d_inverse(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double d = ldlt.vectorD()[i];
+    d_inverse[i] = std::abs(d) > std::numeric_limits<double>::min() ? 1.0 / d : 0.0;
+  }
+  // (L D L^T)^-1 entry by entry (products of this size would take Eigen's GEMM path),
+  // then A^-1 = P^T (L D L^T)^-1 P.
+  const Eigen::PermutationMatrix<Eigen::Dynamic> P(ldlt.transpositionsP());
+  const auto& where = P.indices();  // (P x)_where[i] = x_i
+  MatrixXd out(n, n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b <= a; ++b) {
+      double sum = 0.0;
+      for (Eigen::Index k = a; k < n; ++k) sum += L_inverse(k, a) * d_inverse[k] * L_inverse(k, b);
+      out(b, a) = sum;
+    }
+  }
+  MatrixXd inverse(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const Eigen::Index a = std::max(where[i], where[j]), b = std::min(where[i], where[j]);
+      inverse(i, j) = out(b, a);
+    }
+  }
+  return inverse;
+}
+
 /// Whether every S_i(theta) is positive definite (what an evaluation would find
 /// first), for a step taken without one.
 bool positive_definite(const VarianceComponentData& data, const VectorXd& theta) {
@@ -281,7 +322,7 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
       const VectorXd scale = information.diagonal().cwiseSqrt().cwiseInverse();
       const Eigen::LDLT<MatrixXd> ldlt(scale.asDiagonal() * information * scale.asDiagonal());
       step = scale.asDiagonal() * ldlt.solve(scale.asDiagonal() * score);
-      variance = (scale.asDiagonal() * ldlt.solve(MatrixXd::Identity(free.size(), free.size())) * scale.asDiagonal()).diagonal();
+      variance = inverse_of(ldlt).diagonal().cwiseProduct(scale.cwiseAbs2());
       int outward = -1;
       for (std::size_t a = 0; a < free.size(); ++a) {
         if (fit.theta[free[a]] <= components[free[a]].lower && step[a] < 0.0) outward = static_cast<int>(a);
@@ -367,9 +408,7 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
       for (std::size_t b = 0; b < free.size(); ++b) information(a, b) = current.information(free[a], free[b]);
     }
     const VectorXd scale = information.diagonal().cwiseSqrt().cwiseInverse();
-    const MatrixXd inverse = scale.asDiagonal() *
-                             (scale.asDiagonal() * information * scale.asDiagonal()).ldlt().solve(MatrixXd::Identity(free.size(), free.size())) *
-                             scale.asDiagonal();
+    const MatrixXd inverse = scale.asDiagonal() * inverse_of((scale.asDiagonal() * information * scale.asDiagonal()).ldlt()) * scale.asDiagonal();
     for (std::size_t a = 0; a < free.size(); ++a) {
       for (std::size_t b = 0; b < free.size(); ++b) fit.covariance(free[a], free[b]) = inverse(a, b);
     }
