@@ -686,6 +686,8 @@ struct NoisePass {
   /// sigma (Mahalanobis length); the shift is infinite when a number at its bound
   /// would move by 0.1 of its sigma or more (that number has no P_k, h_k).
   double x_change = 0.0, x_shift = 0.0;
+  /// The information it was made at and its inverse, for the result to reuse.
+  Matrix12d information = Matrix12d::Zero(), covariance = Matrix12d::Zero();
   /// Whether the fit is settled: its step is under 0.1 sigma of each number, or, as
   /// X sees it, under 0.1 sigma of Sigma_X and of X_hat (a step along the
   /// likelihood's ridge, between numbers that X cannot tell apart).
@@ -715,6 +717,7 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
                      const Solution& s) {
   NoisePass out;
   const Matrix12d covariance = inverse_information(s.information);
+  out.information = s.information, out.covariance = covariance;
   const Eigen::LLT<Matrix6d> Sx(covariance.topLeftCorner<6, 6>());
   if (Sx.info() != Eigen::Success || free.empty()) return out;
   const Eigen::Matrix<double, 6, 12> Vt = Sx.matrixL().solve(covariance.topRows<6>());  // V^T = Lx^-1 Sigma_{x,:}
@@ -1061,6 +1064,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   std::vector<Free> free = free_components(given, chi2_failed, any_camera_stated, dof, options);
   std::vector<std::string> inseparable;  // robot components the camera's can mimic
   double inflation = 1.0, pattern_inflation = 1.0;  // X's and Y's
+  NoisePass pass;
   if (!free.empty()) {
     problem.keep_robot_jacobians();
     std::vector<VarianceComponent> components;
@@ -1077,7 +1081,6 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
                                         : initial_components(free, given ? s.scatter() : problem.residual_scatter(s.X, s.Y), model, dof);
     VarianceComponentFit fit;
     bool fitted = false;  // fit is a REML fit of the current free numbers, at theta
-    NoisePass pass;
     bool settled = false;  // s was solved under theta = fit.theta, a fixed point of the rounds
     for (int round = 0; round < options.max_noise_rounds; ++round) {
       apply_components(free, theta, model);
@@ -1213,7 +1216,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
 
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
-  const Matrix12d information_inverse = inverse_information(s.information);
+  const Matrix12d information_inverse = pass.information == s.information ? pass.covariance : inverse_information(s.information);
   // X's block by X's inflation, Y's by Y's, X-Y by their geometric mean: D Sigma D stays a covariance.
   Eigen::Matrix<double, 12, 1> root_inflation;
   root_inflation << Vector6d::Constant(std::sqrt(inflation)), Vector6d::Constant(std::sqrt(pattern_inflation));
