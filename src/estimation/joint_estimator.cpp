@@ -783,11 +783,14 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   const auto at = [](int row, int col) { return row + kColumns * col; };  // Gram's column-major offset
   // The second-order term, tr(V^T M V) = sum_i 2 w tr(N_i U_i), U = (B V)(B V)^T,
   // N_i = sum_kl C_kl G_l A G_k = E Nh E^T: over l's outers (p, q) and k's (p', q'),
-  // Nh's entry (q', p) gathers C_kl (q^T A p'), one (C_kl, offset in E^T A E, offset
-  // in Nh) per pair of outer products. The same N_i gives Y's, through B Vy.
+  // Nh's entry (q', p) gathers C_kl (q^T A p'). N_i is not formed: tr(N U) =
+  // tr(Nh E^T U E), and (E^T U E)(p, q') is the dot of rows p and q' of E^T B V, so
+  // each pair of outer products adds C_kl (E^T A E)(q, p') (row p . row q'), both
+  // Grams symmetric (pairs that read the same entries are merged). The same terms
+  // give Y's, through the rows of E^T B Vy.
   struct Traced {
     double c;
-    int a, n;
+    int a, r, s;  // offset in E^T A E; the two rows
   };
   std::vector<Traced> traced;
   struct ActiveOuter {
@@ -799,7 +802,13 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
     for (const Outer& o : outers[k]) active_outers.push_back({k, o});
     for (int l : active) {
       for (const Outer& ol : outers[l]) {
-        for (const Outer& ok : outers[k]) traced.push_back({fit.covariance(k, l), at(ol.q, ok.p), at(ok.q, ol.p)});
+        for (const Outer& ok : outers[k]) {
+          const Traced t{fit.covariance(k, l), at(std::min(ol.q, ok.p), std::max(ol.q, ok.p)), std::min(ok.q, ol.p),
+                         std::max(ok.q, ol.p)};
+          const auto same = std::find_if(traced.begin(), traced.end(), [&t](const Traced& u) { return u.a == t.a && u.r == t.r && u.s == t.s; });
+          if (same == traced.end()) traced.push_back(t);
+          else same->c += t.c;
+        }
       }
     }
   }
@@ -813,9 +822,9 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   std::vector<Vector6d> h(K, Vector6d::Zero());
   Eigen::VectorXd score = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K));
   double traced_M = 0.0, traced_My = 0.0;  // tr(V^T M V), tr(Vy^T M Vy)
-  Gram AG, Nh;
+  Gram AG;
   // Rows q^T B V and q^T W, and q^T A e, for the columns q of E.
-  Eigen::Matrix<double, kColumns, 6, Eigen::RowMajor> EBV, EW;
+  Eigen::Matrix<double, kColumns, 6, Eigen::RowMajor> EBV, EW, EBVy;
   Eigen::Matrix<double, kColumns, 1> EAe;
   for (std::size_t i = 0; i < problem.size(); ++i) {
     const double w = s.weight[i];
@@ -850,16 +859,15 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
       R[ao.k].noalias() += (w * EW.row(ao.o.p).transpose()) * EW.row(ao.o.q);
       h[ao.k].noalias() += left * EAe[ao.o.q];
     }
-    Nh.setZero();
-    for (const Traced& t : traced) Nh.data()[t.n] += t.c * AG.data()[t.a];
-    Matrix6d N = Nh.topLeftCorner<6, 6>();  // E Nh E^T, E = [I | F]
-    for (int c = 0; c < width; ++c) {
-      Vector6d column = Nh.block<6, 1>(0, 6 + c);  // (Nh_12 + F Nh_22) e_c
-      for (int a = 0; a < width; ++a) column += Nh(6 + a, 6 + c) * F.col(a);
-      N.noalias() += F.col(c) * Nh.block<1, 6>(6 + c, 0) + column * F.col(c).transpose();
+    EBVy.topRows<6>() = BVy;
+    for (int c = 0; c < width; ++c) EBVy.row(6 + c).noalias() = F.col(c).transpose() * BVy;
+    double trace = 0.0, trace_y = 0.0;
+    for (const Traced& t : traced) {
+      const double ca = t.c * AG.data()[t.a];
+      trace += ca * EBV.row(t.r).dot(EBV.row(t.s));
+      trace_y += ca * EBVy.row(t.r).dot(EBVy.row(t.s));
     }
-    traced_M += 2.0 * w * N.lazyProduct(BV).cwiseProduct(BV).sum();
-    traced_My += 2.0 * w * N.lazyProduct(BVy).cwiseProduct(BVy).sum();
+    traced_M += 2.0 * w * trace, traced_My += 2.0 * w * trace_y;
   }
   // The step: C score over the free numbers; one at its bound by its own information
   // (that one has no P_k, h_k: it is judged by its own sigma alone).
