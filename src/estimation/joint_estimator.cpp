@@ -541,9 +541,11 @@ bool model_is_covariance(const NoiseModel& model) {
   return Eigen::SelfAdjointEigenSolver<Matrix6d>(model.camera, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() >= 1e-18;
 }
 
-/// The fit's data at a solution: fixed part, REML-completed scatter, factors.
+/// The fit's data at a solution: fixed part, REML-completed scatter, factors; with
+/// the solution's whitening when s was linearised under this model (a predicted
+/// step's s: its D and its L^-1 from the same linearisation), scaled by covariance_scale.
 VarianceComponentData component_data(const JointProblem& problem, const std::vector<Free>& free, const NoiseModel& model,
-                                     const Solution& s, double covariance_scale = 1.0) {
+                                     const Solution& s, double covariance_scale = 1.0, bool whitened_at_theta = false) {
   VarianceComponentData data;
   for (const Free& c : free) {
     if (rank_of(c.kind) > 0) add_factor_component(data, rank_of(c.kind));
@@ -560,11 +562,14 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   const Matrix12d covariance = inverse_information(s.information) * covariance_scale;
   const std::size_t n = problem.size();
   data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
+  if (whitened_at_theta) data.start_whitening.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Term& t = problem.terms()[i];
     const Linearized& l = s.lin[i];
     data.fixed[i] = fixed_model.covariance(t, s.D.at(i));
     data.scatter[i] = l.e * l.e.transpose() + projected_covariance(s.J.at(i), covariance);
+    // S_i(theta) is the covariance that s was whitened with (its scale aside).
+    if (whitened_at_theta) data.start_whitening[i] = s.L_inverse(i) / std::sqrt(covariance_scale);
     data.factors[i].resize(6, column);
     for (std::size_t k = 0; k < free.size(); ++k) {
       if (data.ranks[k] > 0) data.factors[i].middleCols(data.columns[k], data.ranks[k]) = factor(free[k], problem, s, i);
@@ -1124,7 +1129,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       per_round.max_iterations = 2;
       per_round.tolerance = 0.1;
       per_round.confirm_last_step = false;
-      fit = fit_variance_components(components, component_data(problem, free, model, s, covariance_scale), theta, per_round);
+      fit = fit_variance_components(components, component_data(problem, free, model, s, covariance_scale, stepped), theta, per_round);
       fitted = true;
       // A robot component the camera's can mimic (its sigma inflated 10x by the
       // others) is not separable: held at 0, the camera's numbers take its share.

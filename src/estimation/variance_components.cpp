@@ -63,7 +63,7 @@ struct EntryPair {
 
 /// The REML criterion at theta with its score, expected and average information
 /// (every caller needs the derivatives at the point it evaluates).
-Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
+Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bool at_start = false) {
   const int K = static_cast<int>(data.columns.size());
   const VectorXd w = column_weights(data, theta);
   const Matrix6d shared = shared_entries(data, theta);
@@ -98,7 +98,8 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta) {
     const ComponentFactors& F = data.factors[i];
     const int width = static_cast<int>(F.cols());
     Matrix6d L_inverse;
-    if (!inverse_cholesky(sample_covariance(data, i, w, shared), L_inverse)) return ev;
+    if (at_start) L_inverse = data.start_whitening[i];
+    else if (!inverse_cholesky(sample_covariance(data, i, w, shared), L_inverse)) return ev;
     const Matrix6d A = L_inverse.transpose().lazyProduct(L_inverse);
     // log det S = -2 log prod diag(L^-1): one log per sample (the product of six
     // reciprocal standard deviations stays far inside double's range).
@@ -305,7 +306,7 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
   const int K = static_cast<int>(components.size());
   VarianceComponentFit fit;
   fit.theta = theta0;
-  Evaluation current = evaluate(data, fit.theta);
+  Evaluation current = evaluate(data, fit.theta, data.start_whitening.size() == data.fixed.size());
   for (int iteration = 1; iteration <= options.max_iterations && std::isfinite(current.log_likelihood); ++iteration) {
     fit.iterations = iteration;
     // Active set: a component at its bound stays there when its score, or its

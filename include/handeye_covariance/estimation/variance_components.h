@@ -49,6 +49,10 @@ struct VarianceComponentData {
   /// entries[k] = (a, b) adds theta_k (e_a e_b^T + e_b e_a^T), or theta_k e_a e_a^T
   /// when a == b. Its score and information come from S_i^-1's own entries.
   std::vector<std::pair<int, int>> entries;
+  /// Optional: each S_i(theta0)^-1's factor L^-1 (S_i = L L^T) at the start theta0,
+  /// when the caller has just computed it (a solve under theta0 whitens with the
+  /// same S_i): the first evaluation then skips its Cholesky factors. Empty: computed.
+  std::vector<Matrix6d> start_whitening;
 };
 
 struct VarianceComponentFit {
