@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
@@ -219,6 +220,8 @@ struct Solution {
   std::vector<Matrix6x12> J;
   std::vector<double> weight;          // robust weights (1 for the squared loss)
   Matrix12d information = Matrix12d::Zero();  // sum w J^T S^-1 J
+  /// information^-1 when a predicted step has computed it; every linearisation clears it.
+  std::optional<Matrix12d> covariance;
   Vector12d gradient = Vector12d::Zero();
   double cost = 0.0;  // sum rho(d_i)
   double chi2 = 0.0;  // sum d_i^2
@@ -231,6 +234,9 @@ struct Solution {
     return out;
   }
 };
+
+/// s.information^-1, from the solution's own when it has one.
+Matrix12d covariance_of(const Solution& s) { return s.covariance ? *s.covariance : inverse_information(s.information); }
 
 class JointProblem {
  public:
@@ -264,6 +270,7 @@ class JointProblem {
     if (keep_D_) s.D.resize(n), s.J.resize(n);
     else s.D.clear(), s.J.clear();
     s.information.setZero(), s.gradient.setZero(), s.cost = 0.0, s.chi2 = 0.0;
+    s.covariance.reset();
     std::shared_ptr<std::vector<Matrix6d>> fresh;
     if (!reuse) fresh = std::make_shared<std::vector<Matrix6d>>(n);
     Linear fresh_l;
@@ -331,7 +338,9 @@ class JointProblem {
   /// noise rounds, which keep J (keep_robot_jacobians).
   bool predicted_step(const NoiseModel& model, Solution& s, double max_sigmas, const std::vector<Linear>* at = nullptr) const {
     linearize_all(model, 0.0, s, nullptr, at);
-    const Vector12d step = -s.information.ldlt().solve(s.gradient);
+    // Its Sigma serves the noise fit and the result too (the step only moves X and Y).
+    s.covariance = inverse_information(s.information);
+    const Vector12d step = -(*s.covariance * s.gradient);
     if (!step.allFinite() || moves_weights(step) || !(step.dot(s.information * step) <= max_sigmas * max_sigmas)) return false;
     s.X = apply(s.X, step.head<6>()), s.Y = apply(s.Y, step.tail<6>());
     for (std::size_t i = 0; i < s.lin.size(); ++i) s.lin[i].e.noalias() += s.J.at(i) * step;
@@ -559,7 +568,7 @@ VarianceComponentData component_data(const JointProblem& problem, const std::vec
   bool scale_free = false;
   for (const Free& c : free) scale_free = scale_free || c.kind == Kind::CameraScale;
   fixed_model.camera_scale = scale_free ? 0.0 : model.camera_scale;
-  const Matrix12d covariance = inverse_information(s.information) * covariance_scale;
+  const Matrix12d covariance = covariance_of(s) * covariance_scale;
   const std::size_t n = problem.size();
   data.fixed.resize(n), data.scatter.resize(n), data.factors.resize(n);
   if (whitened_at_theta) data.start_whitening.resize(n);
@@ -691,8 +700,6 @@ struct NoisePass {
   /// sigma (Mahalanobis length); the shift is infinite when a number at its bound
   /// would move by 0.1 of its sigma or more (that number has no P_k, h_k).
   double x_change = 0.0, x_shift = 0.0;
-  /// The information it was made at and its inverse, for the result to reuse.
-  Matrix12d information = Matrix12d::Zero(), covariance = Matrix12d::Zero();
   /// Whether the fit is settled: its step is under 0.1 sigma of each number, or, as
   /// X sees it, under 0.1 sigma of Sigma_X and of X_hat (a step along the
   /// likelihood's ridge, between numbers that X cannot tell apart).
@@ -721,8 +728,7 @@ struct NoisePass {
 NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
                      const Solution& s) {
   NoisePass out;
-  const Matrix12d covariance = inverse_information(s.information);
-  out.information = s.information, out.covariance = covariance;
+  const Matrix12d covariance = covariance_of(s);
   const Eigen::LLT<Matrix6d> Sx(covariance.topLeftCorner<6, 6>());
   if (Sx.info() != Eigen::Success || free.empty()) return out;
   const Eigen::Matrix<double, 6, 12> Vt = Sx.matrixL().solve(covariance.topRows<6>());  // V^T = Lx^-1 Sigma_{x,:}
@@ -1077,7 +1083,6 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   std::vector<Free> free = free_components(given, chi2_failed, any_camera_stated, dof, options);
   std::vector<std::string> inseparable;  // robot components the camera's can mimic
   double inflation = 1.0, pattern_inflation = 1.0;  // X's and Y's
-  NoisePass pass;
   if (!free.empty()) {
     problem.keep_robot_jacobians();
     std::vector<VarianceComponent> components;
@@ -1094,6 +1099,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
                                         : initial_components(free, given ? s.scatter() : problem.residual_scatter(s.X, s.Y), model, dof);
     VarianceComponentFit fit;
     bool fitted = false;  // fit is a REML fit of the current free numbers, at theta
+    NoisePass pass;
     bool settled = false;  // s was solved under theta = fit.theta, a fixed point of the rounds
     for (int round = 0; round < options.max_noise_rounds; ++round) {
       apply_components(free, theta, model);
@@ -1229,7 +1235,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
 
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
-  const Matrix12d information_inverse = pass.information == s.information ? pass.covariance : inverse_information(s.information);
+  const Matrix12d information_inverse = covariance_of(s);
   // X's block by X's inflation, Y's by Y's, X-Y by their geometric mean: D Sigma D stays a covariance.
   Eigen::Matrix<double, 12, 1> root_inflation;
   root_inflation << Vector6d::Constant(std::sqrt(inflation)), Vector6d::Constant(std::sqrt(pattern_inflation));
