@@ -1,6 +1,6 @@
 #include "handeye_covariance/core/errors.h"
 
-#include <cstdio>
+#include <charconv>
 
 namespace handeye {
 
@@ -29,9 +29,12 @@ const char* to_string(ErrorCode code) {
 }
 
 std::string number_text(double value, int significant_digits) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.*g", significant_digits, value);
-  return buffer;
+  // printf's %.*g in the "C" locale, by the standard's definition of to_chars,
+  // at a fraction of snprintf's cost (the noise summary prints about 16 per solve).
+  char buffer[64];
+  const std::to_chars_result end =
+      std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::general, significant_digits);
+  return std::string(buffer, end.ptr);
 }
 
 namespace {
