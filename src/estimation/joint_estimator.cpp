@@ -1120,12 +1120,17 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
         }
       }
       double covariance_scale = 1.0;
+      bool whitened = stepped;  // s's whitening is S_i(theta)'s (times covariance_scale)
       if (round == 0 && homogeneous && s.chi2 > 0.0) {
         // S_i is linear in theta with no fixed part: scaling theta by chi2 / dof
         // leaves the solve as it is (its covariance scales with it) and starts
         // the fit at the residuals' own size.
         covariance_scale = s.chi2 / (6.0 * n - 12.0);
-        for (Eigen::Index k = 0; k < theta.size(); ++k) theta[k] = std::max(theta[k] * covariance_scale, free[k].component.lower);
+        for (Eigen::Index k = 0; k < theta.size(); ++k) {
+          const double scaled = theta[k] * covariance_scale;
+          whitened = whitened && scaled >= free[k].component.lower;  // a number held at its floor breaks the scaling
+          theta[k] = std::max(scaled, free[k].component.lower);
+        }
         apply_components(free, theta, model);
       }
       // Two AI-REML steps per round, stopping within a tenth of the numbers' own
@@ -1135,7 +1140,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       per_round.max_iterations = 2;
       per_round.tolerance = 0.1;
       per_round.confirm_last_step = false;
-      fit = fit_variance_components(components, component_data(problem, free, model, s, covariance_scale, stepped), theta, per_round);
+      fit = fit_variance_components(components, component_data(problem, free, model, s, covariance_scale, whitened), theta, per_round);
       fitted = true;
       // A robot component the camera's can mimic (its sigma inflated 10x by the
       // others) is not separable: held at 0, the camera's numbers take its share.
