@@ -175,16 +175,7 @@ struct NoiseModel {
 Matrix12d inverse_information(const Matrix12d& information) {
   const Eigen::LLT<Matrix12d> llt(information);
   if (llt.info() != Eigen::Success) return information.ldlt().solve(Matrix12d::Identity());
-  const Matrix12d& L = llt.matrixLLT();  // L in the lower triangle
-  Matrix12d L_inverse = Matrix12d::Zero();
-  for (int j = 0; j < 12; ++j) {
-    L_inverse(j, j) = 1.0 / L(j, j);
-    for (int i = j + 1; i < 12; ++i) {
-      double sum = 0.0;
-      for (int k = j; k < i; ++k) sum += L(i, k) * L_inverse(k, j);
-      L_inverse(i, j) = -sum / L(i, i);
-    }
-  }
+  const Matrix12d L_inverse = lower_triangular_inverse(llt.matrixLLT(), false);  // L in the lower triangle
   return L_inverse.transpose().lazyProduct(L_inverse);
 }
 
@@ -796,12 +787,12 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   // N_i = sum_kl C_kl G_l A G_k = E Nh E^T: over l's outers (p, q) and k's (p', q'),
   // Nh's entry (q', p) gathers C_kl (q^T A p'). N_i is not formed: tr(N U) =
   // tr(Nh E^T U E), and (E^T U E)(p, q') is the dot of rows p and q' of E^T B V, so
-  // each pair of outer products adds C_kl (E^T A E)(q, p') (row p . row q'), both
-  // Grams symmetric (pairs that read the same entries are merged). The same terms
-  // give Y's, through the rows of E^T B Vy.
+  // each pair of outer products adds C_kl (E^T A E)(q, p') (row p . row q'). The
+  // (k, l) and (l, k) sums are equal (tr(G_l A G_k U) = tr(G_k A G_l U), all four
+  // symmetric): l < k counts twice. The same terms give Y's, through the rows of E^T B Vy.
   struct Traced {
     double c;
-    int a, r, s;  // offset in E^T A E; the two rows
+    int a, r, s;  // offset in E^T A E; the two rows of E^T B V
   };
   std::vector<Traced> traced;
   struct ActiveOuter {
@@ -812,14 +803,10 @@ NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free,
   for (int k : active) {
     for (const Outer& o : outers[k]) active_outers.push_back({k, o});
     for (int l : active) {
+      if (l > k) continue;
+      const double c = (l < k ? 2.0 : 1.0) * fit.covariance(k, l);
       for (const Outer& ol : outers[l]) {
-        for (const Outer& ok : outers[k]) {
-          const Traced t{fit.covariance(k, l), at(std::min(ol.q, ok.p), std::max(ol.q, ok.p)), std::min(ok.q, ol.p),
-                         std::max(ok.q, ol.p)};
-          const auto same = std::find_if(traced.begin(), traced.end(), [&t](const Traced& u) { return u.a == t.a && u.r == t.r && u.s == t.s; });
-          if (same == traced.end()) traced.push_back(t);
-          else same->c += t.c;
-        }
+        for (const Outer& ok : outers[k]) traced.push_back({c, at(ol.q, ok.p), ok.q, ol.p});
       }
     }
   }

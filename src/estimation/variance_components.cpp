@@ -187,15 +187,7 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
 /// identity takes Eigen's blocked solver, several times the work at a fit's size.
 MatrixXd inverse_of(const Eigen::LDLT<MatrixXd>& ldlt) {
   const Eigen::Index n = ldlt.rows();
-  const MatrixXd& factors = ldlt.matrixLDLT();  // unit L below the diagonal
-  MatrixXd L_inverse = MatrixXd::Identity(n, n);
-  for (Eigen::Index j = 0; j < n; ++j) {
-    for (Eigen::Index i = j + 1; i < n; ++i) {
-      double sum = 0.0;
-      for (Eigen::Index k = j; k < i; ++k) sum += factors(i, k) * L_inverse(k, j);
-      L_inverse(i, j) = -sum;
-    }
-  }
+  const MatrixXd L_inverse = lower_triangular_inverse(ldlt.matrixLDLT(), true);  // unit L below the diagonal
   VectorXd d_inverse(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double d = ldlt.vectorD()[i];

@@ -87,6 +87,24 @@ VarianceComponentFit fit_variance_components(const std::vector<VarianceComponent
 /// arithmetic at this size; the estimators call this for every sample.
 bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse);
 
+/// L^-1 for the lower triangle of L, by forward substitution; with unit_diagonal,
+/// L's diagonal is read as ones (an LDLT's L). For the small inverses whose Eigen
+/// solves against the identity take its blocked kernels.
+template <typename Matrix>
+Matrix lower_triangular_inverse(const Matrix& L, bool unit_diagonal) {
+  const Eigen::Index n = L.rows();
+  Matrix inverse = Matrix::Zero(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    inverse(j, j) = unit_diagonal ? 1.0 : 1.0 / L(j, j);
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      double sum = 0.0;
+      for (Eigen::Index k = j; k < i; ++k) sum += L(i, k) * inverse(k, j);
+      inverse(i, j) = unit_diagonal ? -sum : -sum / L(i, i);
+    }
+  }
+  return inverse;
+}
+
 /// Adds a component to `data` (factor columns, or a shared covariance entry).
 void add_factor_component(VarianceComponentData& data, int rank);
 void add_entry_component(VarianceComponentData& data, int a, int b);
