@@ -24,6 +24,7 @@ const char* to_string(ErrorCode code) {
     case ErrorCode::IoError: return "IoError";
     case ErrorCode::InvalidLayout: return "InvalidLayout";
     case ErrorCode::TooManyOutliers: return "TooManyOutliers";
+    case ErrorCode::NotConverged: return "NotConverged";
   }
   return "Unknown";
 }

@@ -337,4 +337,40 @@ PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespond
   return result;
 }
 
+PointCorrespondences raw_pixels(const PointCorrespondences& rectified, const CameraModel& camera) {
+  check_camera_model(camera, "camera");
+  bool distorted = false;
+  for (double d : camera.distortion) distorted = distorted || d != 0.0;
+  if (!distorted || rectified.image.empty()) return rectified;
+  // Each rectified pixel is K (x, y, 1) for a normalised point; the raw image has
+  // it where OpenCV's model puts (x, y, 1). d(raw)/d(x, y) is projectPoints'
+  // derivative by the translation (the point moves with it).
+  const Eigen::Matrix3d K_inverse = camera.K.inverse();
+  std::vector<cv::Point3d> normalised;
+  for (const Eigen::Vector2d& u : rectified.image) {
+    const Vector3d p = K_inverse * Vector3d(u.x(), u.y(), 1.0);
+    normalised.emplace_back(p.x() / p.z(), p.y() / p.z(), 1.0);
+  }
+  std::vector<cv::Point2d> raw;
+  cv::Mat jacobian;  // 2n x (3 rvec + 3 tvec + 2 f + 2 c + distortion)
+  cv::projectPoints(normalised, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(camera),
+                    distortion(camera), raw, jacobian);
+  PointCorrespondences out = rectified;
+  const std::size_t n = rectified.image.size();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 2 * n);  // d raw / d rectified, 2x2 blocks
+  const Eigen::Matrix2d K2_inverse = K_inverse.topLeftCorner<2, 2>();
+  for (std::size_t i = 0; i < n; ++i) {
+    out.image[i] = Eigen::Vector2d(raw[i].x, raw[i].y);
+    Eigen::Matrix2d d_raw_d_normalised;
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 2; ++c) d_raw_d_normalised(r, c) = jacobian.at<double>(static_cast<int>(2 * i) + r, 3 + c);
+    J.block<2, 2>(2 * i, 2 * i) = d_raw_d_normalised * K2_inverse;
+  }
+  const Eigen::MatrixXd C =
+      rectified.corner_covariance.size() == 0 ? Eigen::MatrixXd::Identity(2 * n, 2 * n) : rectified.corner_covariance;
+  out.corner_covariance = J * C * J.transpose();
+  out.blocks = rectified.corner_covariance.size() == 0 ? 2 : rectified.blocks;
+  return out;
+}
+
 }  // namespace handeye

@@ -26,6 +26,7 @@ enum class ErrorCode {
   IoError,                   // file cannot be read or written
   InvalidLayout,             // a tag pattern layout without tags, with a bad size or a duplicate id
   TooManyOutliers,           // more samples disagree with the rest than outlier rejection may drop
+  NotConverged,              // an iterative solver stopped before it converged
 };
 
 /// A number for a message, with `significant_digits` digits ("0.0484", "1.2e-05").

@@ -177,4 +177,9 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel
                                                                const Eigen::Isometry3d& T_camera_pattern,
                                                                const std::vector<Eigen::Vector3d>& points);
 
+/// The corners of a detection on the rectified image (camera.rectified(): K, no
+/// distortion) in the raw image's pixels, their covariance carried by the 2x2
+/// Jacobian of the distortion at each corner.
+PointCorrespondences raw_pixels(const PointCorrespondences& rectified, const CameraModel& camera);
+
 }  // namespace handeye

@@ -1,0 +1,112 @@
+// Calibration from the image corners themselves (no ROS): X and the pattern pose
+// Y refined by the reprojection error of every detected corner of every image,
+// with the robot poses as measurements and, optionally, the intrinsics.
+//
+// Each image i sees the pattern at P_i = X^-1 V_i Y (rig.h), so corner j of the
+// target, at o_j in the pattern frame, should appear at
+//     u_ij = pi(K, D, R_P o_j + t_P),
+// pi the pinhole with OpenCV's distortion model (CameraModel). The detector's
+// corner-noise model gives each block of corners (one AprilTag's four under the
+// edge-fit model, or one corner) a covariance sigma^2 C_b; the cost is
+//     sum_b (u_b - u_hat_b)^T C_b^-1 (u_b - u_hat_b) / sigma^2
+//   + sum_i xi_E,i^T Sigma_E^-1 xi_E,i          (robot poses free: E_i' = exp(xi_E,i) E_i)
+//   + sum_k ((k_k - k0_k) / s_k)^2               (intrinsics free: the CameraInfo as a prior)
+// minimised by Ceres (Levenberg-Marquardt, Schur complement on the robot poses),
+// started from the pose-level estimate. The covariance of (X, Y) is the (X, Y)
+// block of the inverse of the Gauss-Newton information, by ceres::Covariance,
+// times sigma^2 when sigma is estimated.
+//
+// Perturbations as everywhere: X = (exp(xi_R) R_hat, t_hat + xi_t), ROS order,
+// likewise Y; the intrinsics' order is fx, fy, cx, cy, k1, k2.
+//
+// Pixel noise sigma. Given, or estimated from the corners' residuals with the
+// fit's degrees of freedom: sigma^2 = RSS_corners / (m - p_eff), where p_eff is
+// what the fit absorbs of the corners (12, the free intrinsics, and each free robot
+// pose's share, 6 - tr(Sigma_post Sigma_E^-1)); with the robot poses free this
+// alternates with the solve, as the prior's weight depends on sigma.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/vision/pattern_pose.h"
+
+namespace handeye {
+
+/// One image: the robot pose it was taken at, and the target's corners in it, in
+/// the pixels of the calibration's camera (distortion included: raw_pixels maps a
+/// rectified image's corners there, vision/pattern_pose.h).
+struct CornerView {
+  Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();
+  PointCorrespondences points;
+  std::string name;  // the image, for reports
+};
+
+/// The intrinsics that `--method corners` can refine: fx, fy, cx, cy (px), k1, k2.
+using IntrinsicsVector = Eigen::Matrix<double, 6, 1>;
+IntrinsicsVector intrinsics_of(const CameraModel& camera);  // k1, k2 = 0 when the model has none
+CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k);
+
+struct CornerOptions {
+  /// Pixel sigma (px) of the corner-noise model; 0: estimated from the residuals.
+  double pixel_sigma = 0.0;
+  /// The robot poses as measurements with this covariance (ROS order, left
+  /// perturbation in the base frame) as their prior; absent: taken as exact.
+  std::optional<Matrix6d> robot_covariance;
+  /// Refine fx, fy, cx, cy, k1, k2, with the given camera as the prior.
+  bool refine_intrinsics = false;
+  /// The prior's 1 sigma: of fx and fy as a share of them, of cx and cy as a share
+  /// of the image width, of k1 and k2 absolute.
+  double focal_prior = 0.05, centre_prior = 0.05, distortion_prior = 0.2;
+  int max_iterations = 100;
+  int max_noise_rounds = 10;  // robot poses free and sigma estimated: solve / sigma alternations
+};
+
+struct ImageReprojection {
+  std::string name;
+  int points = 0;
+  double rms_px = 0.0;
+};
+
+struct CornerCalibration {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();  // T_effector_camera or T_base_camera
+  Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();  // T_base_pattern or T_effector_pattern
+  /// Of (xi_X, xi_Y), ROS order each: X's 6x6, Y's 6x6 and their cross block.
+  Eigen::Matrix<double, 12, 12> covariance = Eigen::Matrix<double, 12, 12>::Zero();
+  double pixel_sigma = 0.0;    // px: as given, or the estimate
+  bool pixel_sigma_estimated = false;
+  int degrees_of_freedom = 0;  // corner residuals m minus what the fit absorbs (rounded)
+  double rms_px = 0.0;         // over every corner
+  std::vector<ImageReprojection> images;
+  /// With refine_intrinsics: fx, fy, cx, cy, k1, k2 and their covariance.
+  std::optional<IntrinsicsVector> intrinsics;
+  Matrix6d intrinsics_covariance = Matrix6d::Zero();
+  int iterations = 0;  // Ceres iterations, every noise round
+  int noise_rounds = 1;
+};
+
+/// Every view's corner residuals, whitened by the corner-noise model (per unit
+/// sigma, the robot poses and the intrinsics as given), and their Jacobian by
+/// (xi_X, xi_Y) as the solver sees it; J^T J / sigma^2 is the information of the
+/// corner model with the robot exact (its inverse the Cramer-Rao bound).
+struct CornerResiduals {
+  Eigen::VectorXd whitened;
+  Eigen::Matrix<double, Eigen::Dynamic, 12> jacobian;
+};
+CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
+                                 const Eigen::Isometry3d& X, const Eigen::Isometry3d& Y);
+
+/// Refines X and Y from the corners of `views`, started from (X0, Y0) (the
+/// pose-level estimate). Throws HandEyeError: NoData for fewer than 3 views or a
+/// view without corners, InvalidNoise for a corner covariance that is not
+/// positive definite or a robot covariance that is not, NotConverged when Ceres
+/// fails, PoorlyConstrained when the information cannot be inverted.
+CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
+                                    const Eigen::Isometry3d& X0, const Eigen::Isometry3d& Y0,
+                                    const CornerOptions& options = {});
+
+}  // namespace handeye

@@ -1,0 +1,520 @@
+#include "handeye_covariance/corners/corner_calibration.h"
+
+#include <ceres/autodiff_cost_function.h>
+#include <ceres/autodiff_manifold.h>
+#include <ceres/covariance.h>
+#include <ceres/normal_prior.h>
+#include <ceres/problem.h>
+#include <ceres/rotation.h>
+#include <ceres/solver.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "handeye_covariance/core/errors.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+// A pose as Ceres holds it: (tx, ty, tz, qw, qx, qy, qz), Ceres's quaternion order.
+using PoseBlock = std::array<double, 7>;
+
+PoseBlock pose_block(const Isometry3d& T) {
+  const Eigen::Quaterniond q(T.rotation());
+  return {T.translation().x(), T.translation().y(), T.translation().z(), q.w(), q.x(), q.y(), q.z()};
+}
+
+Isometry3d pose_of(const PoseBlock& b) {
+  Isometry3d T = Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(b[3], b[4], b[5], b[6]).normalized().toRotationMatrix();
+  T.translation() = Vector3d(b[0], b[1], b[2]);
+  return T;
+}
+
+// The package's perturbation of a pose, on Ceres's 7-number pose: tangent
+// (xi_t, xi_R) in ROS order, T (+) xi = (exp([xi_R]) R, t + xi_t), a left
+// perturbation in the parent frame (pose_covariance.h). Ceres's own
+// QuaternionManifold is also a left product but with exp(delta) of angle
+// 2 |delta|, which would halve the tangent and quarter the covariance.
+struct LeftPosePlus {
+  template <typename T>
+  bool Plus(const T* x, const T* delta, T* x_plus_delta) const {
+    for (int k = 0; k < 3; ++k) x_plus_delta[k] = x[k] + delta[k];
+    T q_delta[4];
+    ceres::AngleAxisToQuaternion(delta + 3, q_delta);
+    ceres::QuaternionProduct(q_delta, x + 3, x_plus_delta + 3);
+    return true;
+  }
+  template <typename T>
+  bool Minus(const T* y, const T* x, T* y_minus_x) const {
+    for (int k = 0; k < 3; ++k) y_minus_x[k] = y[k] - x[k];
+    const T x_inverse[4] = {x[3], -x[4], -x[5], -x[6]};
+    T q_delta[4];
+    ceres::QuaternionProduct(y + 3, x_inverse, q_delta);
+    ceres::QuaternionToAngleAxis(q_delta, y_minus_x + 3);
+    return true;
+  }
+};
+using PoseManifold = ceres::AutoDiffManifold<LeftPosePlus, 7, 6>;
+
+// OpenCV's distortion model (k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4), as
+// cv::projectPoints applies it without the tilt; missing coefficients are 0.
+template <typename T>
+void distort(const T& x, const T& y, const T& k1, const T& k2, const std::array<double, 12>& d, T& xd, T& yd) {
+  const T r2 = x * x + y * y;
+  const T r4 = r2 * r2;
+  const T r6 = r4 * r2;
+  const T radial = (T(1.0) + k1 * r2 + k2 * r4 + d[4] * r6) / (T(1.0) + d[5] * r2 + d[6] * r4 + d[7] * r6);
+  xd = x * radial + 2.0 * d[2] * x * y + d[3] * (r2 + 2.0 * x * x) + d[8] * r2 + d[9] * r4;
+  yd = y * radial + d[2] * (r2 + 2.0 * y * y) + 2.0 * d[3] * x * y + d[10] * r2 + d[11] * r4;
+}
+
+// What every image's cost needs of the camera and the setup.
+struct Projection {
+  double fx, fy, cx, cy, skew;
+  std::array<double, 12> distortion{};  // k1, k2 here too (used when the intrinsics are fixed)
+  bool eye_in_hand = true;
+};
+
+// One image's corners, whitened by the corner-noise model: each block b of
+// coordinates (8 for an AprilTag's corners under the edge-fit model, 2 for one
+// corner) gets L_b^-1 (u_hat - u) / sigma, with C_b = L_b L_b^T.
+struct ImageCorners {
+  std::vector<Vector3d> object;
+  std::vector<Vector2d> image;
+  std::vector<int> block_start, block_size;  // in coordinates (2 per corner)
+  std::vector<Eigen::MatrixXd> whitening;    // L_b^-1
+  PoseBlock robot;                           // E_i as measured
+};
+
+constexpr int kMaxBlock = 16;
+
+// The reprojection cost of one image. Parameter blocks: X (7), Y (7), then the
+// robot pose's perturbation xi_E (6) when kRobot, then the intrinsics (6) when
+// kIntrinsics. The camera sees the pattern at P = X^-1 V Y, V = E^-1 eye-in-hand
+// and E eye-to-hand, with E = exp(xi_E) E_measured.
+template <bool kRobot, bool kIntrinsics>
+class ImageCost {
+ public:
+  ImageCost(const ImageCorners* corners, const Projection* projection, const double* inverse_sigma)
+      : corners_(corners), projection_(projection), inverse_sigma_(inverse_sigma) {}
+
+  template <typename T>
+  bool operator()(const T* x, const T* y, T* residuals) const {
+    static_assert(!kRobot && !kIntrinsics, "two parameter blocks: X and Y only");
+    return evaluate<T>(x, y, nullptr, nullptr, residuals);
+  }
+  template <typename T>
+  bool operator()(const T* x, const T* y, const T* third, T* residuals) const {
+    static_assert(kRobot != kIntrinsics, "three parameter blocks: X, Y and one of robot or intrinsics");
+    return kRobot ? evaluate<T>(x, y, third, nullptr, residuals) : evaluate<T>(x, y, nullptr, third, residuals);
+  }
+  template <typename T>
+  bool operator()(const T* x, const T* y, const T* robot, const T* intrinsics, T* residuals) const {
+    static_assert(kRobot && kIntrinsics, "four parameter blocks");
+    return evaluate<T>(x, y, robot, intrinsics, residuals);
+  }
+
+ private:
+  template <typename T>
+  bool evaluate(const T* x, const T* y, const T* robot, const T* intrinsics, T* residuals) const {
+    const PoseBlock& E = corners_->robot;
+    // E = exp(xi_E) E_measured: rotation q_E, translation t_E.
+    T q_E[4], t_E[3];
+    for (int k = 0; k < 4; ++k) q_E[k] = T(E[3 + k]);
+    for (int k = 0; k < 3; ++k) t_E[k] = T(E[k]);
+    if (robot != nullptr) {
+      T q_delta[4];
+      ceres::AngleAxisToQuaternion(robot + 3, q_delta);
+      const T q_measured[4] = {q_E[0], q_E[1], q_E[2], q_E[3]};
+      ceres::QuaternionProduct(q_delta, q_measured, q_E);
+      for (int k = 0; k < 3; ++k) t_E[k] += robot[k];
+    }
+    // V = E^-1 (eye-in-hand) or E (eye-to-hand).
+    T q_V[4], t_V[3];
+    if (projection_->eye_in_hand) {
+      q_V[0] = q_E[0];
+      for (int k = 1; k < 4; ++k) q_V[k] = -q_E[k];
+      ceres::UnitQuaternionRotatePoint(q_V, t_E, t_V);
+      for (int k = 0; k < 3; ++k) t_V[k] = -t_V[k];
+    } else {
+      for (int k = 0; k < 4; ++k) q_V[k] = q_E[k];
+      for (int k = 0; k < 3; ++k) t_V[k] = t_E[k];
+    }
+    // P = X^-1 V Y.
+    const T q_X_inverse[4] = {x[3], -x[4], -x[5], -x[6]};
+    T q_VY[4], q_P[4];
+    ceres::QuaternionProduct(q_V, y + 3, q_VY);
+    ceres::QuaternionProduct(q_X_inverse, q_VY, q_P);
+    T Vt_Y[3];
+    ceres::UnitQuaternionRotatePoint(q_V, y, Vt_Y);
+    const T d[3] = {Vt_Y[0] + t_V[0] - x[0], Vt_Y[1] + t_V[1] - x[1], Vt_Y[2] + t_V[2] - x[2]};
+    T t_P[3], R_P[9];
+    ceres::UnitQuaternionRotatePoint(q_X_inverse, d, t_P);
+    ceres::QuaternionToRotation(q_P, R_P);  // row-major
+
+    const Projection& c = *projection_;
+    const T fx = intrinsics ? intrinsics[0] : T(c.fx), fy = intrinsics ? intrinsics[1] : T(c.fy);
+    const T cx = intrinsics ? intrinsics[2] : T(c.cx), cy = intrinsics ? intrinsics[3] : T(c.cy);
+    const T k1 = intrinsics ? intrinsics[4] : T(c.distortion[0]), k2 = intrinsics ? intrinsics[5] : T(c.distortion[1]);
+
+    const ImageCorners& image = *corners_;
+    T difference[kMaxBlock];
+    for (std::size_t b = 0; b < image.block_start.size(); ++b) {
+      const int start = image.block_start[b], size = image.block_size[b];
+      for (int i = 0; i < size / 2; ++i) {
+        const int corner = start / 2 + i;
+        const Vector3d& o = image.object[corner];
+        const T p[3] = {R_P[0] * o.x() + R_P[1] * o.y() + R_P[2] * o.z() + t_P[0],
+                        R_P[3] * o.x() + R_P[4] * o.y() + R_P[5] * o.z() + t_P[1],
+                        R_P[6] * o.x() + R_P[7] * o.y() + R_P[8] * o.z() + t_P[2]};
+        T xd, yd;
+        distort<T>(p[0] / p[2], p[1] / p[2], k1, k2, c.distortion, xd, yd);
+        difference[2 * i] = fx * xd + c.skew * yd + cx - image.image[corner].x();
+        difference[2 * i + 1] = fy * yd + cy - image.image[corner].y();
+      }
+      const Eigen::MatrixXd& W = image.whitening[b];
+      for (int r = 0; r < size; ++r) {
+        T sum = T(0.0);
+        for (int k = 0; k <= r; ++k) sum += W(r, k) * difference[k];  // L^-1 is lower-triangular
+        residuals[start + r] = sum * (*inverse_sigma_);
+      }
+    }
+    return true;
+  }
+
+  const ImageCorners* corners_;
+  const Projection* projection_;
+  const double* inverse_sigma_;  // 1 / sigma, updated between the noise rounds
+};
+
+template <bool kRobot, bool kIntrinsics>
+ceres::CostFunction* image_cost(const ImageCorners* corners, const Projection* projection, const double* inverse_sigma) {
+  using Cost = ImageCost<kRobot, kIntrinsics>;
+  const int m = static_cast<int>(2 * corners->image.size());
+  if constexpr (!kRobot && !kIntrinsics) {
+    return new ceres::AutoDiffCostFunction<Cost, ceres::DYNAMIC, 7, 7>(new Cost(corners, projection, inverse_sigma), m);
+  } else if constexpr (kRobot && kIntrinsics) {
+    return new ceres::AutoDiffCostFunction<Cost, ceres::DYNAMIC, 7, 7, 6, 6>(new Cost(corners, projection, inverse_sigma),
+                                                                              m);
+  } else {
+    return new ceres::AutoDiffCostFunction<Cost, ceres::DYNAMIC, 7, 7, 6>(new Cost(corners, projection, inverse_sigma), m);
+  }
+}
+
+ImageCorners image_corners(const CornerView& view, std::size_t index) {
+  const PointCorrespondences& points = view.points;
+  const std::string where = "corner view " + std::to_string(index) + (view.name.empty() ? "" : " (" + view.name + ")");
+  if (points.image.empty() || points.object.size() != points.image.size()) {
+    throw HandEyeError(ErrorCode::NoData,
+                       "has " + std::to_string(points.image.size()) + " image points and " +
+                           std::to_string(points.object.size()) + " target points",
+                       where, "give every image's detected corners with their target points");
+  }
+  const int m = static_cast<int>(2 * points.image.size());
+  const int block = points.corner_covariance.size() == 0 ? 2 : points.blocks;
+  if (block < 2 || block % 2 != 0 || block > kMaxBlock || m % block != 0 ||
+      (points.corner_covariance.size() != 0 && (points.corner_covariance.rows() != m || points.corner_covariance.cols() != m))) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       "its corner covariance is " + std::to_string(points.corner_covariance.rows()) + " x " +
+                           std::to_string(points.corner_covariance.cols()) + " in blocks of " +
+                           std::to_string(points.blocks) + " for " + std::to_string(m) + " coordinates",
+                       where, "give a (2n x 2n) block-diagonal corner covariance in even blocks of at most 16, or none");
+  }
+  ImageCorners out;
+  out.object = points.object;
+  out.image = points.image;
+  out.robot = pose_block(view.T_base_effector);
+  for (int start = 0; start < m; start += block) {
+    Eigen::MatrixXd C = points.corner_covariance.size() == 0
+                            ? Eigen::MatrixXd::Identity(block, block)
+                            : Eigen::MatrixXd(points.corner_covariance.block(start, start, block, block));
+    Eigen::LLT<Eigen::MatrixXd> llt(C);
+    if (!C.allFinite() || llt.info() != Eigen::Success) {
+      throw HandEyeError(ErrorCode::InvalidNoise,
+                         "the corner covariance of coordinates " + std::to_string(start) + ".." +
+                             std::to_string(start + block - 1) + " is not positive definite",
+                         where, "check the detector's corner-noise model");
+    }
+    out.block_start.push_back(start);
+    out.block_size.push_back(block);
+    out.whitening.push_back(llt.matrixL().solve(Eigen::MatrixXd::Identity(block, block)));
+  }
+  return out;
+}
+
+Projection projection_of(const CameraModel& camera, const Rig& rig) {
+  check_camera_model(camera, "the corner calibration's camera");
+  Projection p;
+  p.fx = camera.K(0, 0);
+  p.fy = camera.K(1, 1);
+  p.cx = camera.K(0, 2);
+  p.cy = camera.K(1, 2);
+  p.skew = camera.K(0, 1);
+  for (std::size_t k = 0; k < camera.distortion.size() && k < p.distortion.size(); ++k) p.distortion[k] = camera.distortion[k];
+  if (camera.distortion.size() == 14 && (camera.distortion[12] != 0.0 || camera.distortion[13] != 0.0)) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the camera's distortion has a tilted sensor (tau_x, tau_y)",
+                       "the corner calibration's camera", "use --method poses for a tilted-sensor camera model");
+  }
+  p.eye_in_hand = rig.eye_in_hand();
+  return p;
+}
+
+// The whitened residuals of one image's corners at the problem's current values
+// (sigma = 1), for the RMS and the residual sum of squares.
+struct ImageFit {
+  double weighted = 0.0;    // sum r^T C^-1 r, px^2 per unit sigma^2
+  double unweighted = 0.0;  // sum |u - u_hat|^2, px^2
+};
+
+}  // namespace
+
+IntrinsicsVector intrinsics_of(const CameraModel& camera) {
+  IntrinsicsVector k;
+  k << camera.K(0, 0), camera.K(1, 1), camera.K(0, 2), camera.K(1, 2), camera.distortion.size() > 0 ? camera.distortion[0] : 0.0,
+      camera.distortion.size() > 1 ? camera.distortion[1] : 0.0;
+  return k;
+}
+
+CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k) {
+  CameraModel out = camera;
+  out.K(0, 0) = k[0];
+  out.K(1, 1) = k[1];
+  out.K(0, 2) = k[2];
+  out.K(1, 2) = k[3];
+  if (out.distortion.size() < 5) out.distortion.resize(5, 0.0);
+  out.distortion[0] = k[4];
+  out.distortion[1] = k[5];
+  return out;
+}
+
+CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
+                                 const Isometry3d& X, const Isometry3d& Y) {
+  const Projection projection = projection_of(camera, rig);
+  std::vector<ImageCorners> images;
+  images.reserve(views.size());
+  for (std::size_t i = 0; i < views.size(); ++i) images.push_back(image_corners(views[i], i));
+  PoseBlock x = pose_block(X), y = pose_block(Y);
+  const double inverse_sigma = 1.0;
+  ceres::Problem problem;
+  problem.AddParameterBlock(x.data(), 7, new PoseManifold);
+  problem.AddParameterBlock(y.data(), 7, new PoseManifold);
+  for (const ImageCorners& image : images) {
+    problem.AddResidualBlock(image_cost<false, false>(&image, &projection, &inverse_sigma), nullptr, x.data(), y.data());
+  }
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = {x.data(), y.data()};
+  std::vector<double> residuals;
+  ceres::CRSMatrix jacobian;  // in the tangent spaces of the manifolds
+  problem.Evaluate(evaluate, nullptr, &residuals, nullptr, &jacobian);
+  CornerResiduals out;
+  out.whitened = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
+  out.jacobian.setZero(jacobian.num_rows, 12);
+  for (int r = 0; r < jacobian.num_rows; ++r) {
+    for (int e = jacobian.rows[r]; e < jacobian.rows[r + 1]; ++e) out.jacobian(r, jacobian.cols[e]) = jacobian.values[e];
+  }
+  return out;
+}
+
+CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
+                                    const Isometry3d& X0, const Isometry3d& Y0, const CornerOptions& options) {
+  if (views.size() < 3) {
+    throw HandEyeError(ErrorCode::NoData, "only " + std::to_string(views.size()) + " views with corners, need at least 3",
+                       "corner calibration", "take more images of the target from different robot poses");
+  }
+  if (!(options.pixel_sigma >= 0.0) || !std::isfinite(options.pixel_sigma)) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "pixel sigma " + number_text(options.pixel_sigma) + " px",
+                       "corner calibration options", "give a positive pixel sigma, or 0 to estimate it");
+  }
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> robot_whitening;
+  if (options.robot_covariance) {
+    Eigen::LLT<Matrix6d> llt(*options.robot_covariance);
+    if (!options.robot_covariance->allFinite() || llt.info() != Eigen::Success) {
+      throw HandEyeError(ErrorCode::InvalidNoise, "the robot pose covariance is not positive definite",
+                         "corner calibration options", "give the robot's 6x6 pose noise (ROS order, m^2 and rad^2)");
+    }
+    robot_whitening = llt.matrixL().solve(Matrix6d::Identity());
+  }
+  const Projection projection = projection_of(camera, rig);
+  std::vector<ImageCorners> images;
+  images.reserve(views.size());
+  int m = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    images.push_back(image_corners(views[i], i));
+    m += static_cast<int>(2 * images.back().image.size());
+  }
+  const bool robot_free = options.robot_covariance.has_value();
+  const bool intrinsics_free = options.refine_intrinsics;
+
+  PoseBlock x = pose_block(X0), y = pose_block(Y0);
+  std::vector<std::array<double, 6>> robot(views.size(), std::array<double, 6>{});
+  IntrinsicsVector k0 = intrinsics_of(camera), k = k0;
+  // Sigma for the first round: as given, or the one that makes the start's
+  // residuals fit (rescaled every round).
+  double sigma = options.pixel_sigma > 0.0 ? options.pixel_sigma : 1.0;
+  double inverse_sigma = 1.0 / sigma;
+
+  ceres::Problem::Options problem_options;
+  ceres::Problem problem(problem_options);
+  problem.AddParameterBlock(x.data(), 7, new PoseManifold);
+  problem.AddParameterBlock(y.data(), 7, new PoseManifold);
+  if (intrinsics_free) problem.AddParameterBlock(k.data(), 6);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    ceres::CostFunction* cost = nullptr;
+    std::vector<double*> blocks = {x.data(), y.data()};
+    if (robot_free) blocks.push_back(robot[i].data());
+    if (intrinsics_free) blocks.push_back(k.data());
+    if (robot_free && intrinsics_free) cost = image_cost<true, true>(&images[i], &projection, &inverse_sigma);
+    else if (robot_free) cost = image_cost<true, false>(&images[i], &projection, &inverse_sigma);
+    else if (intrinsics_free) cost = image_cost<false, true>(&images[i], &projection, &inverse_sigma);
+    else cost = image_cost<false, false>(&images[i], &projection, &inverse_sigma);
+    problem.AddResidualBlock(cost, nullptr, blocks);
+    if (robot_free) {
+      problem.AddResidualBlock(new ceres::NormalPrior(robot_whitening, Eigen::VectorXd::Zero(6)), nullptr, robot[i].data());
+    }
+  }
+  Vector6d prior_sigma;
+  if (intrinsics_free) {
+    const double width = camera.width > 0 ? camera.width : 2.0 * camera.K(0, 2);
+    prior_sigma << options.focal_prior * k0[0], options.focal_prior * k0[1], options.centre_prior * width,
+        options.centre_prior * width, options.distortion_prior, options.distortion_prior;
+    const ceres::Matrix A = prior_sigma.cwiseInverse().asDiagonal();
+    problem.AddResidualBlock(new ceres::NormalPrior(A, k0), nullptr, k.data());
+  }
+
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = options.max_iterations;
+  solver.linear_solver_type = robot_free ? ceres::DENSE_SCHUR : ceres::DENSE_QR;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  solver.function_tolerance = 1e-12;
+  solver.gradient_tolerance = 1e-14;
+  solver.parameter_tolerance = 1e-12;
+  if (robot_free) {
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (auto& r : robot) ordering->AddElementToGroup(r.data(), 0);
+    ordering->AddElementToGroup(x.data(), 1);
+    ordering->AddElementToGroup(y.data(), 1);
+    if (intrinsics_free) ordering->AddElementToGroup(k.data(), 1);
+    solver.linear_solver_ordering = ordering;
+  }
+
+  CornerCalibration result;
+  result.pixel_sigma_estimated = options.pixel_sigma == 0.0;
+  // sigma moves the solution only through the priors' weight against the corners.
+  const bool sigma_rounds = result.pixel_sigma_estimated && (robot_free || intrinsics_free);
+  const int rounds = sigma_rounds ? std::max(1, options.max_noise_rounds) : 1;
+  Eigen::MatrixXd xy_covariance;  // unit: the whitening's sigma
+  double corner_rss = 0.0;        // px^2 per unit sigma^2, at the solution
+  double absorbed = 0.0;          // what the fit absorbs of the corners
+  for (int round = 0; round < rounds; ++round) {
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    result.iterations += static_cast<int>(summary.iterations.size());
+    result.noise_rounds = round + 1;
+    if (!summary.IsSolutionUsable() || summary.termination_type == ceres::NO_CONVERGENCE) {
+      throw HandEyeError(ErrorCode::NotConverged, "Ceres stopped: " + summary.message, "corner calibration",
+                         "check the start (the pose-level estimate) and the images' corners");
+    }
+    // The covariance of what the fit moves: (X, Y), each robot pose and the intrinsics.
+    ceres::Covariance::Options covariance_options;
+    covariance_options.num_threads = 1;
+    ceres::Covariance covariance(covariance_options);
+    std::vector<std::pair<const double*, const double*>> pairs = {
+        {x.data(), x.data()}, {x.data(), y.data()}, {y.data(), y.data()}};
+    if (robot_free && sigma_rounds) for (const auto& r : robot) pairs.emplace_back(r.data(), r.data());
+    if (intrinsics_free) pairs.emplace_back(k.data(), k.data());
+    if (!covariance.Compute(pairs, &problem)) {
+      throw HandEyeError(ErrorCode::PoorlyConstrained, "the information of X and the pattern pose cannot be inverted",
+                         "corner calibration", "add views from more varied robot poses");
+    }
+    xy_covariance.resize(12, 12);
+    covariance.GetCovarianceMatrixInTangentSpace({x.data(), y.data()}, xy_covariance.data());
+    xy_covariance.transposeInPlace();  // Ceres writes row-major; symmetric up to rounding
+    if (intrinsics_free) {
+      Eigen::Matrix<double, 6, 6, Eigen::RowMajor> K_covariance;
+      covariance.GetCovarianceBlock(k.data(), k.data(), K_covariance.data());
+      result.intrinsics_covariance = K_covariance;
+    }
+    // The fit's degrees of freedom for the corners: every parameter minus the share
+    // each prior holds, tr(Sigma_post A^T A) of its rows (the hat matrix's trace).
+    absorbed = 12.0;
+    if (intrinsics_free) {
+      absorbed += 6.0 - (result.intrinsics_covariance.diagonal().array() / prior_sigma.array().square()).sum();
+    }
+    if (robot_free && sigma_rounds) {
+      const Matrix6d information = robot_whitening.transpose() * robot_whitening;
+      for (const auto& r : robot) {
+        Eigen::Matrix<double, 6, 6, Eigen::RowMajor> block;
+        covariance.GetCovarianceBlockInTangentSpace(r.data(), r.data(), block.data());
+        absorbed += 6.0 - (Matrix6d(block) * information).trace();
+      }
+    }
+    corner_rss = 0.0;
+    double unweighted = 0.0;
+    result.images.clear();
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      // Residuals at sigma = 1 (the whitening alone), and the plain pixel errors.
+      const double saved = inverse_sigma;
+      inverse_sigma = 1.0;
+      std::vector<double*> blocks = {x.data(), y.data()};
+      if (robot_free) blocks.push_back(robot[i].data());
+      if (intrinsics_free) blocks.push_back(k.data());
+      std::unique_ptr<ceres::CostFunction> cost(
+          robot_free && intrinsics_free ? image_cost<true, true>(&images[i], &projection, &inverse_sigma)
+          : robot_free                  ? image_cost<true, false>(&images[i], &projection, &inverse_sigma)
+          : intrinsics_free             ? image_cost<false, true>(&images[i], &projection, &inverse_sigma)
+                                        : image_cost<false, false>(&images[i], &projection, &inverse_sigma));
+      Eigen::VectorXd r(cost->num_residuals());
+      cost->Evaluate(blocks.data(), r.data(), nullptr);
+      inverse_sigma = saved;
+      corner_rss += r.squaredNorm();
+      // The plain pixel errors: the whitening undone, block by block.
+      double image_unweighted = 0.0;
+      for (std::size_t b = 0; b < images[i].block_start.size(); ++b) {
+        const int start = images[i].block_start[b], size = images[i].block_size[b];
+        const Eigen::VectorXd plain =
+            images[i].whitening[b].triangularView<Eigen::Lower>().solve(r.segment(start, size));
+        image_unweighted += plain.squaredNorm();
+      }
+      unweighted += image_unweighted;
+      result.images.push_back({views[i].name, static_cast<int>(images[i].image.size()),
+                               std::sqrt(image_unweighted / static_cast<double>(r.size()))});
+    }
+    result.rms_px = std::sqrt(unweighted / m);
+    const double dof = m - absorbed;
+    result.degrees_of_freedom = static_cast<int>(std::lround(dof));
+    if (!result.pixel_sigma_estimated) break;
+    if (dof <= 0.0) {
+      throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                         "the corners leave " + number_text(dof) + " degrees of freedom for the pixel noise",
+                         "corner calibration", "give the pixel sigma, or more corners");
+    }
+    const double estimate = std::sqrt(corner_rss / dof);
+    const bool settled = std::abs(estimate / sigma - 1.0) < 1e-3;
+    if (!sigma_rounds) {
+      // The solution does not depend on sigma: the covariance scales with it.
+      xy_covariance *= (estimate * estimate) / (sigma * sigma);
+      sigma = estimate;
+      break;
+    }
+    sigma = estimate;
+    inverse_sigma = 1.0 / sigma;
+    if (settled) break;
+  }
+  result.pixel_sigma = sigma;
+  result.X = pose_of(x);
+  result.Y = pose_of(y);
+  result.covariance = 0.5 * (xy_covariance + xy_covariance.transpose());
+  if (intrinsics_free) result.intrinsics = k;
+  return result;
+}
+
+}  // namespace handeye

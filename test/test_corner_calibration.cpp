@@ -1,0 +1,303 @@
+// The corner-level calibration (corners/corner_calibration.h) on simulated
+// corners: its residuals against OpenCV's projection, its Jacobian against
+// numeric differences in the package's perturbation convention, and its
+// covariance against the actual error over seeded sessions (robot exact, robot
+// noisy, intrinsics off). Rendered images are test_images' and BENCHMARKS.md's.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <optional>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/corners/corner_calibration.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
+#include "test_helpers.h"
+
+namespace handeye {
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+// An 8 x 5 grid of corners, 3 cm apart, centred on the pattern frame's origin
+// (where the simulated views look).
+std::vector<Vector3d> grid() {
+  std::vector<Vector3d> points;
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 8; ++c) points.emplace_back(0.03 * (c - 3.5), 0.03 * (r - 2.0), 0.0);
+  return points;
+}
+
+struct Scene {
+  Rig rig;
+  Isometry3d X, Y;
+  std::vector<Isometry3d> effector;  // true T_base_effector
+  std::vector<Isometry3d> view;      // true T_camera_pattern
+};
+
+Scene scene(Rng& rng, Setup setup, int n) {
+  const SimulatedSession s = simulate_session(rng, setup, typical_X(setup), n, MeasurementNoise{});
+  Scene out;
+  out.rig.setup = setup;
+  out.X = s.X;
+  out.Y = s.T_world_pattern;
+  for (const PoseSample& sample : s.samples.samples) {
+    out.effector.push_back(sample.T_base_effector);
+    out.view.push_back(sample.T_camera_pattern);
+  }
+  return out;
+}
+
+// The corners of view i as `camera` sees them, with independent Gaussian noise.
+CornerView corners(const Scene& s, std::size_t i, const CameraModel& camera, Rng& rng, double sigma_px) {
+  std::normal_distribution<double> noise(0.0, sigma_px);
+  CornerView v;
+  v.T_base_effector = s.effector[i];
+  v.points.object = grid();
+  for (const Vector3d& o : v.points.object) {
+    v.points.image.push_back(camera.project(s.view[i] * o) + Vector2d(noise(rng), noise(rng)));
+  }
+  v.name = "view " + std::to_string(i);
+  return v;
+}
+
+Isometry3d perturbed(const Isometry3d& T, const Vector6d& xi) {
+  Isometry3d out = T;
+  out.linear() = so3::exp(xi.tail<3>()) * T.linear();
+  out.translation() += xi.head<3>();
+  return out;
+}
+
+Vector6d small_error(Rng& rng, double translation, double rotation) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Vector6d xi;
+  for (int k = 0; k < 6; ++k) xi[k] = n(rng) * (k < 3 ? translation : rotation);
+  return xi;
+}
+
+double nees(const Vector6d& e, const Matrix6d& covariance) { return e.dot(covariance.ldlt().solve(e)); }
+
+// At the truth the residuals vanish (the cost's projection is OpenCV's, distortion
+// included), and the Jacobian by (xi_X, xi_Y) is the numeric one of the package's
+// left perturbation, at X rotated by 0, 1e-6 and nearly pi, both setups, with a
+// correlated corner covariance (blocks of 8, as the edge-fit model's).
+TEST(CornerResiduals, VanishAtTheTruthAndTheirJacobianIsTheNumericOne) {
+  const CameraModel camera = simulated_camera();
+  for (const handeye::Setup setup : {handeye::Setup::EyeInHand, handeye::Setup::EyeToHand}) {
+    for (const double angle : {0.0, 1e-6, M_PI - 1e-4}) {
+      Rng rng(11);
+      Scene s = scene(rng, setup, 4);
+      s.X.linear() = so3::exp(angle * Vector3d(1.0, -2.0, 0.5).normalized());
+      for (std::size_t i = 0; i < s.view.size(); ++i) s.effector[i] = s.rig.effector_for_view(s.X, s.Y, s.view[i]);
+      std::vector<CornerView> views;
+      for (std::size_t i = 0; i < s.view.size(); ++i) {
+        CornerView v = corners(s, i, camera, rng, 0.0);
+        const int m = static_cast<int>(2 * v.points.image.size());
+        v.points.corner_covariance = Eigen::MatrixXd::Zero(m, m);
+        v.points.blocks = 8;
+        for (int b = 0; b < m; b += 8) {
+          const Eigen::MatrixXd A = Eigen::MatrixXd::Random(8, 8);
+          v.points.corner_covariance.block(b, b, 8, 8) = A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(8, 8);
+        }
+        views.push_back(v);
+      }
+      const CornerResiduals at_truth = corner_residuals(s.rig, camera, views, s.X, s.Y);
+      EXPECT_LT(at_truth.whitened.cwiseAbs().maxCoeff(), 1e-8) << to_string(setup) << " angle " << angle;
+
+      // Away from the truth, the whitened residuals are L^-1 (u_hat - u).
+      const Vector6d offset = small_error(rng, 2e-3, 0.01);
+      const Isometry3d X1 = perturbed(s.X, offset);
+      const CornerResiduals r = corner_residuals(s.rig, camera, views, X1, s.Y);
+      double expected = 0.0;
+      for (std::size_t i = 0; i < views.size(); ++i) {
+        const Isometry3d P = X1.inverse() * s.rig.robot_link(views[i].T_base_effector) * s.Y;
+        Eigen::VectorXd d(2 * views[i].points.image.size());
+        for (std::size_t j = 0; j < views[i].points.image.size(); ++j) {
+          d.segment<2>(2 * j) = camera.project(P * views[i].points.object[j]) - views[i].points.image[j];
+        }
+        expected += d.dot(views[i].points.corner_covariance.ldlt().solve(d));
+      }
+      EXPECT_NEAR(r.whitened.squaredNorm(), expected, 1e-9 * expected);
+
+      const double h = 1e-6;
+      Eigen::MatrixXd numeric(r.whitened.size(), 12);
+      for (int k = 0; k < 12; ++k) {
+        Vector6d d = Vector6d::Zero();
+        d[k % 6] = h;
+        const auto at = [&](const Vector6d& step) {
+          return k < 6 ? corner_residuals(s.rig, camera, views, perturbed(X1, step), s.Y).whitened
+                       : corner_residuals(s.rig, camera, views, X1, perturbed(s.Y, step)).whitened;
+        };
+        numeric.col(k) = (at(d) - at(-d)) / (2.0 * h);
+      }
+      const double scale = numeric.cwiseAbs().maxCoeff();
+      EXPECT_LT((r.jacobian - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale) << to_string(setup) << " angle " << angle;
+    }
+  }
+}
+
+// raw_pixels takes a rectified image's corners to where the distorted camera has
+// them, and carries their covariance by the distortion's Jacobian.
+TEST(CornerResiduals, RawPixelsUndoTheRectification) {
+  const CameraModel camera = simulated_camera();
+  CameraModel rectified = camera;
+  rectified.distortion.clear();
+  Rng rng(3);
+  const Scene s = scene(rng, Setup::EyeInHand, 3);
+  const CornerView ideal = corners(s, 0, rectified, rng, 0.0);
+  const PointCorrespondences raw = raw_pixels(ideal.points, camera);
+  ASSERT_EQ(raw.corner_covariance.rows(), 80);
+  for (std::size_t j = 0; j < raw.image.size(); ++j) {
+    EXPECT_LT((raw.image[j] - camera.project(s.view[0] * ideal.points.object[j])).norm(), 1e-6);
+    // The covariance of a rectified corner moved by h is the raw one moved by J h.
+    const Vector2d step(0.3, -0.2);
+    PointCorrespondences moved = ideal.points;
+    moved.image[j] += 1e-4 * step;
+    const Vector2d raw_step = (raw_pixels(moved, camera).image[j] - raw.image[j]) / 1e-4;
+    const Eigen::Matrix2d C = raw.corner_covariance.block<2, 2>(2 * j, 2 * j);
+    // C = J J^T for identity input: the raw step's squared length under C^-1 is |step|^2.
+    EXPECT_NEAR(raw_step.dot(C.ldlt().solve(raw_step)), step.squaredNorm(), 1e-4);
+  }
+}
+
+struct Honesty {
+  double nees_X = 0.0, nees_Y = 0.0, sigma = 0.0;
+  Vector6d bias = Vector6d::Zero();  // mean of the error over its sigma, per axis of X
+  double focal_within_2_sigma = 0.0;  // share of sessions (intrinsics free)
+};
+
+// M sessions of n views: noisy corners (0.3 px), the robot's measured poses
+// perturbed by `robot_noise`, the camera given with its focal length scaled by
+// `focal_error`; the calibration started 1 mm / 0.1 deg off the truth.
+Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const std::optional<Matrix6d>& robot_noise,
+                double focal_error) {
+  const CameraModel truth_camera = simulated_camera();
+  CameraModel given = truth_camera;
+  given.K(0, 0) *= 1.0 + focal_error;
+  given.K(1, 1) *= 1.0 + focal_error;
+  Honesty h;
+  for (int session = 0; session < M; ++session) {
+    Rng rng(1000 + session);
+    const Scene s = scene(rng, setup, n);
+    std::vector<CornerView> views;
+    for (std::size_t i = 0; i < s.view.size(); ++i) {
+      CornerView v = corners(s, i, truth_camera, rng, 0.3);
+      if (robot_noise) v.T_base_effector = perturb(rng, v.T_base_effector, PoseNoise::from_pose_covariance(*robot_noise));
+      views.push_back(v);
+    }
+    const CornerCalibration c = calibrate_corners(s.rig, given, views, perturbed(s.X, small_error(rng, 1e-3, 1.7e-3)),
+                                                  perturbed(s.Y, small_error(rng, 1e-3, 1.7e-3)), options);
+    const Vector6d eX = test::pose_perturbation(c.X, s.X), eY = test::pose_perturbation(c.Y, s.Y);
+    const Matrix6d CX = c.covariance.topLeftCorner<6, 6>(), CY = c.covariance.bottomRightCorner<6, 6>();
+    h.nees_X += nees(eX, CX) / M;
+    h.nees_Y += nees(eY, CY) / M;
+    h.sigma += c.pixel_sigma / M;
+    h.bias += eX.cwiseQuotient(CX.diagonal().cwiseSqrt()) / M;
+    if (c.intrinsics) {
+      const double f_sigma = std::sqrt(c.intrinsics_covariance(0, 0));
+      h.focal_within_2_sigma += (std::abs((*c.intrinsics)[0] - truth_camera.K(0, 0)) < 2.0 * f_sigma ? 1.0 : 0.0) / M;
+    }
+  }
+  return h;
+}
+
+// The mean of M chi2(6) / 6 x 6: its 99.9% band (Wilson-Hilferty), for the NEES means.
+std::pair<double, double> chi2_band(int M, int dim) {
+  const double k = static_cast<double>(M * dim), z = 3.29;
+  const auto q = [&](double zz) { return k * std::pow(1.0 - 2.0 / (9.0 * k) + zz * std::sqrt(2.0 / (9.0 * k)), 3) / M; };
+  return {q(-z), q(z)};
+}
+
+TEST(CornerCalibration, CovarianceIsHonestWithTheRobotExact) {
+  const int M = 200;
+  const auto band = chi2_band(M, 6);
+  for (const handeye::Setup setup : {handeye::Setup::EyeInHand, handeye::Setup::EyeToHand}) {
+    const Honesty h = honesty(setup, M, 15, CornerOptions{}, std::nullopt, 0.0);
+    std::printf("%s, robot exact: NEES X %.2f, Y %.2f (band %.2f..%.2f), sigma %.4f px (true 0.3)\n", to_string(setup),
+                h.nees_X, h.nees_Y, band.first, band.second, h.sigma);
+    EXPECT_GT(h.nees_X, band.first);
+    EXPECT_LT(h.nees_X, band.second);
+    EXPECT_GT(h.nees_Y, band.first);
+    EXPECT_LT(h.nees_Y, band.second);
+    EXPECT_NEAR(h.sigma, 0.3, 0.003);
+  }
+}
+
+// Robot errors (0.3 mm, 0.03 deg per axis) that the corners cannot average out:
+// with the robot poses as measurements the covariance stays honest; with them
+// taken as exact it is overconfident.
+TEST(CornerCalibration, RobotPosesAsMeasurementsKeepTheCovarianceHonest) {
+  const int M = 200;
+  const auto band = chi2_band(M, 6);
+  Matrix6d robot = Matrix6d::Zero();
+  robot.diagonal() << Vector3d::Constant(std::pow(0.3e-3, 2)), Vector3d::Constant(std::pow(0.03 * M_PI / 180.0, 2));
+  CornerOptions free;
+  free.robot_covariance = robot;
+  for (const handeye::Setup setup : {handeye::Setup::EyeInHand, handeye::Setup::EyeToHand}) {
+    const Honesty h = honesty(setup, M, 15, free, robot, 0.0);
+    const Honesty exact = honesty(setup, M, 15, CornerOptions{}, robot, 0.0);
+    std::printf("%s, robot noisy: NEES X %.2f, Y %.2f with the robot poses free (band %.2f..%.2f), sigma %.4f px; "
+                "X %.2f taken as exact\n",
+                to_string(setup), h.nees_X, h.nees_Y, band.first, band.second, h.sigma, exact.nees_X);
+    EXPECT_GT(h.nees_X, band.first);
+    EXPECT_LT(h.nees_X, band.second);
+    EXPECT_GT(h.nees_Y, band.first);
+    EXPECT_LT(h.nees_Y, band.second);
+    EXPECT_NEAR(h.sigma, 0.3, 0.006);
+    EXPECT_GT(exact.nees_X, band.second);
+  }
+}
+
+// The focal length given 1% off: refined with the intrinsics, it lands within 2
+// sigma of the truth as often as a Gaussian says, and X is unbiased; kept fixed, X
+// is biased.
+TEST(CornerCalibration, RefinedIntrinsicsRemoveTheFocalLengthBias) {
+  const int M = 100;
+  CornerOptions intrinsics;
+  intrinsics.refine_intrinsics = true;
+  const Honesty h = honesty(Setup::EyeInHand, M, 20, intrinsics, std::nullopt, 0.01);
+  const Honesty fixed = honesty(Setup::EyeInHand, M, 20, CornerOptions{}, std::nullopt, 0.01);
+  std::printf("focal 1%% off: refined within 2 sigma in %.0f%% of sessions; X bias over sigma %.2f (refined) and %.2f "
+              "(fixed), NEES X %.2f / %.2f\n",
+              100.0 * h.focal_within_2_sigma, h.bias.cwiseAbs().maxCoeff(), fixed.bias.cwiseAbs().maxCoeff(), h.nees_X,
+              fixed.nees_X);
+  EXPECT_GT(h.focal_within_2_sigma, 0.88);          // 95% expected; 100 sessions
+  EXPECT_LT(h.bias.cwiseAbs().maxCoeff(), 0.33);    // the mean of 100 unit normals: 3.3 of its sigma
+  EXPECT_GT(fixed.bias.cwiseAbs().maxCoeff(), 1.0);
+}
+
+TEST(CornerCalibration, RefusesWhatItCannotUse) {
+  const CameraModel camera = simulated_camera();
+  Rng rng(5);
+  const Scene s = scene(rng, Setup::EyeInHand, 4);
+  std::vector<CornerView> views;
+  for (std::size_t i = 0; i < 4; ++i) views.push_back(corners(s, i, camera, rng, 0.3));
+  const auto code_of = [&](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const HandEyeError& e) {
+      return std::string(to_string(e.code()));
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, {views[0], views[1]}, s.X, s.Y); }), "NoData");
+  std::vector<CornerView> bad = views;
+  bad[2].points.corner_covariance = -Eigen::MatrixXd::Identity(80, 80);
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, bad, s.X, s.Y); }), "InvalidNoise");
+  bad = views;
+  bad[1].points.image.pop_back();
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, bad, s.X, s.Y); }), "NoData");
+  CornerOptions robot;
+  robot.robot_covariance = Matrix6d::Zero();
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, views, s.X, s.Y, robot); }), "InvalidNoise");
+  CameraModel tilted = camera;
+  tilted.distortion.resize(14, 0.0);
+  tilted.distortion[12] = 0.01;
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, tilted, views, s.X, s.Y); }), "MalformedFile");
+}
+
+}  // namespace
+}  // namespace handeye
