@@ -14,7 +14,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
@@ -43,7 +45,18 @@ Eigen::Isometry3d theta_u_pose(const Eigen::Vector3d& t, const Eigen::Vector3d& 
 
 struct RealSession {
   SampleSet samples;
+  std::vector<PointCorrespondences> corners;  // per sample, raw pixels
+  std::vector<std::string> names;
+  CameraModel camera;
   int images = 0, detected = 0;
+
+  RealSession without(std::size_t k) const {
+    RealSession fewer = *this;
+    fewer.samples.samples.erase(fewer.samples.samples.begin() + static_cast<long>(k));
+    fewer.corners.erase(fewer.corners.begin() + static_cast<long>(k));
+    fewer.names.erase(fewer.names.begin() + static_cast<long>(k));
+    return fewer;
+  }
 };
 
 /// One of the two sessions as `handeye images` runs it (images/image_folder.h):
@@ -52,10 +65,12 @@ struct RealSession {
 RealSession real_session(const fs::path& dir, Setup setup, const Target& target) {
   const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(dir, dir);
   Rig rig{setup, {"base", "effector", "camera", "pattern"}};
-  const images::ImageSession found =
-      images::detect_images(inputs, images::read_camera((dir / "camera_info.yaml").string()), target, rig);
   RealSession session;
+  session.camera = images::read_camera((dir / "camera_info.yaml").string());
+  const images::ImageSession found = images::detect_images(inputs, session.camera, target, rig);
   session.samples = found.samples;
+  session.corners = found.corners;
+  session.names = found.sample_images;
   session.images = static_cast<int>(found.images.size());
   for (const images::ImageReport& r : found.images) {
     if (!r.used) {
@@ -80,17 +95,32 @@ Calibration calibrate_like_the_node(const SampleSet& samples) {
   return session.calibrate(session.snapshot());
 }
 
+/// As `handeye images --method corners`: the node's pose-level estimate, then the
+/// corners refined from it (the robot poses free with the noise it estimated).
+Calibration calibrate_by_corners(const RealSession& session) {
+  const Calibration pose_level = calibrate_like_the_node(session.samples);
+  const CornerMethodResult r =
+      refine_with_corners(session.samples, session.corners, session.names, session.camera, pose_level);
+  for (const Calibration::CornerFit::Image& image : r.calibration.corner_fit->images) {
+    std::printf("  %s: %d corners, reprojection RMS %.3f px\n", image.name.c_str(), image.corners, image.rms_px);
+  }
+  std::printf("  corners: %s; RMS %.3f px over %d corners\n", r.calibration.noise_model.c_str(),
+              r.calibration.corner_fit->rms_px, r.calibration.corner_fit->corners);
+  return r.calibration;
+}
+
+using Pipeline = std::function<Calibration(const RealSession&)>;
+const Pipeline by_poses = [](const RealSession& s) { return calibrate_like_the_node(s.samples); };
+
 /// X against the published X (both from the same images): within 3 sigma per axis
 /// of the combined uncertainty, ours and the jackknife spread of this pipeline
 /// over the leave-one-out sessions for theirs (8 poses determine it weakly).
-Calibration judge(const RealSession& session, const Eigen::Isometry3d& published) {
-  const Calibration c = calibrate_like_the_node(session.samples);
+Calibration judge(const RealSession& session, const Eigen::Isometry3d& published, const Pipeline& calibrate = by_poses) {
+  const Calibration c = calibrate(session);
   const Vector6d error = pose_error(c.T_parent_camera, published);
   std::vector<Vector6d> leave_one_out;
   for (std::size_t k = 0; k < session.samples.samples.size(); ++k) {
-    SampleSet fewer = session.samples;
-    fewer.samples.erase(fewer.samples.begin() + static_cast<long>(k));
-    leave_one_out.push_back(pose_error(calibrate_like_the_node(fewer).T_parent_camera, published));
+    leave_one_out.push_back(pose_error(calibrate(session.without(k)).T_parent_camera, published));
   }
   Vector6d mean = Vector6d::Zero(), jackknife = Vector6d::Zero();
   for (const Vector6d& e : leave_one_out) mean += e / static_cast<double>(leave_one_out.size());
@@ -148,6 +178,32 @@ TEST(RealData, EyeInHandChessboardLandsWithin3SigmaOfThePublishedX) {
   EXPECT_EQ(session.detected, 8) << "every image shows the board";
   // ViSP's published X = T_effector_camera (the data's README).
   judge(session, theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244}, {0.001783530191, 0.009173747947, 1.581782359}));
+}
+
+// --method corners on the same real sessions: X within 3 sigma of the published X.
+TEST(RealData, CornersOnTheEyeToHandAprilTagSessionLandWithin3SigmaOfThePublishedX) {
+  const fs::path dir = realdata() / "visp-franka" / "data-eye-to-hand";
+  ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
+  std::printf("[real eye-to-hand, AprilTag, --method corners] %s\n", dir.c_str());
+  const RealSession session = real_session(dir, Setup::EyeToHand, make_target(single_tag_layout(10, 0.048)));
+  const Calibration c = judge(session,
+                              theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018}, {-1.104108108, -1.112745553, 1.289540899}),
+                              calibrate_by_corners);
+  EXPECT_EQ(c.method, Method::Corners);
+}
+
+TEST(RealData, CornersOnTheEyeInHandChessboardSessionLandWithin3SigmaOfThePublishedX) {
+  const fs::path dir = realdata() / "visp-franka" / "data-eye-in-hand";
+  ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
+  std::printf("[real eye-in-hand, chessboard, --method corners] %s\n", dir.c_str());
+  const RealSession session = real_session(dir, Setup::EyeInHand,
+                                           io::parse_target("{type: chessboard, inner_corners: [9, 6], square: 0.0236}",
+                                                            "chessboard.yaml"));
+  const Calibration c = judge(session,
+                              theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244},
+                                           {0.001783530191, 0.009173747947, 1.581782359}),
+                              calibrate_by_corners);
+  EXPECT_EQ(c.method, Method::Corners);
 }
 
 }  // namespace

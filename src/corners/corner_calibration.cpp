@@ -510,11 +510,92 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     if (settled) break;
   }
   result.pixel_sigma = sigma;
+  result.chi2 = corner_rss / (sigma * sigma);
   result.X = pose_of(x);
   result.Y = pose_of(y);
   result.covariance = 0.5 * (xy_covariance + xy_covariance.transpose());
   if (intrinsics_free) result.intrinsics = k;
   return result;
+}
+
+CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vector<PointCorrespondences>& corners,
+                                       const std::vector<std::string>& names, const CameraModel& camera,
+                                       const Calibration& pose_level, CornerOptions options) {
+  if (corners.size() != samples.samples.size() || names.size() != samples.samples.size()) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       std::to_string(corners.size()) + " images' corners for " + std::to_string(samples.samples.size()) +
+                           " samples",
+                       "corner calibration", "give one image's corners per sample, in the samples' order");
+  }
+  if (!pose_level.pattern) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the pose-level estimate has no pattern pose to start from",
+                       "corner calibration", "start from the joint estimator (method joint), not pairs");
+  }
+  std::vector<bool> rejected(samples.samples.size(), false);
+  for (const Calibration::Rejected& r : pose_level.rejected) rejected.at(static_cast<std::size_t>(r.index)) = true;
+  std::vector<CornerView> views;
+  for (std::size_t i = 0; i < samples.samples.size(); ++i) {
+    if (!rejected[i]) views.push_back({samples.samples[i].T_base_effector, corners[i], names[i]});
+  }
+  std::string robot = "exact";
+  if (!options.robot_covariance) {
+    Matrix6d R = pose_level.noise.robot.as_pose_covariance();
+    if (!R.isZero(0.0)) {
+      for (int k = 0; k < 6; ++k) R(k, k) = std::max(R(k, k), 1e-12);  // (1 um)^2, (1 urad)^2
+      options.robot_covariance = R;
+    }
+  }
+  if (options.robot_covariance) {
+    const Vector6d s = options.robot_covariance->diagonal().cwiseSqrt();
+    robot = "free, prior 1 sigma " + number_text(s.head<3>().maxCoeff() * 1e3, 3) + " mm / " +
+            number_text(s.tail<3>().maxCoeff() * 180.0 / M_PI, 3) + " deg (largest axis)";
+  }
+  CornerMethodResult out;
+  out.fit = calibrate_corners(samples.rig, camera, views, pose_level.T_parent_camera, pose_level.pattern->pose, options);
+  const CornerCalibration& f = out.fit;
+  Calibration& c = out.calibration;
+  c = pose_level;
+  c.method = Method::Corners;
+  c.T_parent_camera = f.X;
+  c.pose_covariance = f.covariance.topLeftCorner<6, 6>();
+  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
+  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  c.pattern = PoseWithCovariance{f.Y, f.covariance.bottomRightCorner<6, 6>()};
+  c.cross_covariance = f.covariance.topRightCorner<6, 6>();
+  c.samples_used = static_cast<int>(views.size());
+  c.noise_components.clear();
+  c.residual_checks.clear();
+  c.warnings.clear();  // the pose-level fit's
+  c.loss = "squared";
+  c.covariance_kind = "information";
+  c.downweighted = 0;
+  c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
+  c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
+  c.noise_model = "corners: pixel sigma " + number_text(f.pixel_sigma, 3) + " px" +
+                  (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
+                  " under the detector's corner-noise model; robot poses " + robot +
+                  (f.intrinsics ? "; intrinsics refined" : "");
+  c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
+  c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;
+  c.rotation_stage.dof = c.translation_stage.dof = f.degrees_of_freedom;
+  c.rotation_stage.chi2 = c.translation_stage.chi2 = f.chi2;
+  Calibration::CornerFit fit;
+  fit.pixel_sigma = f.pixel_sigma;
+  fit.pixel_sigma_estimated = f.pixel_sigma_estimated;
+  fit.rms_px = f.rms_px;
+  fit.robot = robot;
+  for (const ImageReprojection& image : f.images) {
+    fit.corners += image.points;
+    fit.images.push_back({image.name, image.points, image.rms_px});
+  }
+  if (f.intrinsics) {
+    for (int k = 0; k < 6; ++k) {
+      fit.intrinsics.push_back((*f.intrinsics)[k]);
+      fit.intrinsics_sigma.push_back(std::sqrt(std::max(0.0, f.intrinsics_covariance(k, k))));
+    }
+  }
+  c.corner_fit = fit;
+  return out;
 }
 
 }  // namespace handeye

@@ -20,11 +20,22 @@ const char* to_string(StopReason reason) {
   return "unknown";
 }
 
-const char* to_string(Method method) { return method == Method::Pairs ? "pairs" : "joint"; }
+const char* to_string(Method method) {
+  switch (method) {
+    case Method::Pairs: return "pairs";
+    case Method::Joint: return "joint";
+    case Method::Corners: return "corners";
+  }
+  return "unknown";
+}
 
 Method method_from_string(const std::string& name) {
   if (name == "pairs") return Method::Pairs;
   if (name == "joint") return Method::Joint;
+  if (name == "corners") {
+    throw HandEyeError(ErrorCode::MalformedFile, "method `corners` needs the images' corners, which pose samples do not hold",
+                       "method", "run `handeye images --method corners` on the images, or use joint here");
+  }
   throw HandEyeError(ErrorCode::MalformedFile, "unknown method `" + name + "`", "method",
                      "use joint (X and the pattern pose from the absolute poses) or pairs (the paper's AX = XB)");
 }

@@ -163,6 +163,8 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
     sample.T_camera_pattern = pose->T_camera_pattern;
     sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(pose->covariance)};
     session.samples.samples.push_back(sample);
+    session.corners.push_back(*detector.frame(*frame_of[i]).corners);
+    session.sample_images.push_back(report.image);
   }
   return session;
 }

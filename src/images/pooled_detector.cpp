@@ -23,7 +23,8 @@ const PooledDetector::Frame& PooledDetector::add(const cv::Mat& gray, const Came
     // A refused frame adds nothing to the pool (estimate_pose adds only what it accepts).
     PatternPoseResult r = estimate_pose(rectifier_->rectified(), *seen.points, noise_, pose_options_);
     frame.pose = std::move(r.pose);
-    if (!frame.pose) frame.why = r.refusal;
+    if (frame.pose) frame.corners = raw_pixels(*seen.points, camera);
+    else frame.why = r.refusal;
   }
   frames_.push_back(std::move(frame));
   return frames_.back();

@@ -90,6 +90,10 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
   }
   if (c.method == Method::Joint) {
     out += line("  data                  %d samples (joint estimator: X and the pattern pose from the poses)", c.samples_used);
+  } else if (c.method == Method::Corners && c.corner_fit) {
+    out += line("  data                  %d images, %d corners (corner estimator: X and the pattern pose from every "
+                "corner's reprojection error)",
+                c.samples_used, c.corner_fit->corners);
   } else if (c.samples_used > 0) {
     out += line("  data                  %d samples -> %d motions (pairs estimator)", c.samples_used, c.motions_used);
   } else {
@@ -99,7 +103,18 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     const Eigen::Vector3d s = C.diagonal().cwiseMax(0.0).cwiseSqrt() * unit;
     return line("%.4f %.4f %.4f", s.x(), s.y(), s.z());
   };
-  if (c.noise_origin == NoiseOrigin::EstimatedFromResiduals) {
+  if (c.method == Method::Corners) {
+    out += "  noise                 " + c.noise_model + "\n";
+    if (c.corner_fit) {
+      std::string worst;
+      double worst_rms = -1.0;
+      for (const Calibration::CornerFit::Image& image : c.corner_fit->images) {
+        if (image.rms_px > worst_rms) worst_rms = image.rms_px, worst = image.name;
+      }
+      out += line("  reprojection          RMS %.3f px over every corner; worst image %s at %.3f px", c.corner_fit->rms_px,
+                  worst.c_str(), worst_rms);
+    }
+  } else if (c.noise_origin == NoiseOrigin::EstimatedFromResiduals) {
     std::string estimated = "  noise                 ESTIMATED from the residuals (no noise block given); camera 1 sigma x y z [mm] " +
                             sigmas(c.noise.camera.translation, 1e3);
     estimated.pop_back();
@@ -124,7 +139,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                : line("  covariance            inverse information x%.3f (X), x%.3f (pattern)", c.covariance_inflation,
                       c.pattern_covariance_inflation);
   }
-  if (c.method == Method::Joint) {
+  if (c.method == Method::Joint || c.method == Method::Corners) {
     out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,
                 to_string(c.rotation_stage.stop_reason), c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof),
                 c.rotation_stage.dof);

@@ -543,6 +543,30 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     const auto cross = to_row_major_6x6(calibration.cross_covariance);
     emit_numbers(out, cross.data(), cross.size());
   }
+  if (calibration.corner_fit) {  // method corners: the reprojection fit, per image
+    const Calibration::CornerFit& fit = *calibration.corner_fit;
+    out << YAML::Key << "corners" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "pixel_sigma" << YAML::Value << fit.pixel_sigma;
+    out << YAML::Key << "pixel_sigma_estimated" << YAML::Value << fit.pixel_sigma_estimated;
+    out << YAML::Key << "rms_px" << YAML::Value << fit.rms_px;
+    out << YAML::Key << "corners" << YAML::Value << fit.corners;
+    out << YAML::Key << "robot_poses" << YAML::Value << fit.robot;
+    if (!fit.intrinsics.empty()) {  // refined: fx, fy, cx, cy (px), k1, k2, each with its 1 sigma
+      const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2"};
+      out << YAML::Key << "intrinsics" << YAML::Value << YAML::BeginMap;
+      for (std::size_t k = 0; k < fit.intrinsics.size(); ++k) {
+        out << YAML::Key << names[k] << YAML::Value << YAML::Flow << YAML::BeginSeq << fit.intrinsics[k]
+            << fit.intrinsics_sigma[k] << YAML::EndSeq;
+      }
+      out << YAML::EndMap;
+    }
+    out << YAML::Key << "images" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::CornerFit::Image& image : fit.images) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << image.name << YAML::Key << "corners"
+          << YAML::Value << image.corners << YAML::Key << "rms_px" << YAML::Value << image.rms_px << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
 
   const bool samples = context.setup.has_value();
   out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;

@@ -7,6 +7,7 @@
 
 #include "cli_common.h"
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -19,6 +20,8 @@ namespace {
 
 int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string images_dir, poses, camera_path, target_path, setup_name, output, samples_out, robust = "auto";
+  std::string method = "joint";
+  bool refine_intrinsics = false;
   po::options_description options("images: calibrate from a folder of images and one robot pose per image");
   options.add_options()("help,h", "show this help")(
       "images", po::value(&images_dir)->required(), "folder of .png/.jpg images (sorted by name)")(
@@ -31,6 +34,10 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
                                                      "or a tag layout)")(
       "setup", po::value(&setup_name)->required(), "eye_in_hand or eye_to_hand")(
       "robust", po::value(&robust), "auto (default), on or off, as for solve")(
+      "method", po::value(&method), "joint (default): X and the pattern pose from each image's detected pose; corners: "
+                                    "then refined by every corner's reprojection error (README: when to use which)")(
+      "refine-intrinsics", po::bool_switch(&refine_intrinsics),
+      "with --method corners: also refine fx, fy, cx, cy, k1, k2, the camera file as their prior")(
       "output,o", po::value(&output), "result file (YAML); default: <images folder>_result.yaml here")(
       "samples-out", po::value(&samples_out), "also write the samples (each detection with its covariance) for "
                                               "`handeye solve`");
@@ -40,6 +47,14 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
     return kOk;
   }
   const Setup setup = setup_from_string(setup_name, "--setup");
+  if (method != "joint" && method != "corners") {
+    throw HandEyeError(ErrorCode::MalformedFile, "unknown method `" + method + "`", "--method",
+                       "use joint (from each image's pose) or corners (from every corner)");
+  }
+  if (refine_intrinsics && method != "corners") {
+    throw HandEyeError(ErrorCode::MalformedFile, "--refine-intrinsics needs the corners", "--refine-intrinsics",
+                       "add --method corners");
+  }
   if (output.empty()) output = default_result_path(std::filesystem::path(images_dir).lexically_normal().string());
   const CameraModel camera = images::read_camera(camera_path);
   const Target target = io::read_target(target_path);
@@ -80,7 +95,28 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   CalibrationSession session(settings);
   session.replace(found.samples.samples, "images in " + images_dir);
   const SessionSnapshot snapshot = session.snapshot();
-  const Calibration calibration = session.calibrate(snapshot);
+  Calibration calibration = session.calibrate(snapshot);
+  if (method == "corners") {
+    CornerOptions corner_options;
+    corner_options.refine_intrinsics = refine_intrinsics;
+    calibration = refine_with_corners(snapshot.samples, found.corners, found.sample_images, camera, calibration,
+                                      corner_options)
+                      .calibration;
+    for (const Calibration::CornerFit::Image& image : calibration.corner_fit->images) {
+      std::snprintf(line, sizeof line, "  %-28s %3d corners, reprojection RMS %.3f px (corner fit)\n", image.name.c_str(),
+                    image.corners, image.rms_px);
+      out << line;
+    }
+    const std::vector<double>& k = calibration.corner_fit->intrinsics;
+    const std::vector<double>& s = calibration.corner_fit->intrinsics_sigma;
+    if (!k.empty()) {
+      std::snprintf(line, sizeof line,
+                    "  intrinsics refined: fx %.2f +- %.2f, fy %.2f +- %.2f, cx %.2f +- %.2f, cy %.2f +- %.2f px, "
+                    "k1 %.4f +- %.4f, k2 %.4f +- %.4f\n",
+                    k[0], s[0], k[1], s[1], k[2], s[2], k[3], s[3], k[4], s[4], k[5], s[5]);
+      out << line;
+    }
+  }
   const io::ResultContext context = io::context_of(snapshot.samples);
   io::write_file_atomically(output, io::format_result(calibration, context));
   out << io::human_summary(calibration, context);

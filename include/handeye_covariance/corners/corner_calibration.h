@@ -33,6 +33,7 @@
 
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
@@ -81,6 +82,7 @@ struct CornerCalibration {
   bool pixel_sigma_estimated = false;
   int degrees_of_freedom = 0;  // corner residuals m minus what the fit absorbs (rounded)
   double rms_px = 0.0;         // over every corner
+  double chi2 = 0.0;           // the corners' sum r^T C^-1 r / sigma^2 (= dof when sigma is estimated)
   std::vector<ImageReprojection> images;
   /// With refine_intrinsics: fx, fy, cx, cy, k1, k2 and their covariance.
   std::optional<IntrinsicsVector> intrinsics;
@@ -108,5 +110,21 @@ CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, cons
 CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
                                     const Eigen::Isometry3d& X0, const Eigen::Isometry3d& Y0,
                                     const CornerOptions& options = {});
+
+/// `--method corners` after the pose-level estimate `pose_level` of the same
+/// samples: calibrate_corners started from its X and Y, its rejected samples left
+/// out. corners[i] and names[i] belong to samples.samples[i]. Unless `options`
+/// says otherwise, the robot poses are free with the robot noise pose_level used
+/// (stated or estimated; a zero block is floored at 1 um / 1 urad), or exact when
+/// it used none. The Calibration holds X, Y, their covariances and cross block
+/// (method Corners) and the corner fit; the pose-level residual checks and noise
+/// components, which described the poses' fit, are replaced by the corners'.
+struct CornerMethodResult {
+  Calibration calibration;
+  CornerCalibration fit;
+};
+CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vector<PointCorrespondences>& corners,
+                                       const std::vector<std::string>& names, const CameraModel& camera,
+                                       const Calibration& pose_level, CornerOptions options = {});
 
 }  // namespace handeye

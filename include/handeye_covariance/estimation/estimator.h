@@ -82,9 +82,12 @@ enum class NoiseOrigin { Given, EstimatedFromResiduals };
 enum class Method {
   Pairs,  // the paper's AX = XB on motion pairs (estimator.h)
   Joint,  // X and the pattern pose Y jointly from the absolute poses (joint_estimator.h)
+  Corners,  // X and Y from every image corner's reprojection error (corners/corner_calibration.h)
 };
-const char* to_string(Method method);  // "pairs" / "joint"
-/// Throws HandEyeError(MalformedFile) naming the valid values.
+const char* to_string(Method method);  // "pairs" / "joint" / "corners"
+/// A session's method from pose samples: "pairs" or "joint" ("corners" needs the
+/// images' corners: `handeye images --method corners`). Throws
+/// HandEyeError(MalformedFile) naming the valid values.
 Method method_from_string(const std::string& name);
 
 struct Calibration {
@@ -151,6 +154,24 @@ struct Calibration {
     std::string reason;
   };
   std::vector<Rejected> rejected;
+
+  /// Corners: the fit of every image's corners (corners/corner_calibration.h).
+  struct CornerFit {
+    double pixel_sigma = 0.0;  // px, estimated from the residuals (or given)
+    bool pixel_sigma_estimated = true;
+    double rms_px = 0.0;       // over every corner coordinate
+    int corners = 0;
+    struct Image {
+      std::string name;
+      int corners = 0;
+      double rms_px = 0.0;
+    };
+    std::vector<Image> images;
+    std::string robot;  // how the robot poses entered: "exact" or their prior
+    /// Refined intrinsics fx, fy, cx, cy (px), k1, k2 and their 1 sigma; empty when kept.
+    std::vector<double> intrinsics, intrinsics_sigma;
+  };
+  std::optional<CornerFit> corner_fit;
 };
 
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of

@@ -57,6 +57,9 @@ struct ImageReport {
 
 struct ImageSession {
   SampleSet samples;               // one sample per used image, each with its detection's covariance
+  /// Per sample (same order): its image's corners in raw pixels, and the image's name.
+  std::vector<PointCorrespondences> corners;
+  std::vector<std::string> sample_images;
   std::vector<ImageReport> images;  // one per image, in order
   double pixel_sigma = 0.0;        // pooled over every detected image
 };

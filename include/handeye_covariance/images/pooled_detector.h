@@ -27,6 +27,9 @@ class PooledDetector {
 
   struct Frame {
     std::optional<PatternPose> pose;  // under the sigma pooled so far; pooled() rescales it
+    /// The corners the pose came from, in the raw image's pixels (raw_pixels):
+    /// what --method corners refines from.
+    std::optional<PointCorrespondences> corners;
     std::string why;                  // why not (not found, refused by the PnP)
   };
   /// Detects the target in an 8-bit gray image as `camera` took it (rectified
@@ -34,6 +37,7 @@ class PooledDetector {
   const Frame& add(const cv::Mat& gray, const CameraModel& camera);
 
   std::size_t size() const { return frames_.size(); }
+  const Frame& frame(std::size_t i) const { return frames_.at(i); }
   double pixel_sigma() const { return noise_.sigma(); }
   int degrees_of_freedom() const { return noise_.degrees_of_freedom(); }  // pooled so far
   /// The i-th frame's pose with its covariance under the pooled sigma:
