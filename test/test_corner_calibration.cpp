@@ -167,6 +167,8 @@ struct Honesty {
   double nees_X = 0.0, nees_Y = 0.0, sigma = 0.0;
   Vector6d bias = Vector6d::Zero();  // mean of the error over its sigma, per axis of X
   double focal_within_2_sigma = 0.0;  // share of sessions (intrinsics free)
+  Eigen::Vector2d robot_sigma = Eigen::Vector2d::Zero();  // root of the mean variance estimate (m, rad)
+  double rounds = 0.0, iterations = 0.0;                   // mean noise rounds and Ceres iterations
 };
 
 // M sessions of n views: noisy corners (0.3 px), the robot's measured poses
@@ -195,12 +197,16 @@ Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const s
     h.nees_X += nees(eX, CX) / M;
     h.nees_Y += nees(eY, CY) / M;
     h.sigma += c.pixel_sigma / M;
+    h.robot_sigma += c.robot_sigma.cwiseAbs2() / M;  // the mean variance, rooted below
+    h.rounds += static_cast<double>(c.noise_rounds) / M;
+    h.iterations += static_cast<double>(c.iterations) / M;
     h.bias += eX.cwiseQuotient(CX.diagonal().cwiseSqrt()) / M;
     if (c.intrinsics) {
       const double f_sigma = std::sqrt(c.intrinsics_covariance(0, 0));
       h.focal_within_2_sigma += (std::abs((*c.intrinsics)[0] - truth_camera.K(0, 0)) < 2.0 * f_sigma ? 1.0 : 0.0) / M;
     }
   }
+  h.robot_sigma = h.robot_sigma.cwiseSqrt();
   return h;
 }
 
@@ -236,18 +242,34 @@ TEST(CornerCalibration, RobotPosesAsMeasurementsKeepTheCovarianceHonest) {
   robot.diagonal() << Vector3d::Constant(std::pow(0.3e-3, 2)), Vector3d::Constant(std::pow(0.03 * M_PI / 180.0, 2));
   CornerOptions free;
   free.robot_covariance = robot;
+  CornerOptions estimated;
+  estimated.estimate_robot_noise = true;
   for (const handeye::Setup setup : {handeye::Setup::EyeInHand, handeye::Setup::EyeToHand}) {
     const Honesty h = honesty(setup, M, 15, free, robot, 0.0);
+    const Honesty e = honesty(setup, M, 15, estimated, robot, 0.0);
     const Honesty exact = honesty(setup, M, 15, CornerOptions{}, robot, 0.0);
     std::printf("%s, robot noisy: NEES X %.2f, Y %.2f with the robot poses free (band %.2f..%.2f), sigma %.4f px; "
-                "X %.2f taken as exact\n",
-                to_string(setup), h.nees_X, h.nees_Y, band.first, band.second, h.sigma, exact.nees_X);
+                "X %.2f, Y %.2f with the robot's noise estimated (%.3f mm, %.4f deg; true 0.3, 0.03); X %.2f taken as exact\n",
+                to_string(setup), h.nees_X, h.nees_Y, band.first, band.second, h.sigma, e.nees_X, e.nees_Y,
+                e.robot_sigma[0] * 1e3, e.robot_sigma[1] * 180.0 / M_PI, exact.nees_X);
+    std::printf("  noise rounds %.1f / %.1f, Ceres iterations %.1f / %.1f (given / estimated)\n", h.rounds, e.rounds,
+                h.iterations, e.iterations);
     EXPECT_GT(h.nees_X, band.first);
     EXPECT_LT(h.nees_X, band.second);
     EXPECT_GT(h.nees_Y, band.first);
     EXPECT_LT(h.nees_Y, band.second);
     EXPECT_NEAR(h.sigma, 0.3, 0.006);
     EXPECT_GT(exact.nees_X, band.second);
+    // Estimated from 15 images (45 rows per component): the estimate's own error
+    // widens the NEES a little (about 1 + 2 / 45 for one scale).
+    EXPECT_GT(e.nees_X, band.first);
+    EXPECT_LT(e.nees_X, band.second * 1.05);
+    EXPECT_GT(e.nees_Y, band.first);
+    EXPECT_LT(e.nees_Y, band.second * 1.05);
+    // 15 images tell the robot's translation from its rotation poorly (some sessions
+    // put one of them at 0): the mean variance is within 15% of the truth.
+    EXPECT_NEAR(e.robot_sigma[0], 0.3e-3, 0.045e-3);
+    EXPECT_NEAR(e.robot_sigma[1], 0.03 * M_PI / 180.0, 0.0045 * M_PI / 180.0);
   }
 }
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -333,14 +334,24 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     throw HandEyeError(ErrorCode::InvalidNoise, "pixel sigma " + number_text(options.pixel_sigma) + " px",
                        "corner calibration options", "give a positive pixel sigma, or 0 to estimate it");
   }
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> robot_whitening;
+  // The robot poses' prior: as given, or (estimated) isotropic per translation and
+  // rotation, started at the given one's mean variances or 1 mm / 0.1 deg.
+  Matrix6d robot_covariance = Matrix6d::Zero();
   if (options.robot_covariance) {
     Eigen::LLT<Matrix6d> llt(*options.robot_covariance);
     if (!options.robot_covariance->allFinite() || llt.info() != Eigen::Success) {
       throw HandEyeError(ErrorCode::InvalidNoise, "the robot pose covariance is not positive definite",
                          "corner calibration options", "give the robot's 6x6 pose noise (ROS order, m^2 and rad^2)");
     }
-    robot_whitening = llt.matrixL().solve(Matrix6d::Identity());
+    robot_covariance = *options.robot_covariance;
+  }
+  Eigen::Vector2d robot_variance(1e-6, std::pow(0.1 * M_PI / 180.0, 2));  // m^2, rad^2 (estimated)
+  if (options.estimate_robot_noise) {
+    if (options.robot_covariance) {
+      robot_variance << robot_covariance.diagonal().head<3>().mean(), robot_covariance.diagonal().tail<3>().mean();
+    }
+    robot_covariance.setZero();
+    robot_covariance.diagonal() << Vector3d::Constant(robot_variance[0]), Vector3d::Constant(robot_variance[1]);
   }
   const Projection projection = projection_of(camera, rig);
   std::vector<ImageCorners> images;
@@ -350,7 +361,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     images.push_back(image_corners(views[i], i));
     m += static_cast<int>(2 * images.back().image.size());
   }
-  const bool robot_free = options.robot_covariance.has_value();
+  const bool robot_free = options.robot_covariance.has_value() || options.estimate_robot_noise;
   const bool intrinsics_free = options.refine_intrinsics;
 
   PoseBlock x = pose_block(X0), y = pose_block(Y0);
@@ -362,6 +373,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   double inverse_sigma = 1.0 / sigma;
 
   ceres::Problem::Options problem_options;
+  problem_options.enable_fast_removal = true;  // the robot priors are replaced as their noise is estimated
   ceres::Problem problem(problem_options);
   problem.AddParameterBlock(x.data(), 7, new PoseManifold);
   problem.AddParameterBlock(y.data(), 7, new PoseManifold);
@@ -376,10 +388,16 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     else if (intrinsics_free) cost = image_cost<false, true>(&images[i], &projection, &inverse_sigma);
     else cost = image_cost<false, false>(&images[i], &projection, &inverse_sigma);
     problem.AddResidualBlock(cost, nullptr, blocks);
-    if (robot_free) {
-      problem.AddResidualBlock(new ceres::NormalPrior(robot_whitening, Eigen::VectorXd::Zero(6)), nullptr, robot[i].data());
-    }
   }
+  // The robot poses' priors, xi_E,i ~ N(0, robot_covariance): NormalPrior with A = L^-1.
+  std::vector<ceres::ResidualBlockId> robot_priors;
+  const auto set_robot_priors = [&] {
+    const ceres::Matrix A = Eigen::LLT<Matrix6d>(robot_covariance).matrixL().solve(Matrix6d::Identity());
+    for (ceres::ResidualBlockId id : robot_priors) problem.RemoveResidualBlock(id);
+    robot_priors.clear();
+    for (auto& r : robot) robot_priors.push_back(problem.AddResidualBlock(new ceres::NormalPrior(A, Eigen::VectorXd::Zero(6)), nullptr, r.data()));
+  };
+  if (robot_free) set_robot_priors();
   Vector6d prior_sigma;
   if (intrinsics_free) {
     const double width = camera.width > 0 ? camera.width : 2.0 * camera.K(0, 2);
@@ -408,12 +426,15 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 
   CornerCalibration result;
   result.pixel_sigma_estimated = options.pixel_sigma == 0.0;
+  result.robot_noise_estimated = options.estimate_robot_noise;
   // sigma moves the solution only through the priors' weight against the corners.
-  const bool sigma_rounds = result.pixel_sigma_estimated && (robot_free || intrinsics_free);
+  const bool sigma_rounds = (result.pixel_sigma_estimated && (robot_free || intrinsics_free)) || options.estimate_robot_noise;
   const int rounds = sigma_rounds ? std::max(1, options.max_noise_rounds) : 1;
   Eigen::MatrixXd xy_covariance;  // unit: the whitening's sigma
   double corner_rss = 0.0;        // px^2 per unit sigma^2, at the solution
   double absorbed = 0.0;          // what the fit absorbs of the corners
+  std::vector<Eigen::Vector2d> history;  // the robot's log variances, since the last extrapolation
+  std::array<bool, 2> robot_at_bound = {false, false};
   for (int round = 0; round < rounds; ++round) {
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &problem, &summary);
@@ -449,12 +470,19 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     if (intrinsics_free) {
       absorbed += 6.0 - (result.intrinsics_covariance.diagonal().array() / prior_sigma.array().square()).sum();
     }
+    // Variance components (Forstner): each prior group's squared residuals over its
+    // redundancy, its rows' count minus the share the fit takes of them.
+    Eigen::Vector2d robot_squares = Eigen::Vector2d::Zero(), robot_share = Eigen::Vector2d::Zero();
     if (robot_free && sigma_rounds) {
-      const Matrix6d information = robot_whitening.transpose() * robot_whitening;
+      const Matrix6d information = robot_covariance.inverse();
       for (const auto& r : robot) {
         Eigen::Matrix<double, 6, 6, Eigen::RowMajor> block;
         covariance.GetCovarianceBlockInTangentSpace(r.data(), r.data(), block.data());
-        absorbed += 6.0 - (Matrix6d(block) * information).trace();
+        const Matrix6d held = Matrix6d(block) * information;
+        absorbed += 6.0 - held.trace();
+        robot_share += Eigen::Vector2d(held.topLeftCorner<3, 3>().trace(), held.bottomRightCorner<3, 3>().trace());
+        const Eigen::Map<const Vector6d> xi(r.data());
+        robot_squares += Eigen::Vector2d(xi.head<3>().squaredNorm(), xi.tail<3>().squaredNorm());
       }
     }
     corner_rss = 0.0;
@@ -491,14 +519,57 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     result.rms_px = std::sqrt(unweighted / m);
     const double dof = m - absorbed;
     result.degrees_of_freedom = static_cast<int>(std::lround(dof));
-    if (!result.pixel_sigma_estimated) break;
+    bool settled = true;
+    if (options.estimate_robot_noise) {
+      const double rows = 3.0 * static_cast<double>(views.size());
+      const double floor = 1e-12;  // (1 um)^2, (1 urad)^2: the residuals do not support it
+      Eigen::Vector2d estimate = robot_variance;
+      for (int c = 0; c < 2; ++c) {
+        if (robot_at_bound[c]) continue;
+        const double redundancy = rows - robot_share[c];  // robot_share[c] = sum tr(Sigma_post,cc) / variance_c
+        // Under one row's worth of redundancy the residuals hold nothing of it: the
+        // estimate creeps towards 0 ever more slowly; it is put there.
+        if (redundancy < 1.0) {
+          robot_at_bound[c] = true;
+          estimate[c] = floor;
+          settled = false;
+          continue;
+        }
+        estimate[c] = std::max(floor, robot_squares[c] / redundancy);
+        settled = settled && std::abs(std::sqrt(estimate[c] / robot_variance[c]) - 1.0) < 1e-3;
+      }
+      // Where the two are told apart by few images, the fixed point creeps along a
+      // ridge (translation up, rotation down) at a steady rate: every third step
+      // jumps to the limit of that geometric sequence (Aitken's delta-squared on the
+      // log variances, with the rate they share).
+      history.push_back(estimate.array().log().matrix());
+      if (!settled && history.size() == 3) {
+        const Eigen::Vector2d d1 = history[1] - history[0], d2 = history[2] - history[1];
+        const double rate = d1.squaredNorm() > 0.0 ? std::clamp(d2.dot(d1) / d1.squaredNorm(), 0.0, 0.95) : 0.0;
+        const Eigen::Vector2d jumped = (history[2] + rate / (1.0 - rate) * d2).array().exp().max(floor).matrix();
+        for (int c = 0; c < 2; ++c) {
+          if (!robot_at_bound[c]) estimate[c] = jumped[c];
+        }
+        history.clear();
+      }
+      robot_variance = estimate;
+      robot_covariance.setZero();
+      robot_covariance.diagonal() << Vector3d::Constant(robot_variance[0]), Vector3d::Constant(robot_variance[1]);
+      result.robot_sigma = robot_variance.cwiseSqrt();
+      result.robot_at_bound = {robot_at_bound[0], robot_at_bound[1]};
+    }
+    if (!result.pixel_sigma_estimated) {
+      if (settled) break;
+      set_robot_priors();
+      continue;
+    }
     if (dof <= 0.0) {
       throw HandEyeError(ErrorCode::NoiseUnidentifiable,
                          "the corners leave " + number_text(dof) + " degrees of freedom for the pixel noise",
                          "corner calibration", "give the pixel sigma, or more corners");
     }
     const double estimate = std::sqrt(corner_rss / dof);
-    const bool settled = std::abs(estimate / sigma - 1.0) < 1e-3;
+    settled = settled && std::abs(estimate / sigma - 1.0) < 1e-3;
     if (!sigma_rounds) {
       // The solution does not depend on sigma: the covariance scales with it.
       xy_covariance *= (estimate * estimate) / (sigma * sigma);
@@ -508,6 +579,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     sigma = estimate;
     inverse_sigma = 1.0 / sigma;
     if (settled) break;
+    if (options.estimate_robot_noise) set_robot_priors();
   }
   result.pixel_sigma = sigma;
   result.chi2 = corner_rss / (sigma * sigma);
@@ -538,14 +610,20 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vect
     if (!rejected[i]) views.push_back({samples.samples[i].T_base_effector, corners[i], names[i]});
   }
   std::string robot = "exact";
-  if (!options.robot_covariance) {
+  if (!options.robot_covariance && !options.estimate_robot_noise) {
+    const bool stated = samples.noise && !samples.noise->robot.as_pose_covariance().isZero(0.0);
+    bool trusted = stated;
+    for (const Calibration::ResidualCheck& check : pose_level.residual_checks) trusted = trusted && check.passed;
     Matrix6d R = pose_level.noise.robot.as_pose_covariance();
     if (!R.isZero(0.0)) {
       for (int k = 0; k < 6; ++k) R(k, k) = std::max(R(k, k), 1e-12);  // (1 um)^2, (1 urad)^2
       options.robot_covariance = R;
     }
+    options.estimate_robot_noise = !trusted && views.size() >= 6;
   }
-  if (options.robot_covariance) {
+  if (options.estimate_robot_noise) {
+    robot = "free, their noise estimated from the corners";
+  } else if (options.robot_covariance) {
     const Vector6d s = options.robot_covariance->diagonal().cwiseSqrt();
     robot = "free, prior 1 sigma " + number_text(s.head<3>().maxCoeff() * 1e3, 3) + " mm / " +
             number_text(s.tail<3>().maxCoeff() * 180.0 / M_PI, 3) + " deg (largest axis)";
@@ -571,6 +649,10 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vect
   c.downweighted = 0;
   c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
   c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
+  if (f.robot_noise_estimated) {
+    robot += ": 1 sigma " + number_text(f.robot_sigma[0] * 1e3, 3) + " mm / " +
+             number_text(f.robot_sigma[1] * 180.0 / M_PI, 3) + " deg per axis";
+  }
   c.noise_model = "corners: pixel sigma " + number_text(f.pixel_sigma, 3) + " px" +
                   (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
                   " under the detector's corner-noise model; robot poses " + robot +

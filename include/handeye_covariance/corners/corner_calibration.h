@@ -24,9 +24,17 @@
 // what the fit absorbs of the corners (12, the free intrinsics, and each free robot
 // pose's share, 6 - tr(Sigma_post Sigma_E^-1)); with the robot poses free this
 // alternates with the solve, as the prior's weight depends on sigma.
+//
+// Robot noise. Given, or estimated (an isotropic translation and rotation variance,
+// which the corners tell from the pixel noise: a robot error moves all of an image's
+// corners together) as variance components, alternating with the solve until every
+// sigma moves by under 0.1%: each group's squared residuals over its redundancy,
+// its rows minus the share the fit takes of them (Forstner's estimator; for the
+// robot's translation, sum |xi_t,i|^2 / (3n - sum tr(Sigma_post,tt,i) / s_t^2)).
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -58,13 +66,17 @@ struct CornerOptions {
   /// The robot poses as measurements with this covariance (ROS order, left
   /// perturbation in the base frame) as their prior; absent: taken as exact.
   std::optional<Matrix6d> robot_covariance;
+  /// Robot poses free with an isotropic noise (one translation, one rotation
+  /// variance) estimated from the data as variance components, alternating with
+  /// the solve (robot_covariance, if given, is the start).
+  bool estimate_robot_noise = false;
   /// Refine fx, fy, cx, cy, k1, k2, with the given camera as the prior.
   bool refine_intrinsics = false;
   /// The prior's 1 sigma: of fx and fy as a share of them, of cx and cy as a share
   /// of the image width, of k1 and k2 absolute.
   double focal_prior = 0.05, centre_prior = 0.05, distortion_prior = 0.2;
   int max_iterations = 100;
-  int max_noise_rounds = 10;  // robot poses free and sigma estimated: solve / sigma alternations
+  int max_noise_rounds = 30;  // noise estimated with a prior's weight at stake: solve / estimate alternations
 };
 
 struct ImageReprojection {
@@ -87,6 +99,11 @@ struct CornerCalibration {
   /// With refine_intrinsics: fx, fy, cx, cy, k1, k2 and their covariance.
   std::optional<IntrinsicsVector> intrinsics;
   Matrix6d intrinsics_covariance = Matrix6d::Zero();
+  /// With estimate_robot_noise: the robot's 1 sigma per axis, translation (m) and
+  /// rotation (rad); 1e-6 where the residuals do not support any.
+  bool robot_noise_estimated = false;
+  Eigen::Vector2d robot_sigma = Eigen::Vector2d::Zero();
+  std::array<bool, 2> robot_at_bound = {false, false};  // not supported: held at 1e-6
   int iterations = 0;  // Ceres iterations, every noise round
   int noise_rounds = 1;
 };
@@ -114,9 +131,10 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 /// `--method corners` after the pose-level estimate `pose_level` of the same
 /// samples: calibrate_corners started from its X and Y, its rejected samples left
 /// out. corners[i] and names[i] belong to samples.samples[i]. Unless `options`
-/// says otherwise, the robot poses are free with the robot noise pose_level used
-/// (stated or estimated; a zero block is floored at 1 um / 1 urad), or exact when
-/// it used none. The Calibration holds X, Y, their covariances and cross block
+/// says otherwise, the robot poses are free: with the robot noise the samples
+/// state when pose_level's residual checks trusted it, else (6 images or more)
+/// with the robot noise estimated from the corners, else with the one pose_level
+/// used (a zero block floored at 1 um / 1 urad); exact when there is none. The Calibration holds X, Y, their covariances and cross block
 /// (method Corners) and the corner fit; the pose-level residual checks and noise
 /// components, which described the poses' fit, are replaced by the corners'.
 struct CornerMethodResult {
