@@ -121,8 +121,11 @@ std::vector<ImageWithPose> pair_images_with_poses(const fs::path& images, const 
   return out;
 }
 
-ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const CameraModel& camera, const Target& target,
-                           const Rig& rig, const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress) {
+namespace {
+
+ImageSession detect(const std::vector<ImageWithPose>& inputs, const std::function<cv::Mat(std::size_t)>& load,
+                    const CameraModel& camera, const Target& target, const Rig& rig,
+                    const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress) {
   PooledDetector detector(target);
   ImageSession session;
   session.samples.rig = rig;
@@ -134,7 +137,7 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
     if (!inputs[i].T_base_effector) {
       report.why = inputs[i].why;
     } else {
-      const cv::Mat image = cv::imread(inputs[i].image.string(), cv::IMREAD_GRAYSCALE);
+      const cv::Mat image = load(i);
       if (image.empty()) {
         report.why = "cannot be read as an image";
       } else if (camera.width > 0 && (image.cols != camera.width || image.rows != camera.height)) {
@@ -167,6 +170,24 @@ ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const Camer
     session.sample_images.push_back(report.image);
   }
   return session;
+}
+
+}  // namespace
+
+ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const CameraModel& camera, const Target& target,
+                           const Rig& rig, const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress) {
+  const auto read = [&](std::size_t i) { return cv::imread(inputs[i].image.string(), cv::IMREAD_GRAYSCALE); };
+  return detect(inputs, read, camera, target, rig, progress);
+}
+
+ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const std::vector<cv::Mat>& images,
+                           const CameraModel& camera, const Target& target, const Rig& rig) {
+  if (images.size() != inputs.size()) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       std::to_string(images.size()) + " images for " + std::to_string(inputs.size()) + " inputs",
+                       "detect_images", "give one image per input");
+  }
+  return detect(inputs, [&](std::size_t i) { return images[i]; }, camera, target, rig, {});
 }
 
 }  // namespace images

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "handeye_covariance/core/measurements.h"
 #include "handeye_covariance/core/target.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -71,6 +73,10 @@ struct ImageSession {
 ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const CameraModel& camera, const Target& target,
                            const Rig& rig,
                            const std::function<void(std::size_t, std::size_t, const ImageReport&)>& progress = {});
+/// The same with the images in memory (images[i] is inputs[i]'s, 8-bit gray; empty:
+/// unreadable): rendered sessions for the studies.
+ImageSession detect_images(const std::vector<ImageWithPose>& inputs, const std::vector<cv::Mat>& images,
+                           const CameraModel& camera, const Target& target, const Rig& rig);
 
 }  // namespace images
 }  // namespace handeye

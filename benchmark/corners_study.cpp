@@ -1,0 +1,234 @@
+// Rendered sessions with known truth: `--method corners` against the pose-level
+// estimator on the same images, for BENCHMARKS.md (issue 18's figures).
+//
+// Each session: 30 eye-in-hand views at 0.4-1.0 m of a target (a 2 x 2 AprilTag
+// board, a 6 x 5 ChArUco board, a 9 x 6 chessboard), rendered by PatternRenderer
+// with the simulated camera's distortion, detected as `handeye images` detects
+// them (detect_images: rectified, the pixel sigma pooled), calibrated as it
+// calibrates them (the session's pose-level estimate, then refine_with_corners).
+// Printed per target kind: the RMS error of X by both, their ratio, the
+// Cramer-Rao bound of the corner model (the information J^T J / sigma^2 of the
+// detected corners at the truth, sigma the corner fit's estimate, averaged over
+// the sessions), the 6-dof NEES of X by both, and with --focal-error the refined
+// focal length's coverage and X's bias in sigma.
+//
+//   handeye_corners_study --sessions 300 [--kinds apriltag,charuco,chessboard] [--focal-error 0.01]
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/corners/corner_calibration.h"
+#include "handeye_covariance/images/image_folder.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/simulation/pattern_renderer.h"
+
+namespace handeye {
+namespace {
+
+Target target_of(const std::string& kind) {
+  if (kind == "apriltag") return make_target(io::read_tag_layout(HANDEYE_SOURCE_DIR "/config/tag_board_2x2.yaml"));
+  if (kind == "charuco") return make_target(CharucoTarget{6, 5, 0.035, 0.026, "DICT_5X5_100"});
+  if (kind == "chessboard") return make_target(ChessboardTarget{9, 6, 0.030});
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown target kind " + kind, "--kinds", "use apriltag, charuco, chessboard");
+}
+
+Vector6d error_of(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
+  Vector6d e;
+  e.head<3>() = estimate.translation() - truth.translation();
+  e.tail<3>() = so3::log(estimate.linear() * truth.linear().transpose());
+  return e;
+}
+
+struct SessionResult {
+  bool ok = false;
+  std::string why;
+  int images = 0;
+  Vector6d poses_error, corners_error;
+  Matrix6d poses_covariance, corners_covariance, bound;
+  double focal = 0.0, focal_sigma = 0.0, true_focal = 0.0;
+};
+
+SessionResult run_session(const std::string& kind, int index, int n, double focal_error) {
+  SessionResult out;
+  const Target target = target_of(kind);
+  const CameraModel camera = simulated_camera();
+  CameraModel given = camera;
+  given.K(0, 0) *= 1.0 + focal_error;
+  given.K(1, 1) *= 1.0 + focal_error;
+  out.true_focal = camera.K(0, 0);
+  Rng rng(static_cast<std::uint64_t>(18000 + index));
+  ViewpointOptions views;
+  views.min_distance = 0.4;
+  views.max_distance = 1.0;
+  SimulatedSession truth = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), n, MeasurementNoise{}, views);
+  // The views look at the pattern frame's origin; make them look at the printed face.
+  const Eigen::Isometry3d face_inverse = target_face(target).inverse();
+  truth.T_world_pattern = truth.T_world_pattern * face_inverse;
+  const PatternRenderer renderer(target, camera);
+  std::vector<images::ImageWithPose> inputs;
+  std::vector<cv::Mat> rendered;
+  for (std::size_t i = 0; i < truth.samples.samples.size(); ++i) {
+    const PoseSample& s = truth.samples.samples[i];
+    inputs.push_back({"view_" + std::to_string(i) + ".png", s.T_base_effector, "simulated", ""});
+    rendered.push_back(renderer.render(s.T_camera_pattern * face_inverse, rng));
+  }
+  Rig rig;
+  rig.setup = Setup::EyeInHand;
+  rig.frames = {"base", "effector", "camera", "pattern"};
+  rig.T_pattern_face = target_face(target);
+  try {
+    const images::ImageSession found = images::detect_images(inputs, rendered, given, target, rig);
+    out.images = static_cast<int>(found.samples.samples.size());
+    if (out.images < 6) {
+      out.why = "only " + std::to_string(out.images) + " images detected";
+      return out;
+    }
+    SessionSettings settings = session_settings(found.samples);
+    CalibrationSession session(settings);
+    session.replace(found.samples.samples, "rendered");
+    const SessionSnapshot snapshot = session.snapshot();
+    const Calibration poses = session.calibrate(snapshot);
+    CornerOptions options;
+    options.refine_intrinsics = focal_error != 0.0;
+    const CornerMethodResult corners =
+        refine_with_corners(snapshot.samples, found.corners, found.sample_images, given, poses, options);
+    out.poses_error = error_of(poses.T_parent_camera, truth.X);
+    out.corners_error = error_of(corners.calibration.T_parent_camera, truth.X);
+    out.poses_covariance = poses.pose_covariance;
+    out.corners_covariance = corners.calibration.pose_covariance;
+    // The corner model's bound: its information at the truth, the detected corners'
+    // structure and noise model, sigma as the fit estimated it.
+    std::vector<CornerView> detected;
+    for (std::size_t i = 0; i < found.corners.size(); ++i) {
+      detected.push_back({found.samples.samples[i].T_base_effector, found.corners[i], found.sample_images[i]});
+    }
+    const CornerResiduals at_truth = corner_residuals(rig, camera, detected, truth.X, truth.T_world_pattern);
+    const double sigma = corners.fit.pixel_sigma;
+    const Eigen::Matrix<double, 12, 12> information = at_truth.jacobian.transpose() * at_truth.jacobian / (sigma * sigma);
+    out.bound = information.inverse().topLeftCorner<6, 6>();
+    if (corners.fit.intrinsics) {
+      out.focal = (*corners.fit.intrinsics)[0];
+      out.focal_sigma = std::sqrt(corners.fit.intrinsics_covariance(0, 0));
+    }
+    out.ok = true;
+  } catch (const HandEyeError& e) {
+    out.why = e.what();
+  }
+  return out;
+}
+
+struct Summary {
+  int sessions = 0, failed = 0;
+  double images = 0.0;
+  Eigen::Vector2d poses_ms = Eigen::Vector2d::Zero(), corners_ms = Eigen::Vector2d::Zero(), bound_ms = Eigen::Vector2d::Zero();
+  double nees_poses = 0.0, nees_corners = 0.0, focal_within_2_sigma = 0.0;
+  Vector6d bias_poses = Vector6d::Zero(), bias_corners = Vector6d::Zero();
+  std::string first_failure;
+};
+
+// Mean squared translation (m^2) and rotation (rad^2) error, summed over the axes.
+Eigen::Vector2d squares(const Vector6d& e) { return {e.head<3>().squaredNorm(), e.tail<3>().squaredNorm()}; }
+Eigen::Vector2d traces(const Matrix6d& C) { return {C.topLeftCorner<3, 3>().trace(), C.bottomRightCorner<3, 3>().trace()}; }
+
+Summary study(const std::string& kind, int M, int n, double focal_error, int threads) {
+  std::vector<SessionResult> results(static_cast<std::size_t>(M));
+  std::atomic<int> next{0};
+  std::vector<std::thread> workers;
+  for (int t = 0; t < threads; ++t) {
+    workers.emplace_back([&] {
+      for (int k = next++; k < M; k = next++) results[static_cast<std::size_t>(k)] = run_session(kind, k, n, focal_error);
+    });
+  }
+  for (std::thread& w : workers) w.join();
+  Summary s;
+  for (const SessionResult& r : results) {
+    if (!r.ok) {
+      ++s.failed;
+      if (s.first_failure.empty()) s.first_failure = r.why;
+      continue;
+    }
+    ++s.sessions;
+    s.images += r.images;
+    s.poses_ms += squares(r.poses_error);
+    s.corners_ms += squares(r.corners_error);
+    s.bound_ms += traces(r.bound);
+    s.nees_poses += r.poses_error.dot(r.poses_covariance.ldlt().solve(r.poses_error));
+    s.nees_corners += r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
+    s.bias_poses += r.poses_error.cwiseQuotient(r.poses_covariance.diagonal().cwiseSqrt());
+    s.bias_corners += r.corners_error.cwiseQuotient(r.corners_covariance.diagonal().cwiseSqrt());
+    if (r.focal_sigma > 0.0) s.focal_within_2_sigma += std::abs(r.focal - r.true_focal) < 2.0 * r.focal_sigma;
+  }
+  const double m = std::max(1, s.sessions);
+  s.images /= m;
+  s.poses_ms /= m;
+  s.corners_ms /= m;
+  s.bound_ms /= m;
+  s.nees_poses /= m;
+  s.nees_corners /= m;
+  s.bias_poses /= m;
+  s.bias_corners /= m;
+  s.focal_within_2_sigma /= m;
+  return s;
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  using namespace handeye;
+  int M = 300, n = 30, threads = 2;
+  double focal_error = 0.0;
+  std::string kinds = "apriltag,charuco,chessboard";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string key = argv[i];
+    if (key == "--sessions") M = std::atoi(argv[i + 1]);
+    else if (key == "--images") n = std::atoi(argv[i + 1]);
+    else if (key == "--threads") threads = std::max(1, std::atoi(argv[i + 1]));
+    else if (key == "--focal-error") focal_error = std::atof(argv[i + 1]);
+    else if (key == "--kinds") kinds = argv[i + 1];
+    else {
+      std::fprintf(stderr, "usage: %s [--sessions M] [--images n] [--kinds apriltag,charuco,chessboard] "
+                           "[--focal-error e] [--threads t]\n", argv[0]);
+      return 2;
+    }
+  }
+  const double deg = 180.0 / M_PI;
+  if (focal_error == 0.0) {
+    std::printf("| target | sessions (images used) | X RMS poses [mm / deg] | X RMS corners [mm / deg] | corners / poses | "
+                "corner-model bound [mm / deg] | corners / bound | NEES X poses | NEES X corners |\n");
+    std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  } else {
+    std::printf("| target | sessions | focal within 2 sigma | X bias / sigma, corners (worst axis) | X bias / sigma, poses "
+                "(worst axis) | NEES X corners | NEES X poses |\n");
+    std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
+  }
+  std::stringstream list(kinds);
+  std::string kind;
+  while (std::getline(list, kind, ',')) {
+    const Summary s = study(kind, M, n, focal_error, threads);
+    const Eigen::Vector2d poses = s.poses_ms.cwiseSqrt(), corners = s.corners_ms.cwiseSqrt(), bound = s.bound_ms.cwiseSqrt();
+    if (focal_error == 0.0) {
+      std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2f | %.2f |\n",
+                  kind.c_str(), s.sessions, s.images, poses[0] * 1e3, poses[1] * deg, corners[0] * 1e3, corners[1] * deg,
+                  corners[0] / poses[0], corners[1] / poses[1], bound[0] * 1e3, bound[1] * deg, corners[0] / bound[0],
+                  corners[1] / bound[1], s.nees_poses, s.nees_corners);
+    } else {
+      std::printf("| %s | %d | %.0f%% | %.2f | %.2f | %.2f | %.2f |\n", kind.c_str(), s.sessions,
+                  100.0 * s.focal_within_2_sigma, s.bias_corners.cwiseAbs().maxCoeff(), s.bias_poses.cwiseAbs().maxCoeff(),
+                  s.nees_corners, s.nees_poses);
+    }
+    if (s.failed > 0) std::printf("\n%d %s session(s) failed, the first: %s\n\n", s.failed, kind.c_str(), s.first_failure.c_str());
+    std::fflush(stdout);
+  }
+  return 0;
+}
