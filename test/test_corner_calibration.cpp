@@ -12,6 +12,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/corners/corner_calibration.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"
 
@@ -319,6 +320,18 @@ TEST(CornerCalibration, RefusesWhatItCannotUse) {
   tilted.distortion.resize(14, 0.0);
   tilted.distortion[12] = 0.01;
   EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, tilted, views, s.X, s.Y); }), "MalformedFile");
+  // Ceres out of iterations far from the solution: named, not a half-way X.
+  CornerOptions one_step;
+  one_step.max_iterations = 1;
+  Isometry3d far = s.X;
+  far.translation() += Vector3d(0.05, -0.04, 0.03);
+  far.linear() = so3::exp(Vector3d(0.2, -0.1, 0.15)) * far.linear();
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, views, far, s.Y, one_step); }), "NotConverged");
+  // Pose samples hold no corners: a session (or the node) asked for them is told how.
+  SampleSet samples;
+  samples.rig = s.rig;
+  EXPECT_EQ(code_of([&] { estimate(samples, Method::Corners); }), "MalformedFile");
+  EXPECT_EQ(code_of([&] { method_from_string("corners"); }), "MalformedFile");
 }
 
 }  // namespace

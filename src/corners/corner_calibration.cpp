@@ -197,7 +197,7 @@ class ImageCost {
 };
 
 template <bool kRobot, bool kIntrinsics>
-ceres::CostFunction* image_cost(const ImageCorners* corners, const Projection* projection, const double* inverse_sigma) {
+ceres::CostFunction* typed_image_cost(const ImageCorners* corners, const Projection* projection, const double* inverse_sigma) {
   using Cost = ImageCost<kRobot, kIntrinsics>;
   const int m = static_cast<int>(2 * corners->image.size());
   if constexpr (!kRobot && !kIntrinsics) {
@@ -208,6 +208,15 @@ ceres::CostFunction* image_cost(const ImageCorners* corners, const Projection* p
   } else {
     return new ceres::AutoDiffCostFunction<Cost, ceres::DYNAMIC, 7, 7, 6>(new Cost(corners, projection, inverse_sigma), m);
   }
+}
+
+// The cost of one image with what is free (the robot pose, the intrinsics).
+ceres::CostFunction* image_cost(bool robot, bool intrinsics, const ImageCorners* corners, const Projection* projection,
+                                const double* inverse_sigma) {
+  if (robot && intrinsics) return typed_image_cost<true, true>(corners, projection, inverse_sigma);
+  if (robot) return typed_image_cost<true, false>(corners, projection, inverse_sigma);
+  if (intrinsics) return typed_image_cost<false, true>(corners, projection, inverse_sigma);
+  return typed_image_cost<false, false>(corners, projection, inverse_sigma);
 }
 
 ImageCorners image_corners(const CornerView& view, std::size_t index) {
@@ -308,7 +317,7 @@ CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, cons
   problem.AddParameterBlock(x.data(), 7, new PoseManifold);
   problem.AddParameterBlock(y.data(), 7, new PoseManifold);
   for (const ImageCorners& image : images) {
-    problem.AddResidualBlock(image_cost<false, false>(&image, &projection, &inverse_sigma), nullptr, x.data(), y.data());
+    problem.AddResidualBlock(image_cost(false, false, &image, &projection, &inverse_sigma), nullptr, x.data(), y.data());
   }
   ceres::Problem::EvaluateOptions evaluate;
   evaluate.parameter_blocks = {x.data(), y.data()};
@@ -378,16 +387,16 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   problem.AddParameterBlock(x.data(), 7, new PoseManifold);
   problem.AddParameterBlock(y.data(), 7, new PoseManifold);
   if (intrinsics_free) problem.AddParameterBlock(k.data(), 6);
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    ceres::CostFunction* cost = nullptr;
+  // Image i's parameter blocks, in ImageCost's order.
+  const auto blocks_of = [&](std::size_t i) {
     std::vector<double*> blocks = {x.data(), y.data()};
     if (robot_free) blocks.push_back(robot[i].data());
     if (intrinsics_free) blocks.push_back(k.data());
-    if (robot_free && intrinsics_free) cost = image_cost<true, true>(&images[i], &projection, &inverse_sigma);
-    else if (robot_free) cost = image_cost<true, false>(&images[i], &projection, &inverse_sigma);
-    else if (intrinsics_free) cost = image_cost<false, true>(&images[i], &projection, &inverse_sigma);
-    else cost = image_cost<false, false>(&images[i], &projection, &inverse_sigma);
-    problem.AddResidualBlock(cost, nullptr, blocks);
+    return blocks;
+  };
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    problem.AddResidualBlock(image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma), nullptr,
+                             blocks_of(i));
   }
   // The robot poses' priors, xi_E,i ~ N(0, robot_covariance): NormalPrior with A = L^-1.
   std::vector<ceres::ResidualBlockId> robot_priors;
@@ -492,14 +501,9 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
       // Residuals at sigma = 1 (the whitening alone), and the plain pixel errors.
       const double saved = inverse_sigma;
       inverse_sigma = 1.0;
-      std::vector<double*> blocks = {x.data(), y.data()};
-      if (robot_free) blocks.push_back(robot[i].data());
-      if (intrinsics_free) blocks.push_back(k.data());
-      std::unique_ptr<ceres::CostFunction> cost(
-          robot_free && intrinsics_free ? image_cost<true, true>(&images[i], &projection, &inverse_sigma)
-          : robot_free                  ? image_cost<true, false>(&images[i], &projection, &inverse_sigma)
-          : intrinsics_free             ? image_cost<false, true>(&images[i], &projection, &inverse_sigma)
-                                        : image_cost<false, false>(&images[i], &projection, &inverse_sigma));
+      const std::vector<double*> blocks = blocks_of(i);
+      const std::unique_ptr<ceres::CostFunction> cost(
+          image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma));
       Eigen::VectorXd r(cost->num_residuals());
       cost->Evaluate(blocks.data(), r.data(), nullptr);
       inverse_sigma = saved;

@@ -37,7 +37,8 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
       "method", po::value(&method), "joint (default): X and the pattern pose from each image's detected pose; corners: "
                                     "then refined by every corner's reprojection error (README: when to use which)")(
       "refine-intrinsics", po::bool_switch(&refine_intrinsics),
-      "with --method corners: also refine fx, fy, cx, cy, k1, k2, the camera file as their prior")(
+      "with --method corners: also refine fx, fy, cx, cy, k1, k2, the camera file as their prior (the pose-level "
+      "start then rejects no image: wrong intrinsics make the images disagree)")(
       "output,o", po::value(&output), "result file (YAML); default: <images folder>_result.yaml here")(
       "samples-out", po::value(&samples_out), "also write the samples (each detection with its covariance) for "
                                               "`handeye solve`");
@@ -92,6 +93,9 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   SessionSettings settings = session_settings(found.samples);
   settings.robust = robust_from_string(robust);
+  // Wrong intrinsics make the images' poses disagree with each other: with
+  // --refine-intrinsics the pose level only starts the corners and rejects nothing.
+  if (refine_intrinsics) settings.reject_outliers = false;
   CalibrationSession session(settings);
   session.replace(found.samples.samples, "images in " + images_dir);
   const SessionSnapshot snapshot = session.snapshot();
