@@ -14,6 +14,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+#include <yaml-cpp/yaml.h>
 #include <functional>
 
 #include "handeye_covariance/corners/corner_calibration.h"
@@ -204,6 +207,54 @@ TEST(RealData, CornersOnTheEyeInHandChessboardSessionLandWithin3SigmaOfThePublis
                                            {0.001783530191, 0.009173747947, 1.581782359}),
                               calibrate_by_corners);
   EXPECT_EQ(c.method, Method::Corners);
+}
+
+// `handeye images --method corners` as a user runs it on the real eye-in-hand folder:
+// every image's reprojection RMS under the corner fit printed and written, the
+// result's method and pattern, and --refine-intrinsics near the factory intrinsics.
+TEST(RealData, HandeyeImagesWithCornersOnTheRealChessboardFolder) {
+  const fs::path dir = realdata() / "visp-franka" / "data-eye-in-hand";
+  ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
+  const std::string tmp = ::testing::TempDir();
+  const std::string target = tmp + "/real_chessboard.yaml", result = tmp + "/real_corners_result.yaml";
+  {
+    std::ofstream(target) << "{type: chessboard, inner_corners: [9, 6], square: 0.0236}\n";
+  }
+  const std::string common = "images --images " + dir.string() + " --poses " + dir.string() + " --camera " +
+                             (dir / "camera_info.yaml").string() + " --target " + target + " --setup eye_in_hand";
+  const auto run = [&](const std::string& args, std::string& out) {
+    const std::string out_file = tmp + "/real_cli_stdout";
+    const int status = std::system((std::string(HANDEYE_CLI) + " " + args + " >" + out_file + " 2>&1").c_str());
+    out = io::read_file(out_file);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  std::string out;
+  ASSERT_EQ(run(common + " --method corners -o " + result, out), 0) << out;
+  std::size_t fit_lines = 0;
+  for (std::size_t at = out.find("(corner fit)"); at != std::string::npos; at = out.find("(corner fit)", at + 1)) ++fit_lines;
+  EXPECT_EQ(fit_lines, 8u) << out;
+  EXPECT_NE(out.find("8 images, 432 corners (corner estimator"), std::string::npos) << out;
+  const YAML::Node written = YAML::LoadFile(result);
+  EXPECT_EQ(written["method"].as<std::string>(), "corners");
+  ASSERT_TRUE(written["pattern"]) << "Y with its covariance";
+  ASSERT_EQ(written["corners"]["images"].size(), 8u);
+  for (const YAML::Node& image : written["corners"]["images"]) {
+    EXPECT_EQ(image["corners"].as<int>(), 54);
+    EXPECT_GT(image["rms_px"].as<double>(), 0.05);  // real corners are not exact
+    EXPECT_LT(image["rms_px"].as<double>(), 0.6) << image["image"].as<std::string>();
+  }
+  // The intrinsics refined from 8 images land near the camera file's factory values.
+  ASSERT_EQ(run(common + " --method corners --refine-intrinsics -o " + result, out), 0) << out;
+  const YAML::Node refined = YAML::LoadFile(result)["corners"]["intrinsics"];
+  ASSERT_TRUE(refined) << out;
+  std::printf("  refined fx %.2f +- %.2f, fy %.2f +- %.2f, cx %.2f, cy %.2f (camera file: 607.59, 607.58, 323.46, 243.26)\n",
+              refined["fx"][0].as<double>(), refined["fx"][1].as<double>(), refined["fy"][0].as<double>(),
+              refined["fy"][1].as<double>(), refined["cx"][0].as<double>(), refined["cy"][0].as<double>());
+  EXPECT_NEAR(refined["fx"][0].as<double>(), 607.593, 0.03 * 607.593);
+  EXPECT_NEAR(refined["fy"][0].as<double>(), 607.575, 0.03 * 607.575);
+  // The intrinsics need the corners: said before any image is read.
+  EXPECT_EQ(run(common + " --refine-intrinsics -o " + result, out), 2);
+  EXPECT_NE(out.find("--method corners"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -376,8 +376,8 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   PoseBlock x = pose_block(X0), y = pose_block(Y0);
   std::vector<std::array<double, 6>> robot(views.size(), std::array<double, 6>{});
   IntrinsicsVector k0 = intrinsics_of(camera), k = k0;
-  // Sigma for the first round: as given, or the one that makes the start's
-  // residuals fit (rescaled every round).
+  // Sigma for the first round: as given, or 1 px, re-estimated after every round
+  // (it weighs the corners against the priors; alone it only scales the covariance).
   double sigma = options.pixel_sigma > 0.0 ? options.pixel_sigma : 1.0;
   double inverse_sigma = 1.0 / sigma;
 
@@ -404,7 +404,9 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     const ceres::Matrix A = Eigen::LLT<Matrix6d>(robot_covariance).matrixL().solve(Matrix6d::Identity());
     for (ceres::ResidualBlockId id : robot_priors) problem.RemoveResidualBlock(id);
     robot_priors.clear();
-    for (auto& r : robot) robot_priors.push_back(problem.AddResidualBlock(new ceres::NormalPrior(A, Eigen::VectorXd::Zero(6)), nullptr, r.data()));
+    for (auto& r : robot) {
+      robot_priors.push_back(problem.AddResidualBlock(new ceres::NormalPrior(A, Eigen::VectorXd::Zero(6)), nullptr, r.data()));
+    }
   };
   if (robot_free) set_robot_priors();
   Vector6d prior_sigma;
