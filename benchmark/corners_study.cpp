@@ -26,11 +26,11 @@
 #include <thread>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 
 namespace handeye {
@@ -43,13 +43,6 @@ Target target_of(const std::string& kind) {
   // One 48 mm tag, as the real eye-to-hand session: a pose weakly determined by 4 corners.
   if (kind == "apriltag_single") return make_target(single_tag_layout(10, 0.048));
   throw HandEyeError(ErrorCode::MalformedFile, "unknown target kind " + kind, "--kinds", "use apriltag, charuco, chessboard, apriltag_single");
-}
-
-Vector6d error_of(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
-  Vector6d e;
-  e.head<3>() = estimate.translation() - truth.translation();
-  e.tail<3>() = so3::log(estimate.linear() * truth.linear().transpose());
-  return e;
 }
 
 struct SessionResult {
@@ -108,8 +101,8 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     options.refine_intrinsics = focal_error != 0.0;
     const CornerMethodResult corners =
         refine_with_corners(snapshot.samples, found.corners, found.sample_images, given, poses, options);
-    out.poses_error = error_of(poses.T_parent_camera, truth.X);
-    out.corners_error = error_of(corners.calibration.T_parent_camera, truth.X);
+    out.poses_error = pose_error(poses.T_parent_camera, truth.X);
+    out.corners_error = pose_error(corners.calibration.T_parent_camera, truth.X);
     out.poses_covariance = poses.pose_covariance;
     out.corners_covariance = corners.calibration.pose_covariance;
     // The corner model's bound: its information at the truth, the detected corners'

@@ -65,13 +65,6 @@ CornerView corners(const Scene& s, std::size_t i, const CameraModel& camera, Rng
   return v;
 }
 
-Isometry3d perturbed(const Isometry3d& T, const Vector6d& xi) {
-  Isometry3d out = T;
-  out.linear() = so3::exp(xi.tail<3>()) * T.linear();
-  out.translation() += xi.head<3>();
-  return out;
-}
-
 Vector6d small_error(Rng& rng, double translation, double rotation) {
   std::normal_distribution<double> n(0.0, 1.0);
   Vector6d xi;
@@ -110,7 +103,7 @@ TEST(CornerResiduals, VanishAtTheTruthAndTheirJacobianIsTheNumericOne) {
 
       // Away from the truth, the whitened residuals are L^-1 (u_hat - u).
       const Vector6d offset = small_error(rng, 2e-3, 0.01);
-      const Isometry3d X1 = perturbed(s.X, offset);
+      const Isometry3d X1 = test::apply(s.X, offset);
       const CornerResiduals r = corner_residuals(s.rig, camera, views, X1, s.Y);
       double expected = 0.0;
       for (std::size_t i = 0; i < views.size(); ++i) {
@@ -129,8 +122,8 @@ TEST(CornerResiduals, VanishAtTheTruthAndTheirJacobianIsTheNumericOne) {
         Vector6d d = Vector6d::Zero();
         d[k % 6] = h;
         const auto at = [&](const Vector6d& step) {
-          return k < 6 ? corner_residuals(s.rig, camera, views, perturbed(X1, step), s.Y).whitened
-                       : corner_residuals(s.rig, camera, views, X1, perturbed(s.Y, step)).whitened;
+          return k < 6 ? corner_residuals(s.rig, camera, views, test::apply(X1, step), s.Y).whitened
+                       : corner_residuals(s.rig, camera, views, X1, test::apply(s.Y, step)).whitened;
         };
         numeric.col(k) = (at(d) - at(-d)) / (2.0 * h);
       }
@@ -191,8 +184,8 @@ Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const s
       if (robot_noise) v.T_base_effector = perturb(rng, v.T_base_effector, PoseNoise::from_pose_covariance(*robot_noise));
       views.push_back(v);
     }
-    const CornerCalibration c = calibrate_corners(s.rig, given, views, perturbed(s.X, small_error(rng, 1e-3, 1.7e-3)),
-                                                  perturbed(s.Y, small_error(rng, 1e-3, 1.7e-3)), options);
+    const CornerCalibration c = calibrate_corners(s.rig, given, views, test::apply(s.X, small_error(rng, 1e-3, 1.7e-3)),
+                                                  test::apply(s.Y, small_error(rng, 1e-3, 1.7e-3)), options);
     const Vector6d eX = test::pose_perturbation(c.X, s.X), eY = test::pose_perturbation(c.Y, s.Y);
     const Matrix6d CX = c.covariance.topLeftCorner<6, 6>(), CY = c.covariance.bottomRightCorner<6, 6>();
     h.nees_X += nees(eX, CX) / M;

@@ -277,13 +277,6 @@ Projection projection_of(const CameraModel& camera, const Rig& rig) {
   return p;
 }
 
-// The whitened residuals of one image's corners at the problem's current values
-// (sigma = 1), for the RMS and the residual sum of squares.
-struct ImageFit {
-  double weighted = 0.0;    // sum r^T C^-1 r, px^2 per unit sigma^2
-  double unweighted = 0.0;  // sum |u - u_hat|^2, px^2
-};
-
 }  // namespace
 
 IntrinsicsVector intrinsics_of(const CameraModel& camera) {
@@ -394,9 +387,10 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     if (intrinsics_free) blocks.push_back(k.data());
     return blocks;
   };
+  std::vector<ceres::ResidualBlockId> image_blocks;
   for (std::size_t i = 0; i < views.size(); ++i) {
-    problem.AddResidualBlock(image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma), nullptr,
-                             blocks_of(i));
+    image_blocks.push_back(problem.AddResidualBlock(
+        image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma), nullptr, blocks_of(i)));
   }
   // The robot poses' priors, xi_E,i ~ N(0, robot_covariance): NormalPrior with A = L^-1.
   std::vector<ceres::ResidualBlockId> robot_priors;
@@ -500,15 +494,11 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     double unweighted = 0.0;
     result.images.clear();
     for (std::size_t i = 0; i < views.size(); ++i) {
-      // Residuals at sigma = 1 (the whitening alone), and the plain pixel errors.
-      const double saved = inverse_sigma;
-      inverse_sigma = 1.0;
-      const std::vector<double*> blocks = blocks_of(i);
-      const std::unique_ptr<ceres::CostFunction> cost(
-          image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma));
-      Eigen::VectorXd r(cost->num_residuals());
-      cost->Evaluate(blocks.data(), r.data(), nullptr);
-      inverse_sigma = saved;
+      // The image's residuals at the solution, per unit sigma (the whitening alone),
+      // and the plain pixel errors.
+      Eigen::VectorXd r(2 * images[i].image.size());
+      problem.EvaluateResidualBlock(image_blocks[i], false, nullptr, r.data(), nullptr);
+      r *= sigma;
       corner_rss += r.squaredNorm();
       // The plain pixel errors: the whitening undone, block by block.
       double image_unweighted = 0.0;

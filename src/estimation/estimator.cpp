@@ -29,13 +29,15 @@ const char* to_string(Method method) {
   return "unknown";
 }
 
+HandEyeError corners_need_images() {
+  return HandEyeError(ErrorCode::MalformedFile, "method `corners` needs the images' corners, which pose samples do not hold",
+                      "method", "run `handeye images --method corners` on the images, or use joint here");
+}
+
 Method method_from_string(const std::string& name) {
   if (name == "pairs") return Method::Pairs;
   if (name == "joint") return Method::Joint;
-  if (name == "corners") {
-    throw HandEyeError(ErrorCode::MalformedFile, "method `corners` needs the images' corners, which pose samples do not hold",
-                       "method", "run `handeye images --method corners` on the images, or use joint here");
-  }
+  if (name == "corners") throw corners_need_images();
   throw HandEyeError(ErrorCode::MalformedFile, "unknown method `" + name + "`", "method",
                      "use joint (X and the pattern pose from the absolute poses) or pairs (the paper's AX = XB)");
 }

@@ -1004,10 +1004,7 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Iso
 }
 
 Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options) {
-  if (method == Method::Corners) {
-    throw HandEyeError(ErrorCode::MalformedFile, "method corners needs the images' corners; pose samples hold none",
-                       "method", "run `handeye images --method corners` on the images, or use joint");
-  }
+  if (method == Method::Corners) throw corners_need_images();
   return method == Method::Joint ? solve_joint(samples, options) : solve(samples);
 }
 

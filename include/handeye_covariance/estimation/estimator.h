@@ -89,6 +89,9 @@ const char* to_string(Method method);  // "pairs" / "joint" / "corners"
 /// images' corners: `handeye images --method corners`). Throws
 /// HandEyeError(MalformedFile) naming the valid values.
 Method method_from_string(const std::string& name);
+/// The refusal of method corners for pose samples (method_from_string and
+/// estimate throw it): HandEyeError(MalformedFile) with the fix.
+HandEyeError corners_need_images();
 
 struct Calibration {
   /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
