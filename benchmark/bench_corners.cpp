@@ -38,7 +38,7 @@ const Session& session() {
         for (int c = 0; c < 10; ++c) {
           const Eigen::Vector3d o(0.03 * (c - 4.5), 0.03 * (r - 2.0), 0.0);
           v.points.object.push_back(o);
-          v.points.image.push_back(camera.project(sample.T_camera_pattern * o) + Eigen::Vector2d(pixel(rng), pixel(rng)));
+          v.points.image.push_back(project(camera, sample.T_camera_pattern * o) + Eigen::Vector2d(pixel(rng), pixel(rng)));
         }
       }
       out.views.push_back(v);

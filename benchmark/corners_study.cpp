@@ -100,7 +100,7 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     CornerOptions options;
     options.refine_intrinsics = focal_error != 0.0;
     const CornerMethodResult corners =
-        refine_with_corners(snapshot.samples, found.corners, found.sample_images, given, poses, options);
+        refine_with_corners(snapshot.samples, poses, options);
     out.poses_error = pose_error(poses.T_parent_camera, truth.X);
     out.corners_error = pose_error(corners.calibration.T_parent_camera, truth.X);
     out.poses_covariance = poses.pose_covariance;
@@ -108,8 +108,8 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     // The corner model's bound: its information at the truth, the detected corners'
     // structure and noise model, sigma as the fit estimated it.
     std::vector<CornerView> detected;
-    for (std::size_t i = 0; i < found.corners.size(); ++i) {
-      detected.push_back({found.samples.samples[i].T_base_effector, found.corners[i], found.sample_images[i]});
+    for (const PoseSample& sample : found.samples.samples) {
+      detected.push_back({sample.T_base_effector, sample.corners->points, sample.corners->source});
     }
     const CornerResiduals at_truth = corner_residuals(rig, camera, detected, truth.X, truth.T_world_pattern);
     const double sigma = corners.fit.pixel_sigma;

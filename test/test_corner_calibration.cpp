@@ -13,6 +13,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
+#include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"
 
@@ -59,7 +60,7 @@ CornerView corners(const Scene& s, std::size_t i, const CameraModel& camera, Rng
   v.T_base_effector = s.effector[i];
   v.points.object = grid();
   for (const Vector3d& o : v.points.object) {
-    v.points.image.push_back(camera.project(s.view[i] * o) + Vector2d(noise(rng), noise(rng)));
+    v.points.image.push_back(project(camera, s.view[i] * o) + Vector2d(noise(rng), noise(rng)));
   }
   v.name = "view " + std::to_string(i);
   return v;
@@ -110,7 +111,7 @@ TEST(CornerResiduals, VanishAtTheTruthAndTheirJacobianIsTheNumericOne) {
         const Isometry3d P = X1.inverse() * s.rig.robot_link(views[i].T_base_effector) * s.Y;
         Eigen::VectorXd d(2 * views[i].points.image.size());
         for (std::size_t j = 0; j < views[i].points.image.size(); ++j) {
-          d.segment<2>(2 * j) = camera.project(P * views[i].points.object[j]) - views[i].points.image[j];
+          d.segment<2>(2 * j) = project(camera, P * views[i].points.object[j]) - views[i].points.image[j];
         }
         expected += d.dot(views[i].points.corner_covariance.ldlt().solve(d));
       }
@@ -145,7 +146,7 @@ TEST(CornerResiduals, RawPixelsUndoTheRectification) {
   const PointCorrespondences raw = raw_pixels(ideal.points, camera);
   ASSERT_EQ(raw.corner_covariance.rows(), 80);
   for (std::size_t j = 0; j < raw.image.size(); ++j) {
-    EXPECT_LT((raw.image[j] - camera.project(s.view[0] * ideal.points.object[j])).norm(), 1e-6);
+    EXPECT_LT((raw.image[j] - project(camera, s.view[0] * ideal.points.object[j])).norm(), 1e-6);
     // The covariance of a rectified corner moved by h is the raw one moved by J h.
     const Vector2d step(0.3, -0.2);
     PointCorrespondences moved = ideal.points;
@@ -320,11 +321,72 @@ TEST(CornerCalibration, RefusesWhatItCannotUse) {
   far.translation() += Vector3d(0.05, -0.04, 0.03);
   far.linear() = so3::exp(Vector3d(0.2, -0.1, 0.15)) * far.linear();
   EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, views, far, s.Y, one_step); }), "NotConverged");
-  // Pose samples hold no corners: a session (or the node) asked for them is told how.
+  // The pose estimators cannot do corners, nor can a session without the hook.
   SampleSet samples;
   samples.rig = s.rig;
   EXPECT_EQ(code_of([&] { estimate(samples, Method::Corners); }), "MalformedFile");
-  EXPECT_EQ(code_of([&] { method_from_string("corners"); }), "MalformedFile");
+  SessionSettings settings;
+  settings.rig = s.rig;
+  settings.method = method_from_string("corners");
+  EXPECT_EQ(code_of([&] { CalibrationSession session(settings); }), "MalformedFile");
+}
+
+// The session runs method corners as the node and `handeye images` do: the joint
+// estimate from the samples' poses, then the refiner hook on their corners. A
+// sample without corners, or with another camera's, is named.
+TEST(CornerCalibration, SessionRefinesTheSamplesCorners) {
+  const CameraModel camera = simulated_camera();
+  Rng rng(8);
+  const Scene s = scene(rng, Setup::EyeInHand, 12);
+  PoseNoise detection;
+  detection.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
+  detection.rotation = std::pow(0.03 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  SessionSettings settings;
+  settings.rig = s.rig;
+  settings.method = Method::Corners;
+  settings.refine_corners = corner_refiner();
+  settings.noise = MeasurementNoise{PoseNoise{}, detection};  // the robot exact: the hook keeps it so
+  std::vector<PoseSample> samples;
+  for (std::size_t i = 0; i < s.view.size(); ++i) {
+    PoseSample sample;
+    sample.T_base_effector = s.effector[i];
+    sample.T_camera_pattern = test::apply(s.view[i], small_error(rng, 0.3e-3, 0.03 * M_PI / 180.0));
+    const CornerView v = corners(s, i, camera, rng, 0.3);
+    sample.corners = std::make_shared<const TargetCorners>(TargetCorners{camera, v.points, v.name});
+    samples.push_back(sample);
+  }
+  CalibrationSession session(settings);
+  session.replace(samples, "simulated");
+  const Calibration c = session.calibrate(session.snapshot());
+  EXPECT_EQ(c.method, Method::Corners);
+  ASSERT_TRUE(c.corner_fit);
+  ASSERT_EQ(c.corner_fit->images.size(), 12u);
+  EXPECT_EQ(c.corner_fit->images[3].name, "view 3");
+  EXPECT_EQ(c.corner_fit->corners, 12 * 40);
+  EXPECT_NEAR(c.corner_fit->pixel_sigma, 0.3, 0.03);
+  const double e = nees(test::pose_perturbation(c.T_parent_camera, s.X), c.pose_covariance);
+  std::printf("session method corners: X within NEES %.2f, sigma %.3f px\n", e, c.corner_fit->pixel_sigma);
+  EXPECT_LT(e, 22.5);  // chi^2(6) at 0.999
+
+  const auto message_of = [&](std::vector<PoseSample> changed) {
+    CalibrationSession other(settings);
+    other.replace(std::move(changed), "changed");
+    try {
+      other.calibrate(other.snapshot());
+    } catch (const HandEyeError& error) {
+      return std::string(to_string(error.code())) + ": " + error.what();
+    }
+    return std::string("no error");
+  };
+  std::vector<PoseSample> without = samples;
+  without[5].corners.reset();
+  EXPECT_NE(message_of(without).find("MalformedFile: sample 5 has no corners"), std::string::npos) << message_of(without);
+  std::vector<PoseSample> other_camera = samples;
+  TargetCorners moved = *other_camera[7].corners;
+  moved.camera.K(0, 0) *= 1.01;
+  other_camera[7].corners = std::make_shared<const TargetCorners>(moved);
+  EXPECT_NE(message_of(other_camera).find("sample 7's corners come from another camera"), std::string::npos)
+      << message_of(other_camera);
 }
 
 }  // namespace

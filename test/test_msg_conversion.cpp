@@ -1,7 +1,6 @@
 // Round trips across the only ROS <-> Eigen seam.
 #include <gtest/gtest.h>
 
-#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/session/session_config.h"
@@ -92,6 +91,59 @@ TEST(CameraInfoConversion, RoundTripsAndRefusesUncalibratedCameras) {
 
 // Every refusal of the detection -> sample path the node and the bag replay share,
 // each with its stable kind and a message that says what to fix.
+// A detection's corners travel in TagDetection and come back as they were; a
+// detection without them has none, and inconsistent ones are refused by kind.
+TEST(MsgConversion, ADetectionsCornersRoundTrip) {
+  TargetCorners corners;
+  corners.camera.K << 605.0, 0.0, 320.5, 0.0, 604.0, 240.25, 0.0, 0.0, 1.0;
+  corners.camera.distortion = {0.1, -0.2, 1e-3, -2e-3, 0.05};
+  corners.camera.width = 640;
+  corners.camera.height = 480;
+  for (int i = 0; i < 4; ++i) {
+    corners.points.object.emplace_back(0.02 * i, -0.01 * i, 0.0);
+    corners.points.image.emplace_back(300.0 + 1.5 * i, 220.0 - 0.25 * i);
+  }
+  corners.points.ids = {7};
+  corners.points.blocks = 8;
+  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(8, 8);
+  corners.points.corner_covariance = A * A.transpose() + Eigen::MatrixXd::Identity(8, 8);
+  TagDetection detection;
+  EXPECT_FALSE(conversions::to_corners(detection));
+  conversions::set_corners(corners, detection);
+  const std::shared_ptr<TargetCorners> back = conversions::to_corners(detection);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->camera.K, corners.camera.K);
+  EXPECT_EQ(back->camera.distortion, corners.camera.distortion);
+  EXPECT_EQ(back->points.object, corners.points.object);
+  EXPECT_EQ(back->points.image, corners.points.image);
+  EXPECT_EQ(back->points.ids, corners.points.ids);
+  EXPECT_EQ(back->points.corner_covariance, corners.points.corner_covariance);
+
+  TagDetectionArray tags;
+  tags.header.stamp = ros::Time(10.5);
+  detection.pose.pose.pose.orientation.w = 1.0;
+  tags.detections = {detection};
+  std::optional<Refusal> refusal;
+  std::optional<Detection> chosen = select_detection(tags, {}, refusal);
+  ASSERT_TRUE(chosen && chosen->corners);
+  EXPECT_EQ(chosen->corners->source, "image at 10.5 s");
+  tags.detections[0].image_points.pop_back();
+  EXPECT_FALSE(select_detection(tags, {}, refusal));
+  ASSERT_TRUE(refusal);
+  EXPECT_EQ(refusal->kind, "bad_corners");
+  EXPECT_NE(refusal->message.find("image_points"), std::string::npos) << refusal->message;
+  tags.detections[0] = detection;
+  tags.detections[0].camera_info.K[0] = 0.0;  // fx 0: not a pinhole camera
+  EXPECT_FALSE(select_detection(tags, {}, refusal));
+  ASSERT_TRUE(refusal);
+  EXPECT_EQ(refusal->kind, "bad_corners");
+  tags.detections[0] = detection;
+  tags.detections[0].corner_covariance.resize(10);
+  EXPECT_FALSE(select_detection(tags, {}, refusal));
+  ASSERT_TRUE(refusal);
+  EXPECT_NE(refusal->message.find("corner_covariance"), std::string::npos) << refusal->message;
+}
+
 TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {
   tf2::BufferCore tf;
   geometry_msgs::TransformStamped robot;

@@ -13,7 +13,6 @@
 
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/messages.h"
-#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "node_test_helpers.h"

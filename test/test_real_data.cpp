@@ -47,17 +47,13 @@ Eigen::Isometry3d theta_u_pose(const Eigen::Vector3d& t, const Eigen::Vector3d& 
 }
 
 struct RealSession {
-  SampleSet samples;
-  std::vector<PointCorrespondences> corners;  // per sample, raw pixels
-  std::vector<std::string> names;
+  SampleSet samples;  // each with its corners in raw pixels
   CameraModel camera;
   int images = 0, detected = 0;
 
   RealSession without(std::size_t k) const {
     RealSession fewer = *this;
     fewer.samples.samples.erase(fewer.samples.samples.begin() + static_cast<long>(k));
-    fewer.corners.erase(fewer.corners.begin() + static_cast<long>(k));
-    fewer.names.erase(fewer.names.begin() + static_cast<long>(k));
     return fewer;
   }
 };
@@ -72,8 +68,6 @@ RealSession real_session(const fs::path& dir, Setup setup, const Target& target)
   session.camera = images::read_camera((dir / "camera_info.yaml").string());
   const images::ImageSession found = images::detect_images(inputs, session.camera, target, rig);
   session.samples = found.samples;
-  session.corners = found.corners;
-  session.names = found.sample_images;
   session.images = static_cast<int>(found.images.size());
   for (const images::ImageReport& r : found.images) {
     if (!r.used) {
@@ -87,29 +81,31 @@ RealSession real_session(const fs::path& dir, Setup setup, const Target& target)
   return session;
 }
 
-/// As the node: no noise config, each sample's own detection covariance.
-Calibration calibrate_like_the_node(const SampleSet& samples) {
+/// As the node: no noise config, each sample's own detection covariance; `method`
+/// joint, or corners (the joint estimate refined from the corners, as the node and
+/// `handeye images --method corners` run it).
+Calibration calibrate_like_the_node(const SampleSet& samples, Method method = Method::Joint) {
   SessionConfig config;
   config.rig = samples.rig;
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();
+  settings.method = method;
+  if (method == Method::Corners) settings.refine_corners = corner_refiner();
   CalibrationSession session(settings);
   session.replace(samples.samples, "real images");
   return session.calibrate(session.snapshot());
 }
 
-/// As `handeye images --method corners`: the node's pose-level estimate, then the
-/// corners refined from it (the robot poses free with the noise it estimated).
+/// Method corners (the robot poses free with the noise it estimates), with its
+/// per-image reprojection RMS printed.
 Calibration calibrate_by_corners(const RealSession& session) {
-  const Calibration pose_level = calibrate_like_the_node(session.samples);
-  const CornerMethodResult r =
-      refine_with_corners(session.samples, session.corners, session.names, session.camera, pose_level);
-  for (const Calibration::CornerFit::Image& image : r.calibration.corner_fit->images) {
+  const Calibration c = calibrate_like_the_node(session.samples, Method::Corners);
+  for (const Calibration::CornerFit::Image& image : c.corner_fit->images) {
     std::printf("  %s: %d corners, reprojection RMS %.3f px\n", image.name.c_str(), image.corners, image.rms_px);
   }
-  std::printf("  corners: %s; RMS %.3f px over %d corners\n", r.calibration.noise_model.c_str(),
-              r.calibration.corner_fit->rms_px, r.calibration.corner_fit->corners);
-  return r.calibration;
+  std::printf("  corners: %s; RMS %.3f px over %d corners\n", c.noise_model.c_str(), c.corner_fit->rms_px,
+              c.corner_fit->corners);
+  return c;
 }
 
 using Pipeline = std::function<Calibration(const RealSession&)>;

@@ -90,7 +90,7 @@ TEST(TagDetector, CornersMatchTheLayoutOrderOnRenderedTags) {
     for (const TagCorners& tag : tags) {
       const auto corners = layout.find(tag.id)->corners();
       for (int c = 0; c < 4; ++c) {
-        const double error = (rectifier.rectified().project(T * corners[c]) - tag.corners[c]).norm();
+        const double error = (project(rectifier.rectified(), T * corners[c]) - tag.corners[c]).norm();
         EXPECT_LT(error, 0.25) << "tag " << tag.id << " corner " << c << " roll " << roll;
       }
     }
@@ -113,7 +113,7 @@ TEST(PatternPose, ReprojectionJacobianMatchesNumericDifferences) {
       d(j) = h;
       for (std::size_t i = 0; i < points.size(); ++i) {
         const Eigen::Vector2d numeric =
-            (camera.project(test::apply(T, d) * points[i]) - camera.project(test::apply(T, -d) * points[i])) / (2 * h);
+            (project(camera, test::apply(T, d) * points[i]) - project(camera, test::apply(T, -d) * points[i])) / (2 * h);
         EXPECT_LT((J.block<2, 1>(2 * i, j) - numeric).norm(), 1e-4 * (1.0 + numeric.norm()))
             << "column " << j << " point " << i << " at " << distance << " m";
       }

@@ -61,6 +61,56 @@ TEST(YamlIo, SamplesRoundTripExactly) {
   EXPECT_FALSE(back.samples[4].noise->robot.has_cross_block());
 }
 
+// A sample's corners (method corners) survive the session file: camera, points,
+// ids and the corner-noise blocks, to the bit; inconsistent sizes are named.
+TEST(YamlIo, ASamplesCornersRoundTripExactly) {
+  Rng rng(4);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 3, paper_noise(1e-5));
+  TargetCorners corners;
+  corners.camera.K << 601.5, 0.0, 321.25, 0.0, 602.75, 239.5, 0.0, 0.0, 1.0;
+  corners.camera.distortion = {0.1, -0.2, 1e-3, -2e-3, 0.05};
+  corners.camera.width = 640;
+  corners.camera.height = 480;
+  corners.source = "frame_0007.png";
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < 8; ++i) {
+    corners.points.object.emplace_back(0.01 * i, 0.02 * (i % 3), 0.0);
+    corners.points.image.emplace_back(100.0 + n(rng), 200.0 + n(rng));
+  }
+  corners.points.ids = {3, 5};
+  corners.points.blocks = 8;
+  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(8, 8);
+  corners.points.corner_covariance = Eigen::MatrixXd::Zero(16, 16);
+  corners.points.corner_covariance.block(0, 0, 8, 8) = A * A.transpose() + Eigen::MatrixXd::Identity(8, 8);
+  corners.points.corner_covariance.block(8, 8, 8, 8) = 2.0 * Eigen::MatrixXd::Identity(8, 8);
+  s.samples.samples[1].corners = std::make_shared<const TargetCorners>(corners);
+  const SampleSet back = io::parse_samples(io::format_samples(s.samples), "memory");
+  EXPECT_FALSE(back.samples[0].corners);
+  ASSERT_TRUE(back.samples[1].corners);
+  const TargetCorners& c = *back.samples[1].corners;
+  EXPECT_EQ(c.source, corners.source);
+  EXPECT_EQ(c.camera.K, corners.camera.K);
+  EXPECT_EQ(c.camera.distortion, corners.camera.distortion);
+  EXPECT_EQ(c.camera.width, 640);
+  EXPECT_EQ(c.camera.height, 480);
+  EXPECT_EQ(c.points.object, corners.points.object);
+  EXPECT_EQ(c.points.image, corners.points.image);
+  EXPECT_EQ(c.points.ids, corners.points.ids);
+  EXPECT_EQ(c.points.blocks, 8);
+  EXPECT_EQ(c.points.corner_covariance, corners.points.corner_covariance);
+
+  const std::string head = std::string(kValid) + "    corners: {camera: {K: [600, 0, 320, 0, 600, 240, 0, 0, 1]}, ";
+  expect_parse_error(head + "object: [0, 0, 0, 1, 0], image: [1, 2]}\n", ErrorCode::WrongLength, "samples[0].corners");
+  expect_parse_error(head + "object: [0, 0, 0, 1, 0, 0], image: [1, 2, 3, 4], block: 8}\n", ErrorCode::WrongLength,
+                     "corners.block");
+  expect_parse_error(head + "object: [0, 0, 0], image: [1, 2], covariance: [1, 0, 0]}\n", ErrorCode::WrongLength,
+                     "corners.covariance");
+  expect_parse_error(head + "object: [0, 0, .nan], image: [1, 2]}\n", ErrorCode::NonFinite, "corners.object[2]");
+  const SampleSet plain = io::parse_samples(head + "object: [0, 0, 0], image: [1, 2]}\n", "test.yaml");
+  ASSERT_TRUE(plain.samples[0].corners);
+  EXPECT_EQ(plain.samples[0].corners->points.corner_covariance.size(), 0);  // independent corners
+}
+
 TEST(YamlIo, ANoiseEntryIsEitherTheBlocksOrTheFullPoseCovariance) {
   std::string identity36 = "[";
   for (int i = 0; i < 36; ++i) identity36 += std::string(i ? ", " : "") + (i % 7 == 0 ? "1e-6" : "0");

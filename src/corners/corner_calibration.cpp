@@ -586,15 +586,15 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   return result;
 }
 
-CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vector<PointCorrespondences>& corners,
-                                       const std::vector<std::string>& names, const CameraModel& camera,
-                                       const Calibration& pose_level, CornerOptions options) {
-  if (corners.size() != samples.samples.size() || names.size() != samples.samples.size()) {
-    throw HandEyeError(ErrorCode::WrongLength,
-                       std::to_string(corners.size()) + " images' corners for " + std::to_string(samples.samples.size()) +
-                           " samples",
-                       "corner calibration", "give one image's corners per sample, in the samples' order");
-  }
+namespace {
+
+bool same_camera(const CameraModel& a, const CameraModel& b) {
+  return a.K == b.K && a.distortion == b.distortion && a.width == b.width && a.height == b.height;
+}
+
+}  // namespace
+
+CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibration& pose_level, CornerOptions options) {
   if (!pose_level.pattern) {
     throw HandEyeError(ErrorCode::MalformedFile, "the pose-level estimate has no pattern pose to start from",
                        "corner calibration", "start from the joint estimator (method joint), not pairs");
@@ -602,8 +602,26 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vect
   std::vector<bool> rejected(samples.samples.size(), false);
   for (const Calibration::Rejected& r : pose_level.rejected) rejected.at(static_cast<std::size_t>(r.index)) = true;
   std::vector<CornerView> views;
+  const CameraModel* camera = nullptr;
   for (std::size_t i = 0; i < samples.samples.size(); ++i) {
-    if (!rejected[i]) views.push_back({samples.samples[i].T_base_effector, corners[i], names[i]});
+    if (rejected[i]) continue;
+    const std::shared_ptr<const TargetCorners>& corners = samples.samples[i].corners;
+    if (!corners) {
+      throw HandEyeError(ErrorCode::MalformedFile, "sample " + std::to_string(i) + " has no corners", "method corners",
+                         "every sample needs the corners its pose was detected from: use the package's target detector "
+                         "(or images), remove that sample, or use method joint");
+    }
+    if (camera == nullptr) camera = &corners->camera;
+    if (!same_camera(*camera, corners->camera)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "sample " + std::to_string(i) + "'s corners come from another camera "
+                         "(CameraInfo) than the first sample's", "method corners",
+                         "calibrate one camera at a time, with one camera calibration");
+    }
+    views.push_back({samples.samples[i].T_base_effector, corners->points,
+                     corners->source.empty() ? "sample " + std::to_string(i) : corners->source});
+  }
+  if (camera == nullptr) {
+    throw HandEyeError(ErrorCode::NoData, "no sample is left to refine", "method corners", "take more samples");
   }
   std::string robot = "exact";
   if (!options.robot_covariance && !options.estimate_robot_noise) {
@@ -625,7 +643,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vect
             number_text(s.tail<3>().maxCoeff() * 180.0 / M_PI, 3) + " deg (largest axis)";
   }
   CornerMethodResult out;
-  out.fit = calibrate_corners(samples.rig, camera, views, pose_level.T_parent_camera, pose_level.pattern->pose, options);
+  out.fit = calibrate_corners(samples.rig, *camera, views, pose_level.T_parent_camera, pose_level.pattern->pose, options);
   const CornerCalibration& f = out.fit;
   Calibration& c = out.calibration;
   c = pose_level;
@@ -674,6 +692,12 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vect
   }
   c.corner_fit = fit;
   return out;
+}
+
+CornerRefiner corner_refiner(CornerOptions options) {
+  return [options](const SampleSet& samples, const Calibration& pose_level) {
+    return refine_with_corners(samples, pose_level, options).calibration;
+  };
 }
 
 }  // namespace handeye

@@ -30,16 +30,20 @@ const char* to_string(Method method) {
 }
 
 HandEyeError corners_need_images() {
-  return HandEyeError(ErrorCode::MalformedFile, "method `corners` needs the images' corners, which pose samples do not hold",
-                      "method", "run `handeye images --method corners` on the images, or use joint here");
+  return HandEyeError(ErrorCode::MalformedFile,
+                      "method `corners` needs the images' corners and the corner estimator, which this program does not have",
+                      "method",
+                      "use the calibration node with the target detector, `handeye images --method corners` or `handeye bag` "
+                      "with method: corners; or use joint here");
 }
 
 Method method_from_string(const std::string& name) {
   if (name == "pairs") return Method::Pairs;
   if (name == "joint") return Method::Joint;
-  if (name == "corners") throw corners_need_images();
+  if (name == "corners") return Method::Corners;
   throw HandEyeError(ErrorCode::MalformedFile, "unknown method `" + name + "`", "method",
-                     "use joint (X and the pattern pose from the absolute poses) or pairs (the paper's AX = XB)");
+                     "use joint (X and the pattern pose from the absolute poses), pairs (the paper's AX = XB) or corners "
+                     "(every image corner's reprojection error; needs the detector's corners)");
 }
 
 namespace {

@@ -55,10 +55,10 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
 
 }  // namespace
 
-io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::string& source) {
+CameraModel parse_opencv_camera(const std::string& text, const std::string& source) {
   const std::string hint = "OpenCV's camera file has camera_matrix (3 x 3) and distortion_coefficients "
                            "(write it with cv::FileStorage)";
-  io::CameraInfoFile file;
+  CameraModel file;
   // OpenCV 4.6's XML parser dereferences NULL on a NUL byte inside a tag
   // (test/fuzz/corpus/files/regression-opencv-nul-byte.xml); a camera file is text.
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {

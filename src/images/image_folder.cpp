@@ -35,15 +35,6 @@ std::optional<std::string> trailing_number(const std::string& stem) {
   return digits;
 }
 
-CameraModel camera_model(const io::CameraInfoFile& file) {
-  CameraModel camera;
-  camera.K = file.K;
-  camera.distortion = file.distortion;
-  camera.width = file.width;
-  camera.height = file.height;
-  return camera;
-}
-
 }  // namespace
 
 CameraModel read_camera(const std::string& path) {
@@ -51,7 +42,7 @@ CameraModel read_camera(const std::string& path) {
   const std::string text = io::read_file(path);
   const bool opencv = lower(fs::path(path).extension().string()) == ".xml" || text.rfind("%YAML", 0) == 0 ||
                       text.find("!!opencv-matrix") != std::string::npos;
-  CameraModel camera = camera_model(opencv ? parse_opencv_camera(text, path) : io::parse_camera_info(text, path));
+  CameraModel camera = opencv ? parse_opencv_camera(text, path) : io::parse_camera_info(text, path);
   check_camera_model(camera, path);
   return camera;
 }
@@ -165,9 +156,9 @@ ImageSession detect(const std::vector<ImageWithPose>& inputs, const std::functio
     sample.T_base_effector = *inputs[i].T_base_effector;
     sample.T_camera_pattern = pose->T_camera_pattern;
     sample.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(pose->covariance)};
+    sample.corners = std::make_shared<const TargetCorners>(
+        TargetCorners{camera, *detector.frame(*frame_of[i]).corners, report.image});
     session.samples.samples.push_back(sample);
-    session.corners.push_back(*detector.frame(*frame_of[i]).corners);
-    session.sample_images.push_back(report.image);
   }
   return session;
 }

@@ -108,6 +108,22 @@ std::array<double, N> as_numbers(const YAML::Node& node, const Location& at, con
   return values;
 }
 
+/// A list of finite numbers of any length.
+std::vector<double> as_number_list(const YAML::Node& node, const Location& at, const std::string& what) {
+  if (!node.IsSequence()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a list of numbers (" + what + ")", at.str(),
+                       "write it as [a, b, ...]");
+  }
+  std::vector<double> values;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    values.push_back(as_double(node[i], at[i]));
+    if (!std::isfinite(values.back())) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf (" + what + ")", at[i].str(), "fix the source that produced it");
+    }
+  }
+  return values;
+}
+
 /// A 4x4 homogeneous matrix, row-major, as robot controllers and other tools
 /// export poses. Rounded printouts are accepted up to the quaternion reader's
 /// tolerance (|R^T R - I| <= 1e-3) and projected onto the nearest rotation
@@ -273,6 +289,102 @@ YAML::Emitter& new_emitter(YAML::Emitter& out) {
   return out;
 }
 
+/// A sample's corners (TargetCorners): the camera, the target points (m, pattern
+/// frame) and their pixels (raw), flat; the corner-noise model's diagonal blocks
+/// (`block` x `block`, row-major, per unit sigma^2; absent: independent corners).
+void emit_corners(YAML::Emitter& out, const TargetCorners& c) {
+  const PointCorrespondences& p = c.points;
+  out << YAML::BeginMap;
+  if (!c.source.empty()) out << YAML::Key << "source" << YAML::Value << c.source;
+  out << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
+  const auto K = to_row_major_3x3(c.camera.K);
+  out << YAML::Key << "K" << YAML::Value;
+  emit_numbers(out, K.data(), K.size());
+  out << YAML::Key << "distortion" << YAML::Value;
+  emit_numbers(out, c.camera.distortion.data(), c.camera.distortion.size());
+  out << YAML::Key << "width" << YAML::Value << c.camera.width << YAML::Key << "height" << YAML::Value << c.camera.height;
+  out << YAML::EndMap;
+  std::vector<double> object, image, covariance;
+  for (const Vector3d& o : p.object) object.insert(object.end(), {o.x(), o.y(), o.z()});
+  for (const Eigen::Vector2d& u : p.image) image.insert(image.end(), {u.x(), u.y()});
+  const Eigen::Index b = p.blocks;
+  for (Eigen::Index start = 0; p.corner_covariance.size() > 0 && start < p.corner_covariance.rows(); start += b) {
+    for (Eigen::Index r = 0; r < b; ++r)
+      for (Eigen::Index k = 0; k < b; ++k) covariance.push_back(p.corner_covariance(start + r, start + k));
+  }
+  out << YAML::Key << "object" << YAML::Value;
+  emit_numbers(out, object.data(), object.size());
+  out << YAML::Key << "image" << YAML::Value;
+  emit_numbers(out, image.data(), image.size());
+  if (!p.ids.empty()) out << YAML::Key << "ids" << YAML::Value << YAML::Flow << p.ids;
+  out << YAML::Key << "block" << YAML::Value << p.blocks;
+  if (!covariance.empty()) {
+    out << YAML::Key << "covariance" << YAML::Value;
+    emit_numbers(out, covariance.data(), covariance.size());
+  }
+  out << YAML::EndMap;
+}
+
+TargetCorners read_corners(const YAML::Node& node, const Location& at) {
+  const std::string hint = "corners are {camera: {K: [9], distortion: [...], width, height}, object: [x, y, z, ...], "
+                           "image: [u, v, ...], block: 2, covariance?: [the diagonal blocks, row-major]}";
+  if (!node.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "expected a map", at.str(), hint);
+  TargetCorners c;
+  if (node["source"]) c.source = as_text(node["source"], at / "source");
+  const YAML::Node camera = require(node, "camera", at, hint);
+  const auto K = as_numbers<9>(require(camera, "K", at / "camera", hint), at / "camera" / "K", "row-major 3x3");
+  for (int i = 0; i < 9; ++i) c.camera.K(i / 3, i % 3) = K[static_cast<std::size_t>(i)];
+  if (camera["distortion"]) {
+    c.camera.distortion = as_number_list(camera["distortion"], at / "camera" / "distortion", "distortion");
+  }
+  for (const auto& [key, member] : {std::pair<const char*, int*>{"width", &c.camera.width}, {"height", &c.camera.height}}) {
+    if (camera[key]) *member = as_integer(camera[key], at / "camera" / key, 0, 100000, std::string(key) + " (pixels)");
+  }
+  const std::vector<double> object = as_number_list(require(node, "object", at, hint), at / "object", "x, y, z per point");
+  const std::vector<double> image = as_number_list(require(node, "image", at, hint), at / "image", "u, v per point");
+  const std::size_t n = image.size() / 2;
+  if (object.size() % 3 != 0 || image.size() % 2 != 0 || object.size() / 3 != n) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       std::to_string(object.size()) + " object numbers for " + std::to_string(image.size()) +
+                           " image numbers",
+                       at.str(), "give 3 numbers per point in object and 2 in image, the same points in the same order");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    c.points.object.emplace_back(object[3 * i], object[3 * i + 1], object[3 * i + 2]);
+    c.points.image.emplace_back(image[2 * i], image[2 * i + 1]);
+  }
+  if (node["ids"]) {
+    for (double id : as_number_list(node["ids"], at / "ids", "the tags, markers or corners used")) {
+      c.points.ids.push_back(static_cast<int>(std::clamp(id, -1e9, 1e9)));
+    }
+  }
+  if (node["block"]) c.points.blocks = as_integer(node["block"], at / "block", 2, 64, "block (coordinates per block)");
+  const int b = c.points.blocks;
+  if (b % 2 != 0 || (2 * n) % static_cast<std::size_t>(b) != 0) {
+    throw HandEyeError(ErrorCode::WrongLength, "block " + std::to_string(b) + " does not divide the " + std::to_string(2 * n) +
+                                                   " coordinates into whole points",
+                       (at / "block").str(), "2 for independent corners, 8 for an AprilTag's four");
+  }
+  if (node["covariance"]) {
+    const std::vector<double> blocks = as_number_list(node["covariance"], at / "covariance", "the diagonal blocks");
+    const std::size_t m = 2 * n;
+    if (blocks.size() != m * static_cast<std::size_t>(b)) {
+      throw HandEyeError(ErrorCode::WrongLength,
+                         "expected " + std::to_string(m * static_cast<std::size_t>(b)) + " numbers (" +
+                             std::to_string(m / static_cast<std::size_t>(b)) + " blocks of " + std::to_string(b) + " x " +
+                             std::to_string(b) + "), got " + std::to_string(blocks.size()),
+                         (at / "covariance").str(), "give each block's numbers row-major, the blocks in order");
+    }
+    c.points.corner_covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+    std::size_t k = 0;
+    for (std::size_t start = 0; start < m; start += static_cast<std::size_t>(b))
+      for (int r = 0; r < b; ++r)
+        for (int q = 0; q < b; ++q)
+          c.points.corner_covariance(static_cast<Eigen::Index>(start) + r, static_cast<Eigen::Index>(start) + q) = blocks[k++];
+  }
+  return c;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- samples
@@ -293,12 +405,13 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     const Location at = (top / "samples")[i];
     const YAML::Node node = list[i];
-    const std::string hint = "a sample is {effector: pose, pattern: pose, stamp?, noise?}";
+    const std::string hint = "a sample is {effector: pose, pattern: pose, stamp?, noise?, corners?}";
     PoseSample sample;
     sample.T_base_effector = read_pose(require(node, "effector", at, hint), at / "effector");
     sample.T_camera_pattern = read_pose(require(node, "pattern", at, hint), at / "pattern");
     if (node["stamp"]) sample.stamp = as_double(node["stamp"], at / "stamp");
     sample.noise = optional_noise(node, at, "effector", "pattern");
+    if (node["corners"]) sample.corners = std::make_shared<const TargetCorners>(read_corners(node["corners"], at / "corners"));
     set.samples.push_back(sample);
   }
   return set;
@@ -341,6 +454,10 @@ std::string format_samples(const SampleSet& set) {
     if (s.noise) {
       out << YAML::Key << "noise" << YAML::Value;
       emit_noise(out, *s.noise, "effector", "pattern");
+    }
+    if (s.corners) {
+      out << YAML::Key << "corners" << YAML::Value;
+      emit_corners(out, *s.corners);
     }
     out << YAML::EndMap;
   }
@@ -880,7 +997,7 @@ Target read_target(const std::string& path) { return parse_target(read_file(path
 
 // ---------------------------------------------------------------- camera_info
 
-CameraInfoFile parse_camera_info(const std::string& text, const std::string& source) {
+CameraModel parse_camera_info(const std::string& text, const std::string& source) {
   const std::string hint = "a ROS camera_info YAML (camera_calibration writes one): image_width, image_height, "
                            "camera_matrix: {data: [9 numbers]}, distortion_coefficients: {data: [...]}";
   const YAML::Node root = load(text, source);
@@ -897,7 +1014,7 @@ CameraInfoFile parse_camera_info(const std::string& text, const std::string& sou
     }
     return values;
   };
-  CameraInfoFile camera;
+  CameraModel camera;
   const std::vector<double> K = numbers("camera_matrix");
   if (K.size() != 9) {
     throw HandEyeError(ErrorCode::WrongLength, "camera_matrix needs 9 numbers, got " + std::to_string(K.size()),

@@ -21,7 +21,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/images/pooled_detector.h"
 #include "handeye_covariance/io/yaml_io.h"
-#include "handeye_covariance/ros/camera_info_conversion.h"
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
@@ -302,6 +302,8 @@ std::vector<Detection> detect_bag_images(rosbag::Bag& bag, const ImageTopics& to
       Detection d;
       d.stamp = header.stamp;
       d.frame = header.frame_id;
+      d.corners = std::make_shared<const TargetCorners>(
+          TargetCorners{camera, *frame.corners, "image at " + number_text(header.stamp.toSec(), 12) + " s"});
       found.emplace_back(detector.size() - 1, d);
     } else {
       ++replay.refusals["no_target_pose"];
@@ -325,6 +327,7 @@ std::vector<Detection> detect_bag_images(rosbag::Bag& bag, const ImageTopics& to
 BagReplay replay_bag(const std::string& path, const SessionConfig& config, std::function<void(double)> progress) {
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();  // a replay persists nothing
+  settings.refine_corners = corner_refiner();  // method corners
   CalibrationSession session(settings);
   return replay_bag(path, config, session, std::move(progress));
 }

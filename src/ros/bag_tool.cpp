@@ -9,6 +9,7 @@
 #include "../tools/cli_common.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/ros/bag.h"
 
 namespace handeye {
@@ -42,6 +43,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (!camera_info_topic.empty()) config.camera_info_topic = camera_info_topic;
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();  // the node's session file is the node's
+  settings.refine_corners = corner_refiner();  // method corners
   CalibrationSession session(settings);
   ProgressBar progress(err, "reading the bag", ::isatty(STDERR_FILENO) != 0);
   const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -38,6 +39,13 @@ SessionConfig read_config(const ros::NodeHandle& private_node) {
   return config;
 }
 
+/// The session's settings, with the corner estimator for method corners.
+SessionSettings node_session_settings(const SessionConfig& config) {
+  SessionSettings settings = session_settings(config);
+  settings.refine_corners = corner_refiner();
+  return settings;
+}
+
 geometry_msgs::PoseStamped stamped(const Eigen::Isometry3d& E, const std::string& frame) {
   geometry_msgs::PoseStamped pose;
   pose.header.stamp = ros::Time::now();
@@ -54,7 +62,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
       private_node_(private_node),
       detection_node_(node),
       tf_listener_(tf_buffer_),
-      session_(session_settings(config_)) {
+      session_(node_session_settings(config_)) {
   if (config_.resume) {
     const SessionEvent resumed = session_.resume();
     ROS_INFO("%s (%s)", resumed.message.c_str(), session_.settings().session_file.c_str());
@@ -157,6 +165,9 @@ void CalibrationNode::observe(const Detection& detection) {
   }
   const ObservationResult result = make_observation(tf_buffer_, config_.rig, detection);
   if (result.refusal) ROS_WARN_THROTTLE(2.0, "sample refused: %s", result.refusal->message.c_str());
+  if (!result.corners_dropped.empty() && session_.settings().method == Method::Corners) {
+    ROS_WARN_THROTTLE(10.0, "%s", result.corners_dropped.c_str());
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);  // the short lock: the sampler, and a file write when a sample is taken
     if (result.refusal) {

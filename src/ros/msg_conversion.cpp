@@ -81,5 +81,113 @@ double quaternion_norm(const geometry_msgs::Quaternion& q) {
   return std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
 }
 
+CameraModel to_camera_model(const sensor_msgs::CameraInfo& info) {
+  const std::string where = "CameraInfo of frame `" + info.header.frame_id + "`";
+  CameraModel camera;
+  camera.K = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(info.K.data());
+  camera.width = static_cast<int>(info.width);
+  camera.height = static_cast<int>(info.height);
+  if (info.distortion_model != "plumb_bob" && info.distortion_model != "rational_polynomial" &&
+      !(info.distortion_model.empty() && info.D.empty())) {
+    throw HandEyeError(ErrorCode::MalformedFile, "distortion model `" + info.distortion_model + "` is not supported", where,
+                       "calibrate with plumb_bob or rational_polynomial (camera_calibration does), or feed the "
+                       "rectified image (image_rect) with ~image_is_rectified:=true");
+  }
+  camera.distortion.assign(info.D.begin(), info.D.end());
+  if (camera.K.isZero()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "K is all zeros: the camera is not calibrated", where,
+                       "calibrate the intrinsics first (rosrun camera_calibration cameracalibrator.py) so that the "
+                       "driver publishes K and D");
+  }
+  check_camera_model(camera, where);
+  return camera;
+}
+
+sensor_msgs::CameraInfo to_camera_info(const CameraModel& camera) {
+  sensor_msgs::CameraInfo info;
+  info.width = static_cast<uint32_t>(camera.width);
+  info.height = static_cast<uint32_t>(camera.height);
+  info.distortion_model = camera.distortion.size() > 5 ? "rational_polynomial" : "plumb_bob";
+  info.D = camera.distortion;
+  Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(info.K.data()) = camera.K;
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  Eigen::Map<Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> P(info.P.data());
+  P.setZero();
+  P.leftCols<3>() = camera.K;
+  return info;
+}
+
+std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
+  if (detection.object_points.empty() && detection.image_points.empty()) return nullptr;
+  const std::string where = "a detection's corners";
+  const std::size_t n = detection.object_points.size();
+  if (detection.image_points.size() != 2 * n) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       std::to_string(detection.image_points.size()) + " image_points for " + std::to_string(n) +
+                           " object_points",
+                       where, "send u, v per object point, in the same order");
+  }
+  const int block = detection.corner_block == 0 ? 2 : detection.corner_block;
+  if (block < 2 || block % 2 != 0 || (2 * n) % static_cast<std::size_t>(block) != 0) {
+    throw HandEyeError(ErrorCode::WrongLength, "corner_block " + std::to_string(block) + " does not divide " +
+                                                   std::to_string(2 * n) + " coordinates into whole points",
+                       where, "2 for independent corners, 8 for an AprilTag's four");
+  }
+  if (!detection.corner_covariance.empty() && detection.corner_covariance.size() != 2 * n * static_cast<std::size_t>(block)) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       "corner_covariance has " + std::to_string(detection.corner_covariance.size()) + " numbers, " +
+                           std::to_string(2 * n * static_cast<std::size_t>(block)) + " expected",
+                       where, "send the diagonal blocks (corner_block^2 numbers each, row-major), or none");
+  }
+  auto corners = std::make_shared<TargetCorners>();
+  corners->camera = to_camera_model(detection.camera_info);
+  check_camera_model(corners->camera, where);
+  PointCorrespondences& p = corners->points;
+  p.blocks = block;
+  p.ids.assign(detection.point_ids.begin(), detection.point_ids.end());
+  for (std::size_t i = 0; i < n; ++i) {
+    const geometry_msgs::Point& o = detection.object_points[i];
+    p.object.emplace_back(o.x, o.y, o.z);
+    p.image.emplace_back(detection.image_points[2 * i], detection.image_points[2 * i + 1]);
+    if (!p.object.back().allFinite() || !p.image.back().allFinite()) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in point " + std::to_string(i), where, "fix the detector");
+    }
+  }
+  if (!detection.corner_covariance.empty()) {
+    const auto m = static_cast<Eigen::Index>(2 * n);
+    p.corner_covariance = Eigen::MatrixXd::Zero(m, m);
+    std::size_t k = 0;
+    for (Eigen::Index start = 0; start < m; start += block)
+      for (Eigen::Index r = 0; r < block; ++r)
+        for (Eigen::Index c = 0; c < block; ++c) p.corner_covariance(start + r, start + c) = detection.corner_covariance[k++];
+    if (!p.corner_covariance.allFinite()) {
+      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in corner_covariance", where, "fix the detector");
+    }
+  }
+  return corners;
+}
+
+void set_corners(const TargetCorners& corners, TagDetection& detection) {
+  const PointCorrespondences& p = corners.points;
+  detection.object_points.clear();
+  detection.image_points.clear();
+  detection.corner_covariance.clear();
+  for (std::size_t i = 0; i < p.object.size(); ++i) {
+    geometry_msgs::Point o;
+    o.x = p.object[i].x();
+    o.y = p.object[i].y();
+    o.z = p.object[i].z();
+    detection.object_points.push_back(o);
+    detection.image_points.push_back(p.image[i].x());
+    detection.image_points.push_back(p.image[i].y());
+  }
+  detection.point_ids.assign(p.ids.begin(), p.ids.end());
+  detection.corner_block = p.blocks;
+  for (Eigen::Index start = 0; p.corner_covariance.size() > 0 && start < p.corner_covariance.rows(); start += p.blocks)
+    for (Eigen::Index r = 0; r < p.blocks; ++r)
+      for (Eigen::Index c = 0; c < p.blocks; ++c) detection.corner_covariance.push_back(p.corner_covariance(start + r, start + c));
+  detection.camera_info = to_camera_info(corners.camera);
+}
+
 }  // namespace conversions
 }  // namespace handeye

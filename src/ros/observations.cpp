@@ -23,6 +23,15 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
       detection.frame = d.pose.header.frame_id.empty() ? msg.header.frame_id : d.pose.header.frame_id;
       detection.pose = d.pose.pose.pose;
       detection.covariance = conversions::covariance_if_nonzero(d.pose.pose.covariance);
+      try {
+        if (std::shared_ptr<TargetCorners> corners = conversions::to_corners(d)) {
+          corners->source = "image at " + number_text(detection.stamp.toSec(), 12) + " s";
+          detection.corners = std::move(corners);
+        }
+      } catch (const HandEyeError& e) {
+        refusal = Refusal{"bad_corners", std::string("a detection's corners are unusable: ") + e.what()};
+        return std::nullopt;
+      }
       return detection;
     }
   }
@@ -107,6 +116,13 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, co
   }
   o.T_camera_pattern = pattern.pose;
   if (detection.covariance) o.pattern_noise = PoseNoise::from_pose_covariance(pattern.covariance);
+  if (detection.corners && !detection.frame.empty() && detection.frame != rig.frames.camera) {
+    result.corners_dropped = "the detection's corners are in frame `" + detection.frame + "`'s image, not `" +
+                             rig.frames.camera + "`'s; set tracking_base_frame to `" + detection.frame +
+                             "` for method corners";
+  } else {
+    o.corners = detection.corners;
+  }
   result.observation = o;
   return result;
 }

@@ -24,7 +24,6 @@
 
 #include <optional>
 
-#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"

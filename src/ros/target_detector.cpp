@@ -4,7 +4,6 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/ros/camera_info_conversion.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
@@ -50,6 +49,7 @@ void TargetDetectorNode::on_camera_info(const sensor_msgs::CameraInfo::ConstPtr&
     CameraModel camera = conversions::to_camera_model(*info);
     if (image_is_rectified_) camera.distortion.clear();
     rectifier_ = std::make_unique<ImageRectifier>(camera);
+    camera_ = camera;
     info_ = *info;
     camera_error_.clear();
   } catch (const HandEyeError& e) {
@@ -96,6 +96,8 @@ void TargetDetectorNode::on_image(const sensor_msgs::Image::ConstPtr& image) {
       }
       detection.pose.header = image->header;
       detection.pose.pose = conversions::to_msg(PoseWithCovariance{result.pose->T_camera_pattern, result.pose->covariance});
+      // The corners behind the pose, in the raw image's pixels: what method corners refines X from.
+      conversions::set_corners(TargetCorners{camera_, raw_pixels(*seen.points, camera_), ""}, detection);
       array.detections.push_back(detection);
       if (publish_tf_) {
         geometry_msgs::TransformStamped tf;

@@ -61,7 +61,9 @@ SessionSettings session_settings(const SampleSet& samples, const SessionConfig& 
 CalibrationSession::CalibrationSession(SessionSettings settings)
     : settings_(std::move(settings)),
       // A sample with the detector's covariance gets the configured robot noise, else none (exact).
-      sampler_(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}) {}
+      sampler_(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}) {
+  if (settings_.method == Method::Corners && !settings_.refine_corners) throw corners_need_images();
+}
 
 // ------------------------------------------------------------------ changes
 
@@ -179,7 +181,12 @@ SampleSet CalibrationSession::sample_set() const {
 Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const {
   JointOptions joint;
   joint.robust = settings_.robust;
-  return solve_samples(snapshot.samples, settings_.reject_outliers, settings_.method, joint);
+  if (settings_.method != Method::Corners) {
+    return solve_samples(snapshot.samples, settings_.reject_outliers, settings_.method, joint);
+  }
+  // The joint estimate first: it rejects the outliers and starts the corners.
+  const Calibration pose_level = solve_samples(snapshot.samples, settings_.reject_outliers, Method::Joint, joint);
+  return settings_.refine_corners(snapshot.samples, pose_level);
 }
 
 SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {

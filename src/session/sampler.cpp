@@ -90,6 +90,7 @@ SampleOutcome Sampler::try_add(const Observation& observation) {
   sample.T_base_effector = observation.T_base_effector;
   sample.T_camera_pattern = observation.T_camera_pattern;
   sample.stamp = observation.stamp;
+  sample.corners = observation.corners;
   if (observation.pattern_noise) sample.noise = MeasurementNoise{robot_noise_, *observation.pattern_noise};
   samples_.push_back(sample);
   return {true, "accepted sample " + std::to_string(samples_.size() - 1)};

@@ -93,19 +93,20 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   SessionSettings settings = session_settings(found.samples);
   settings.robust = robust_from_string(robust);
+  if (method == "corners") {
+    CornerOptions corner_options;
+    corner_options.refine_intrinsics = refine_intrinsics;
+    settings.method = Method::Corners;
+    settings.refine_corners = corner_refiner(corner_options);
+  }
   // Wrong intrinsics make the images' poses disagree with each other: with
   // --refine-intrinsics the pose level only starts the corners and rejects nothing.
   if (refine_intrinsics) settings.reject_outliers = false;
   CalibrationSession session(settings);
   session.replace(found.samples.samples, "images in " + images_dir);
   const SessionSnapshot snapshot = session.snapshot();
-  Calibration calibration = session.calibrate(snapshot);
-  if (method == "corners") {
-    CornerOptions corner_options;
-    corner_options.refine_intrinsics = refine_intrinsics;
-    calibration = refine_with_corners(snapshot.samples, found.corners, found.sample_images, camera, calibration,
-                                      corner_options)
-                      .calibration;
+  const Calibration calibration = session.calibrate(snapshot);
+  if (calibration.corner_fit) {
     for (const Calibration::CornerFit::Image& image : calibration.corner_fit->images) {
       std::snprintf(line, sizeof line, "  %-28s %3d corners, reprojection RMS %.3f px (corner fit)\n", image.name.c_str(),
                     image.corners, image.rms_px);

@@ -57,10 +57,10 @@ Isometry3d pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
 
 }  // namespace
 
-Eigen::Vector2d CameraModel::project(const Vector3d& p_camera) const {
+Eigen::Vector2d project(const CameraModel& camera, const Vector3d& p_camera) {
   std::vector<cv::Point2d> pixels;
-  cv::projectPoints(cv_points({p_camera}), cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(*this),
-                    handeye::distortion(*this), pixels);
+  cv::projectPoints(cv_points({p_camera}), cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(camera),
+                    handeye::distortion(camera), pixels);
   return {pixels[0].x, pixels[0].y};
 }
 
@@ -84,23 +84,6 @@ cv::Mat ImageRectifier::rectify(const cv::Mat& image) const {
   cv::Mat out;
   cv::remap(image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
   return out;
-}
-
-void check_camera_model(const CameraModel& camera, const std::string& where) {
-  if (!camera.K.allFinite() || !(camera.K(0, 0) > 0.0) || !(camera.K(1, 1) > 0.0) || camera.K(2, 2) != 1.0) {
-    throw HandEyeError(ErrorCode::MalformedFile, "the camera matrix K is not a pinhole matrix (fx, fy > 0, K[2][2] = 1)",
-                       where, "calibrate the camera's intrinsics first (camera_calibration) and publish them in CameraInfo");
-  }
-  const std::size_t n = camera.distortion.size();
-  if (!(n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14)) {
-    throw HandEyeError(ErrorCode::WrongLength, "distortion has " + std::to_string(n) + " coefficients", where,
-                       "give plumb_bob (5) or rational_polynomial (8) coefficients, or none");
-  }
-  for (double d : camera.distortion) {
-    if (!std::isfinite(d)) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in the distortion coefficients", where, "fix the camera info");
-    }
-  }
 }
 
 void PixelNoise::add(double residual_sum_of_squares, int degrees_of_freedom) {
@@ -293,7 +276,7 @@ PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespond
   }
   const auto residuals = [&](const Isometry3d& T) {
     Eigen::VectorXd r(2 * n);
-    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = points.image[static_cast<std::size_t>(i)] - camera.project(T * object[i]);
+    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = points.image[static_cast<std::size_t>(i)] - project(camera, T * object[i]);
     return r;
   };
   // Gauss-Newton on the weighted residuals, from the unweighted PnP solution

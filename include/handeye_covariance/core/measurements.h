@@ -4,10 +4,12 @@
 // Frames and setups: rig.h.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/core/rig.h"
 
@@ -27,6 +29,9 @@ struct PoseSample {
   Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
   std::optional<double> stamp;             // seconds
   std::optional<MeasurementNoise> noise;   // overrides SampleSet::noise for this sample
+  /// The corners T_camera_pattern was detected from, when the detector gave them
+  /// (`--method corners`); shared, as observations are copied at the camera's rate.
+  std::shared_ptr<const TargetCorners> corners;
 };
 
 /// One stamp-matched observation: the pattern's pose as detected and the robot's
@@ -36,6 +41,7 @@ struct Observation {
   Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();  // looked up at `stamp`
   Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
   std::optional<PoseNoise> pattern_noise;  // the detector's full 6x6 in the camera frame, when it gives one
+  std::shared_ptr<const TargetCorners> corners;  // the detection's corners, when it gives them
 };
 
 struct SampleSet {

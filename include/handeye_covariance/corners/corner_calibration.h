@@ -136,19 +136,24 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 
 /// `--method corners` after the pose-level estimate `pose_level` of the same
 /// samples: calibrate_corners started from its X and Y, its rejected samples left
-/// out. corners[i] and names[i] belong to samples.samples[i]. Unless `options`
-/// says otherwise, the robot poses are free: with the robot noise the samples
-/// state when pose_level's residual checks trusted it, else (6 images or more)
-/// with the robot noise estimated from the corners, else with the one pose_level
-/// used (a zero block floored at 1 um / 1 urad); exact when there is none. The Calibration holds X, Y, their covariances and cross block
-/// (method Corners) and the corner fit; the pose-level residual checks and noise
-/// components, which described the poses' fit, are replaced by the corners'.
+/// out, each kept sample's corners (PoseSample::corners, all from one camera) as
+/// its image. Unless `options` says otherwise, the robot poses are free: with the
+/// robot noise the samples state when pose_level's residual checks trusted it,
+/// else (6 images or more) with the robot noise estimated from the corners, else
+/// with the one pose_level used (a zero block floored at 1 um / 1 urad); exact
+/// when there is none. The Calibration holds X, Y, their covariances and cross
+/// block (method Corners) and the corner fit; the pose-level residual checks and
+/// noise components, which described the poses' fit, are replaced by the corners'.
+/// Throws HandEyeError(MalformedFile) naming a sample without corners or with
+/// another camera's, and calibrate_corners's errors.
 struct CornerMethodResult {
   Calibration calibration;
   CornerCalibration fit;
 };
-CornerMethodResult refine_with_corners(const SampleSet& samples, const std::vector<PointCorrespondences>& corners,
-                                       const std::vector<std::string>& names, const CameraModel& camera,
-                                       const Calibration& pose_level, CornerOptions options = {});
+CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibration& pose_level, CornerOptions options = {});
+
+/// The session's hook for method corners (SessionSettings::refine_corners):
+/// refine_with_corners with `options`.
+CornerRefiner corner_refiner(CornerOptions options = {});
 
 }  // namespace handeye

@@ -85,12 +85,12 @@ enum class Method {
   Corners,  // X and Y from every image corner's reprojection error (corners/corner_calibration.h)
 };
 const char* to_string(Method method);  // "pairs" / "joint" / "corners"
-/// A session's method from pose samples: "pairs" or "joint" ("corners" needs the
-/// images' corners: `handeye images --method corners`). Throws
+/// A session's method: "pairs", "joint" or "corners" (which needs the samples'
+/// corners and a program that links the corner estimator: CornerRefiner). Throws
 /// HandEyeError(MalformedFile) naming the valid values.
 Method method_from_string(const std::string& name);
-/// The refusal of method corners for pose samples (method_from_string and
-/// estimate throw it): HandEyeError(MalformedFile) with the fix.
+/// The refusal of method corners where only poses can be solved (estimate, and a
+/// session without a CornerRefiner): HandEyeError(MalformedFile) with the fix.
 HandEyeError corners_need_images();
 
 struct Calibration {
@@ -207,5 +207,10 @@ Calibration solve(const MotionSet& motions, const SolverOptions& options = {});
 /// is propagated into every motion that uses it, so their correlation is in the
 /// covariance.
 Calibration solve(const SampleSet& samples, const SolverOptions& options = {});
+
+/// Method corners, after the pose-level estimate of the same samples: X and Y
+/// refined from the samples' corners (corners/corner_calibration.h: corner_refiner).
+/// A hook, so that a session runs it without linking Ceres or OpenCV itself.
+using CornerRefiner = std::function<Calibration(const SampleSet& samples, const Calibration& pose_level)>;
 
 }  // namespace handeye

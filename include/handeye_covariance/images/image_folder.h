@@ -29,7 +29,7 @@ CameraModel read_camera(const std::string& path);
 /// (3 x 3), distortion_coefficients (optional), image_width and image_height
 /// (optional). Every number checked as io::parse_camera_info checks them; the
 /// pinhole check is read_camera's. Throws HandEyeError naming the source.
-io::CameraInfoFile parse_opencv_camera(const std::string& text, const std::string& source);
+CameraModel parse_opencv_camera(const std::string& text, const std::string& source);
 
 struct ImageWithPose {
   std::filesystem::path image;
@@ -58,10 +58,9 @@ struct ImageReport {
 };
 
 struct ImageSession {
-  SampleSet samples;               // one sample per used image, each with its detection's covariance
-  /// Per sample (same order): its image's corners in raw pixels, and the image's name.
-  std::vector<PointCorrespondences> corners;
-  std::vector<std::string> sample_images;
+  /// One sample per used image, each with its detection's covariance and its
+  /// corners in raw pixels (TargetCorners::source: the image's name).
+  SampleSet samples;
   std::vector<ImageReport> images;  // one per image, in order
   double pixel_sigma = 0.0;        // pooled over every detected image
 };

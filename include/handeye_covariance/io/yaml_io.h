@@ -60,12 +60,8 @@ Target read_target(const std::string& path);
 /// image_height, camera_matrix: {data: [9 numbers]}, distortion_coefficients:
 /// {data: [...]} (optional). Numbers checked (finite; sizes whole pixels); whether K
 /// is a usable pinhole matrix is the vision layer's check (check_camera_model).
-struct CameraInfoFile {
-  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
-  std::vector<double> distortion;
-  int width = 0, height = 0;  // 0: not given
-};
-CameraInfoFile parse_camera_info(const std::string& text, const std::string& source);
+/// The sizes are 0 when not given.
+CameraModel parse_camera_info(const std::string& text, const std::string& source);
 
 /// A file holding either samples or motions (told apart by its top-level key).
 using Input = std::variant<SampleSet, MotionSet>;

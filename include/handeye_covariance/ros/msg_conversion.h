@@ -1,5 +1,4 @@
-// The only place where ROS messages meet the core's Eigen types (camera
-// models, which need the vision library, are in camera_info_conversion.h).
+// The only place where ROS messages meet the core's Eigen types.
 // Covariances: ROS order (x, y, z, rx, ry, rz), row-major arrays, always read and
 // written through explicit row-major maps (pose_covariance.h).
 #pragma once
@@ -7,11 +6,15 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/PoseWithCovariance.h>
 #include <geometry_msgs/Transform.h>
+#include <sensor_msgs/CameraInfo.h>
 
 #include <boost/array.hpp>
+#include <memory>
 #include <optional>
 
+#include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/ros/messages.h"
 
 namespace handeye {
 namespace conversions {
@@ -29,6 +32,19 @@ geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose);
 std::optional<Matrix6d> covariance_if_nonzero(const boost::array<double, 36>& covariance);
 
 boost::array<double, 9> to_msg_array(const Eigen::Matrix3d& covariance);
+
+/// The camera model of a CameraInfo (K, D, size). Throws HandEyeError for an
+/// uncalibrated camera (K all zeros) or an unknown distortion model.
+CameraModel to_camera_model(const sensor_msgs::CameraInfo& info);
+sensor_msgs::CameraInfo to_camera_info(const CameraModel& camera);
+
+/// The corners a detection's pose came from (TagDetection's object_points,
+/// image_points, corner_block, corner_covariance, camera_info); nullptr when it
+/// has none. Throws HandEyeError naming what is inconsistent (sizes, NaN, the
+/// camera).
+std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection);
+/// Fills those fields of `detection`.
+void set_corners(const TargetCorners& corners, TagDetection& detection);
 
 /// |q| of a message quaternion, to refuse non-unit ones before use.
 double quaternion_norm(const geometry_msgs::Quaternion& q);

@@ -8,6 +8,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2/buffer_core.h>
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -23,6 +24,7 @@ struct Detection {
   std::string frame;  // empty: the camera frame
   geometry_msgs::Pose pose;
   std::optional<Matrix6d> covariance;  // the full 6x6, ROS order, when the detector sent a non-zero one
+  std::shared_ptr<const TargetCorners> corners;  // the corners behind the pose, when the detector sent them
 };
 
 /// Why a detection gave no observation: `kind` is short and stable (for counts),
@@ -34,6 +36,7 @@ struct Refusal {
 
 /// The detection of the configured pattern (`tag_ids`, or the lone detection
 /// when tag_ids is empty), or a refusal; nothing at all for an empty message.
+/// Corners that do not fit together (conversions::to_corners) are a refusal too.
 std::optional<Detection> select_detection(const TagDetectionArray& msg, const std::vector<int>& tag_ids,
                                           std::optional<Refusal>& refusal);
 Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg);
@@ -44,10 +47,12 @@ Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern)
 /// STAMP (the caller waits for TF first if it is filled live). A detection in
 /// another frame of the same camera (camera_link for camera_optical_frame) is
 /// moved into the camera frame, its covariance with it (the adjoint of the
-/// frame change, through compose()).
+/// frame change, through compose()); its corners are then dropped, as they
+/// belong to the detector's camera frame (`corners_dropped` says so).
 struct ObservationResult {
   std::optional<Observation> observation;
   std::optional<Refusal> refusal;
+  std::string corners_dropped;  // why the observation has no corners although the detection had them
 };
 ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, const Detection& detection);
 

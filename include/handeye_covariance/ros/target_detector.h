@@ -43,6 +43,7 @@ class TargetDetectorNode {
   std::mutex mutex_;  // info_ and rectifier_ come from the info callback
   std::optional<sensor_msgs::CameraInfo> info_;
   std::unique_ptr<ImageRectifier> rectifier_;
+  CameraModel camera_;  // the raw image's: the detections' corners are sent in its pixels
   PixelNoise pixel_noise_;
   std::string camera_error_;  // why the last CameraInfo was refused
 };

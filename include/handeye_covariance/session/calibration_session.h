@@ -35,7 +35,11 @@ struct SessionSettings {
   /// else estimated from the residuals.
   std::optional<MeasurementNoise> noise;
   bool reject_outliers = true;
-  Method method = Method::Joint;  // the estimator (joint_estimator.h, or the paper's pairs)
+  Method method = Method::Joint;  // the estimator (joint_estimator.h, the paper's pairs, or corners)
+  /// Method corners: refines the joint estimate from the samples' corners. Set by
+  /// the programs that link the corner estimator (corners/corner_calibration.h:
+  /// corner_refiner); without it a session refuses method corners.
+  CornerRefiner refine_corners;
   JointOptions::Robust robust = JointOptions::Robust::Auto;  // the joint estimator's robust mode
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
@@ -99,6 +103,7 @@ class CalibrationSession {
  public:
   static constexpr int kMinimumSamples = 3;
 
+  /// Throws HandEyeError(MalformedFile) for method corners without refine_corners.
   explicit CalibrationSession(SessionSettings settings);
 
   const SessionSettings& settings() const { return settings_; }
@@ -134,7 +139,8 @@ class CalibrationSession {
 
   /// The estimate and the best next pose; never throws (problems are reported).
   Analysis analyse(const SessionSnapshot& snapshot) const;
-  /// X with its covariance, outliers rejected when configured. Throws HandEyeError.
+  /// X with its covariance, outliers rejected when configured; method corners
+  /// refines the joint estimate from the kept samples' corners. Throws HandEyeError.
   Calibration calibrate(const SessionSnapshot& snapshot) const;
   /// The split-half check (split_check.h) of this session's calibration: `splits`
   /// random halves, each calibrated as calibrate() does.

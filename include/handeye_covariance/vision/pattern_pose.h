@@ -16,22 +16,15 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/core/tag_layout.h"
 #include "handeye_covariance/vision/tag_detector.h"
 
 namespace handeye {
 
-/// A pinhole camera with OpenCV's distortion model (sensor_msgs/CameraInfo's
-/// plumb_bob / rational_polynomial: D = k1, k2, p1, p2[, k3[, k4, k5, k6]]).
-struct CameraModel {
-  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
-  std::vector<double> distortion;
-  int width = 0, height = 0;
-
-  /// The pixel of a point in the camera frame (z > 0).
-  Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const;
-};
+/// The pixel of a point in the camera frame (z > 0), by cv::projectPoints.
+Eigen::Vector2d project(const CameraModel& camera, const Eigen::Vector3d& p_camera);
 
 /// Removes the lens distortion from images. libapriltag fits straight lines to
 /// the tag edges, so on a distorted image its corners are biased (about 0.02 px
@@ -50,9 +43,6 @@ class ImageRectifier {
   cv::Mat map_x_, map_y_;  // empty: nothing to undo
 };
 
-/// Throws HandEyeError when K is not a usable pinhole matrix (fx, fy <= 0, NaN)
-/// or the distortion has a length OpenCV does not know.
-void check_camera_model(const CameraModel& camera, const std::string& where);
 
 /// Pooled pixel noise: the residual variance over the recent frames. One frame
 /// of one tag leaves 8 - 6 = 2 degrees of freedom, far too few for an honest
@@ -129,19 +119,6 @@ struct PatternPose {
 struct PatternPoseResult {
   std::optional<PatternPose> pose;
   std::string refusal;  // why there is no pose (empty when there is one)
-};
-
-/// What a detector found of a target: the target's points (pattern frame, m) and
-/// where they are in the image (px), with the detector's corner noise model.
-struct PointCorrespondences {
-  std::vector<Eigen::Vector3d> object;
-  std::vector<Eigen::Vector2d> image;
-  std::vector<int> ids;  // the tags, markers or corners used (for messages and PatternPose::ids)
-  /// (2n x 2n) per unit sigma^2, block-diagonal in blocks of `blocks` rows (8: one
-  /// AprilTag's four corners under the edge-fit model; 2: independent corners).
-  /// Empty: independent corners, identity.
-  Eigen::MatrixXd corner_covariance;
-  int blocks = 2;
 };
 
 /// PnP (IPPE for a planar target, SQPnP otherwise; then Levenberg-Marquardt), a
