@@ -10,6 +10,7 @@
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
+#include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/ros/bag.h"
 
 namespace handeye {
@@ -116,6 +117,38 @@ TEST(Bag, ImagesOfEveryTargetKind) {
                 error.head<3>().norm() * 1e3, nees);
     EXPECT_LT(nees, 20.06) << name;
   }
+}
+
+// `handeye bag` with `method: corners`: the replay keeps each image's corners with
+// its sample, and the session refines the joint estimate from them.
+TEST(Bag, ImagesWithMethodCorners) {
+  BagSimulationOptions options = image_bag(target_file("targets/chessboard.yaml"));
+  options.seed = 12;
+  const std::string path = temp("images_corners.bag");
+  const SimulatedBag bag = write_simulated_bag(path, options);
+  SessionConfig config;
+  config.target_file = target_file("targets/chessboard.yaml");
+  config.method = "corners";
+  SessionSettings settings = session_settings(config);
+  settings.session_file.clear();
+  settings.refine_corners = corner_refiner();
+  CalibrationSession session(settings);
+  const BagReplay replay = replay_bag(path, config, session);
+  ASSERT_GE(replay.samples.samples.size(), 7u);
+  for (const PoseSample& sample : replay.samples.samples) {
+    ASSERT_TRUE(sample.corners);
+    EXPECT_EQ(sample.corners->points.object.size(), 54u);  // the 9 x 6 inner corners
+    EXPECT_EQ(sample.corners->source.rfind("image at ", 0), 0u) << sample.corners->source;
+  }
+  const Calibration c = session.calibrate(session.snapshot());
+  EXPECT_EQ(c.method, Method::Corners);
+  ASSERT_TRUE(c.corner_fit);
+  EXPECT_EQ(static_cast<int>(c.corner_fit->images.size()), c.samples_used);
+  const Vector6d error = pose_error(c.T_parent_camera, bag.X);
+  const double nees = error.dot(c.pose_covariance.ldlt().solve(error));
+  std::printf("corners: %d images, pixel sigma %.3f px, RMS %.3f px, X error %.3f mm, NEES %.2f\n", c.samples_used,
+              c.corner_fit->pixel_sigma, c.corner_fit->rms_px, error.head<3>().norm() * 1e3, nees);
+  EXPECT_LT(nees, 22.46);  // chi^2(6) at 0.999
 }
 
 TEST(Bag, ImagesNeedTheTargetAndTheirCameraInfo) {

@@ -21,7 +21,7 @@ namespace handeye {
 namespace {
 
 // Set per launch file (private params of this test node).
-std::string kNs, kParent, kNoiseOrigin;
+std::string kNs, kParent, kNoiseOrigin, kMethod;
 
 TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ros::NodeHandle nh;
@@ -45,6 +45,12 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   // 12 poses, 1.7 s each: the node must take a sample at (nearly) every pause.
   ASSERT_TRUE(test::wait_for([&] { return status.received && status.latest.samples >= 10; }, 60.0))
       << "samples: " << status.latest.samples << ", last event: " << status.latest.last_event;
+  // Then until the rig has stopped at its last pose (no new sample for 3.5 s, more
+  // than a pause and a move): the save/load round trip below compares with this X.
+  for (int last = -1; last != static_cast<int>(status.latest.samples);) {
+    last = static_cast<int>(status.latest.samples);
+    test::wait_for([&] { return static_cast<int>(status.latest.samples) != last; }, 3.5);
+  }
   // The worker follows each new sample with its estimate (within one solve and ranking).
   EXPECT_TRUE(test::wait_for(
       [&] { return status.latest.has_estimate && status.latest.estimate_samples == status.latest.samples; }, 10.0))
@@ -80,7 +86,29 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_LT(nees, bound) << "error " << error.transpose();
   EXPECT_LT(error.head<3>().norm(), 0.003);
   // The joint estimator gives the pattern's pose Y too, in its parent frame, just as honest.
-  EXPECT_EQ(calibrate.response.method, "joint");
+  EXPECT_EQ(calibrate.response.method, kMethod);
+  if (kMethod == "corners") {
+    // Every sample holds its detection's corners: the fit, the file and the session file say so.
+    std::printf("corners: %d corners, pixel sigma %.3f px, reprojection RMS %.3f px\n", calibrate.response.corners_used,
+                calibrate.response.corner_pixel_sigma, calibrate.response.corner_rms_px);
+    EXPECT_GE(calibrate.response.corners_used, 4 * used);
+    EXPECT_GT(calibrate.response.corner_pixel_sigma, 0.0);
+    EXPECT_GT(calibrate.response.corner_rms_px, 0.0);
+    EXPECT_LT(calibrate.response.corner_rms_px, 1.0);
+    const std::string result = io::read_file(calibrate.response.calibration_file);
+    EXPECT_NE(result.find("rms_px"), std::string::npos) << result;
+    SaveSamples save;
+    save.request.path = "/tmp/handeye_covariance_rostest/corners_samples.yaml";
+    ASSERT_TRUE(test::call(kNs + "save_samples", save));
+    ASSERT_TRUE(save.response.success) << save.response.message;
+    const SampleSet saved = io::read_samples(save.request.path);
+    ASSERT_FALSE(saved.samples.empty());
+    for (const PoseSample& sample : saved.samples) {
+      ASSERT_TRUE(sample.corners);
+      EXPECT_EQ(sample.corners->points.image.size(), sample.corners->points.object.size());
+      EXPECT_GT(sample.corners->camera.K(0, 0), 0.0);
+    }
+  }
   ASSERT_TRUE(test::wait_for([&] { return rig.pattern_received; }, 5.0));
   EXPECT_EQ(calibrate.response.pattern.header.frame_id, rig.pattern.header.frame_id);
   const PoseWithCovariance Y = conversions::to_core(calibrate.response.pattern.pose);
@@ -251,5 +279,6 @@ int main(int argc, char** argv) {
   handeye::kNs = pn.param<std::string>("namespace", "/test_eye_on_hand/");
   handeye::kParent = pn.param<std::string>("parent_frame", "tool0");
   handeye::kNoiseOrigin = pn.param<std::string>("noise_origin", "estimated_from_residuals");
+  handeye::kMethod = pn.param<std::string>("method", "joint");
   return RUN_ALL_TESTS();
 }

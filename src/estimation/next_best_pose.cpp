@@ -108,6 +108,10 @@ Matrix6d candidate_camera_noise(const SampleSet& samples, const Calibration& cal
   return 0.5 * (C + C.transpose());
 }
 
+bool has_joint_covariance(const Calibration& c) {
+  return (c.method == Method::Joint || c.method == Method::Corners) && c.pattern.has_value();
+}
+
 /// The 12x12 covariance of (X, Y) of a joint calibration.
 Matrix12d joint_covariance(const Calibration& c) {
   Matrix12d C;
@@ -124,7 +128,10 @@ Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibrat
                        "give candidate poses, or widen the reach limits (max_step_translation, max_step_rotation)");
   }
   const Isometry3d& X = calibration.T_parent_camera;
-  const bool joint = calibration.method == Method::Joint && calibration.pattern.has_value();
+  // Joint and corners both give (X, Y) with their 12x12 covariance. A candidate
+  // adds its detected pose's information to it: for corners too, as an image's
+  // pose with its covariance summarises its corners to first order.
+  const bool joint = has_joint_covariance(calibration);
   const Isometry3d pattern = joint ? calibration.pattern->pose : pattern_pose(samples, X);
   Suggestion suggestion;
   const PoseWithCovariance current{X, calibration.pose_covariance};
@@ -194,7 +201,7 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
     added.T_base_effector = best.T_base_effector;
     added.T_camera_pattern = best.T_camera_pattern;
     planned.samples.push_back(added);
-    if (current.method == Method::Joint && current.pattern) {
+    if (has_joint_covariance(current)) {
       const Eigen::Matrix<double, 12, 12>& C = best.predicted_joint_covariance;
       current.pose_covariance = C.topLeftCorner<6, 6>();
       current.cross_covariance = C.topRightCorner<6, 6>();

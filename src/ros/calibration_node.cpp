@@ -355,6 +355,11 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
   res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
   res.method = to_string(c.method);
+  if (c.corner_fit) {
+    res.corner_pixel_sigma = c.corner_fit->pixel_sigma;
+    res.corner_rms_px = c.corner_fit->rms_px;
+    res.corners_used = c.corner_fit->corners;
+  }
   if (c.pattern) {
     res.pattern.header.stamp = res.calibration.header.stamp;
     res.pattern.header.frame_id = config_.rig.pattern_parent_frame();
