@@ -8,6 +8,8 @@
 #include <ceres/rotation.h>
 #include <ceres/solver.h>
 
+#include <boost/math/distributions/chi_squared.hpp>
+
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -298,6 +300,36 @@ CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k
   return out;
 }
 
+namespace {
+
+// Bartlett's test of equal variances over the images with at least 1 dof:
+// (N ln s_p^2 - sum nu_i ln s_i^2) / C ~ chi2(k - 1), N = sum nu_i,
+// C = 1 + (sum 1 / nu_i - 1 / N) / (3 (k - 1)).
+HomogeneityTest homogeneity_test(const std::vector<double>& rss, const std::vector<ImageReprojection>& images,
+                                 double level) {
+  double N = 0.0, pooled = 0.0, weighted_log = 0.0, inverse = 0.0;
+  int k = 0;
+  for (std::size_t i = 0; i < rss.size(); ++i) {
+    const double nu = images[i].dof;
+    if (nu < 1.0 || !(rss[i] > 0.0)) continue;
+    ++k;
+    N += nu;
+    pooled += rss[i];
+    weighted_log += nu * std::log(rss[i] / nu);
+    inverse += 1.0 / nu;
+  }
+  HomogeneityTest test;
+  if (k < 2) return test;
+  test.dof = k - 1;
+  const double C = 1.0 + (inverse - 1.0 / N) / (3.0 * (k - 1));
+  test.chi2 = (N * std::log(pooled / N) - weighted_log) / C;
+  test.bound = boost::math::quantile(boost::math::chi_squared(k - 1), level);
+  test.passed = test.chi2 <= test.bound;
+  return test;
+}
+
+}  // namespace
+
 CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
                                  const Isometry3d& X, const Isometry3d& Y) {
   const Projection projection = projection_of(camera, rig);
@@ -372,7 +404,8 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   // Sigma for the first round: as given, or 1 px, re-estimated after every round
   // (it weighs the corners against the priors; alone it only scales the covariance).
   double sigma = options.pixel_sigma > 0.0 ? options.pixel_sigma : 1.0;
-  double inverse_sigma = 1.0 / sigma;
+  // Each image's 1 / sigma in its cost: all the same, unless the images' noise differs.
+  std::vector<double> inverse_sigma(views.size(), 1.0 / sigma);
 
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = true;  // the robot priors are replaced as their noise is estimated
@@ -390,7 +423,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   std::vector<ceres::ResidualBlockId> image_blocks;
   for (std::size_t i = 0; i < views.size(); ++i) {
     image_blocks.push_back(problem.AddResidualBlock(
-        image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma), nullptr, blocks_of(i)));
+        image_cost(robot_free, intrinsics_free, &images[i], &projection, &inverse_sigma[i]), nullptr, blocks_of(i)));
   }
   // The robot poses' priors, xi_E,i ~ N(0, robot_covariance): NormalPrior with A = L^-1.
   std::vector<ceres::ResidualBlockId> robot_priors;
@@ -432,11 +465,18 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   CornerCalibration result;
   result.pixel_sigma_estimated = options.pixel_sigma == 0.0;
   result.robot_noise_estimated = options.estimate_robot_noise;
-  // sigma moves the solution only through the priors' weight against the corners.
-  const bool sigma_rounds = (result.pixel_sigma_estimated && (robot_free || intrinsics_free)) || options.estimate_robot_noise;
-  const int rounds = sigma_rounds ? std::max(1, options.max_noise_rounds) : 1;
+  // One sigma moves the solution only through the priors' weight against the
+  // corners; each image's own sigma moves it always.
+  bool per_image = result.pixel_sigma_estimated && options.robust == JointOptions::Robust::On;
+  const bool may_test = result.pixel_sigma_estimated && options.robust == JointOptions::Robust::Auto;
+  bool sigma_rounds = (result.pixel_sigma_estimated && (robot_free || intrinsics_free)) || options.estimate_robot_noise ||
+                      per_image;
+  const int rounds = sigma_rounds || may_test ? std::max(1, options.max_noise_rounds) : 1;
+  result.per_image_sigma = per_image;
+  std::vector<double> image_sigma(views.size(), sigma);
   Eigen::MatrixXd xy_covariance;  // unit: the whitening's sigma
   double corner_rss = 0.0;        // px^2 per unit sigma^2, at the solution
+  double weighted_chi2 = 0.0;     // sum r^T C^-1 r / sigma_i^2, each image at its sigma
   double absorbed = 0.0;          // what the fit absorbs of the corners
   std::vector<Eigen::Vector2d> history;  // the robot's log variances, since the last extrapolation
   std::array<bool, 2> robot_at_bound = {false, false};
@@ -478,13 +518,17 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     // Variance components (Forstner): each prior group's squared residuals over its
     // redundancy, its rows' count minus the share the fit takes of them.
     Eigen::Vector2d robot_squares = Eigen::Vector2d::Zero(), robot_share = Eigen::Vector2d::Zero();
+    std::vector<double> robot_absorbed(views.size(), 0.0);  // image i's robot pose's share of the corners
+    const double shared_absorbed = absorbed;                 // (X, Y) and the intrinsics: shared by rows
     if (robot_free && sigma_rounds) {
       const Matrix6d information = robot_covariance.inverse();
-      for (const auto& r : robot) {
+      for (std::size_t i = 0; i < robot.size(); ++i) {
+        const auto& r = robot[i];
         Eigen::Matrix<double, 6, 6, Eigen::RowMajor> block;
         covariance.GetCovarianceBlockInTangentSpace(r.data(), r.data(), block.data());
         const Matrix6d held = Matrix6d(block) * information;
-        absorbed += 6.0 - held.trace();
+        robot_absorbed[i] = 6.0 - held.trace();
+        absorbed += robot_absorbed[i];
         robot_share += Eigen::Vector2d(held.topLeftCorner<3, 3>().trace(), held.bottomRightCorner<3, 3>().trace());
         const Eigen::Map<const Vector6d> xi(r.data());
         robot_squares += Eigen::Vector2d(xi.head<3>().squaredNorm(), xi.tail<3>().squaredNorm());
@@ -493,13 +537,17 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     corner_rss = 0.0;
     double unweighted = 0.0;
     result.images.clear();
+    std::vector<double> image_rss(views.size());
+    weighted_chi2 = 0.0;
     for (std::size_t i = 0; i < views.size(); ++i) {
       // The image's residuals at the solution, per unit sigma (the whitening alone),
       // and the plain pixel errors.
       Eigen::VectorXd r(2 * images[i].image.size());
       problem.EvaluateResidualBlock(image_blocks[i], false, nullptr, r.data(), nullptr);
-      r *= sigma;
-      corner_rss += r.squaredNorm();
+      r /= inverse_sigma[i];
+      image_rss[i] = r.squaredNorm();
+      corner_rss += image_rss[i];
+      weighted_chi2 += image_rss[i] * inverse_sigma[i] * inverse_sigma[i];
       // The plain pixel errors: the whitening undone, block by block.
       double image_unweighted = 0.0;
       for (std::size_t b = 0; b < images[i].block_start.size(); ++b) {
@@ -509,8 +557,10 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
         image_unweighted += plain.squaredNorm();
       }
       unweighted += image_unweighted;
+      const double rows = static_cast<double>(r.size());
       result.images.push_back({views[i].name, static_cast<int>(images[i].image.size()),
-                               std::sqrt(image_unweighted / static_cast<double>(r.size()))});
+                               std::sqrt(image_unweighted / rows), 1.0 / inverse_sigma[i],
+                               rows - shared_absorbed * rows / m - robot_absorbed[i]});
     }
     result.rms_px = std::sqrt(unweighted / m);
     const double dof = m - absorbed;
@@ -564,21 +614,61 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
                          "the corners leave " + number_text(dof) + " degrees of freedom for the pixel noise",
                          "corner calibration", "give the pixel sigma, or more corners");
     }
-    const double estimate = std::sqrt(corner_rss / dof);
-    settled = settled && std::abs(estimate / sigma - 1.0) < 1e-3;
-    if (!sigma_rounds) {
-      // The solution does not depend on sigma: the covariance scales with it.
-      xy_covariance *= (estimate * estimate) / (sigma * sigma);
-      sigma = estimate;
-      break;
+    // Each image's variance s_i^2 = RSS_i / nu_i, and the pooled one.
+    double pooled_rss = 0.0, pooled_dof = 0.0;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      pooled_rss += image_rss[i];
+      pooled_dof += result.images[i].dof;
     }
-    sigma = estimate;
-    inverse_sigma = 1.0 / sigma;
+    if (!per_image) {
+      const double estimate = std::sqrt(corner_rss / dof);
+      settled = settled && std::abs(estimate / sigma - 1.0) < 1e-3;
+      if (sigma_rounds && !settled && round + 1 < rounds) {
+        sigma = estimate;
+        std::fill(inverse_sigma.begin(), inverse_sigma.end(), 1.0 / sigma);
+        if (options.estimate_robot_noise) set_robot_priors();
+        continue;
+      }
+      // The one-sigma fit is final: do the images share that sigma?
+      if (may_test) {
+        result.homogeneity = homogeneity_test(image_rss, result.images, options.homogeneity_level);
+        per_image = !result.homogeneity->passed;
+      }
+      if (!per_image) {
+        // Without a prior at stake the solution does not depend on sigma: the covariance scales with it.
+        if (!sigma_rounds) xy_covariance *= (estimate * estimate) / (sigma * sigma);
+        sigma = estimate;
+        weighted_chi2 = corner_rss / (sigma * sigma);
+        break;
+      }
+      sigma_rounds = true;  // the images' own sigmas move the solution: alternate from here
+      settled = false;
+    }
+    // Each image its own sigma; those with few dof share theirs.
+    result.per_image_sigma = true;
+    double few_rss = 0.0, few_dof = 0.0;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      if (result.images[i].dof < options.min_image_dof) {
+        few_rss += image_rss[i];
+        few_dof += std::max(0.0, result.images[i].dof);
+      }
+    }
+    const double pooled = std::sqrt(pooled_rss / std::max(pooled_dof, 1.0));
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const double nu = result.images[i].dof;
+      double s_i = nu >= options.min_image_dof ? std::sqrt(image_rss[i] / nu)
+                                               : (few_dof >= 1.0 ? std::sqrt(few_rss / few_dof) : pooled);
+      s_i = std::max(s_i, 0.1 * pooled);  // an image that fits perfectly is not infinitely certain
+      settled = settled && std::abs(s_i * inverse_sigma[i] - 1.0) < 1e-3;
+      inverse_sigma[i] = 1.0 / s_i;
+    }
+    sigma = pooled;
     if (settled) break;
     if (options.estimate_robot_noise) set_robot_priors();
   }
   result.pixel_sigma = sigma;
-  result.chi2 = corner_rss / (sigma * sigma);
+  result.chi2 = weighted_chi2;
+  result.per_image_sigma = per_image;
   result.X = pose_of(x);
   result.Y = pose_of(y);
   result.covariance = 0.5 * (xy_covariance + xy_covariance.transpose());
@@ -667,7 +757,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     robot += ": 1 sigma " + number_text(f.robot_sigma[0] * 1e3, 3) + " mm / " +
              number_text(f.robot_sigma[1] * 180.0 / M_PI, 3) + " deg per axis";
   }
-  c.noise_model = "corners: pixel sigma " + number_text(f.pixel_sigma, 3) + " px" +
+  c.noise_model = std::string("corners: pixel sigma ") + (f.per_image_sigma ? "per image, pooled " : "") +
+                  number_text(f.pixel_sigma, 3) + " px" +
                   (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
                   " under the detector's corner-noise model; robot poses " + robot +
                   (f.intrinsics ? "; intrinsics refined" : "");
@@ -682,7 +773,16 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   fit.robot = robot;
   for (const ImageReprojection& image : f.images) {
     fit.corners += image.points;
-    fit.images.push_back({image.name, image.points, image.rms_px});
+    fit.images.push_back({image.name, image.points, image.rms_px, image.sigma_px});
+  }
+  fit.per_image_sigma = f.per_image_sigma;
+  if (f.homogeneity) {
+    const HomogeneityTest& h = *f.homogeneity;
+    fit.pixel_noise = std::string(h.passed ? "one pixel sigma for every image" : "each image its own pixel sigma") +
+                      " (Bartlett's test of one sigma: chi2 " + number_text(h.chi2, 3) + " on " + std::to_string(h.dof) +
+                      " dof, bound " + number_text(h.bound, 3) + ")";
+  } else if (f.per_image_sigma) {
+    fit.pixel_noise = "each image its own pixel sigma (robust on)";
   }
   if (f.intrinsics) {
     for (int k = 0; k < 6; ++k) {
@@ -695,8 +795,10 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
 }
 
 CornerRefiner corner_refiner(CornerOptions options) {
-  return [options](const SampleSet& samples, const Calibration& pose_level) {
-    return refine_with_corners(samples, pose_level, options).calibration;
+  return [options](const SampleSet& samples, const Calibration& pose_level, JointOptions::Robust robust) {
+    CornerOptions with = options;
+    with.robust = robust;
+    return refine_with_corners(samples, pose_level, with).calibration;
   };
 }
 

@@ -668,6 +668,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "rms_px" << YAML::Value << fit.rms_px;
     out << YAML::Key << "corners" << YAML::Value << fit.corners;
     out << YAML::Key << "robot_poses" << YAML::Value << fit.robot;
+    if (!fit.pixel_noise.empty()) out << YAML::Key << "pixel_noise" << YAML::Value << fit.pixel_noise;
+    out << YAML::Key << "per_image_sigma" << YAML::Value << fit.per_image_sigma;
     if (!fit.intrinsics.empty()) {  // refined: fx, fy, cx, cy (px), k1, k2, each with its 1 sigma
       const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2"};
       out << YAML::Key << "intrinsics" << YAML::Value << YAML::BeginMap;
@@ -680,7 +682,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "images" << YAML::Value << YAML::BeginSeq;
     for (const Calibration::CornerFit::Image& image : fit.images) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << image.name << YAML::Key << "corners"
-          << YAML::Value << image.corners << YAML::Key << "rms_px" << YAML::Value << image.rms_px << YAML::EndMap;
+          << YAML::Value << image.corners << YAML::Key << "rms_px" << YAML::Value << image.rms_px << YAML::Key
+          << "sigma_px" << YAML::Value << image.sigma_px << YAML::EndMap;
     }
     out << YAML::EndSeq << YAML::EndMap;
   }

@@ -186,7 +186,7 @@ Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const
   }
   // The joint estimate first: it rejects the outliers and starts the corners.
   const Calibration pose_level = solve_samples(snapshot.samples, settings_.reject_outliers, Method::Joint, joint);
-  return settings_.refine_corners(snapshot.samples, pose_level);
+  return settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
 }
 
 SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {

@@ -25,6 +25,16 @@
 // pose's share, 6 - tr(Sigma_post Sigma_E^-1)); with the robot poses free this
 // alternates with the solve, as the prior's weight depends on sigma.
 //
+// Images with different noise (a blurred one, a grazing view, heavy tails image by
+// image). Each image i's residual variance s_i^2 = RSS_i / nu_i, nu_i its rows minus
+// its share of p_eff (the shared parameters' by its rows, its robot pose's own), is
+// tested for one common sigma (Bartlett: chi2 on images - 1 dof). When the test
+// fails (robust auto; or robust on), each image is weighed by its own sigma_i^2 =
+// s_i^2, alternating with the solve (the images with under min_image_dof share one),
+// so a noisy image counts less and the covariance is the information of that
+// weighting. The corner-level counterpart of the joint estimator's robust mode: an
+// image's corners tell its own noise, which one pose residual cannot.
+//
 // Robot noise. Given, or estimated (an isotropic translation and rotation variance,
 // which the corners tell from the pixel noise: a robot error moves all of an image's
 // corners together) as variance components, alternating with the solve until every
@@ -48,6 +58,7 @@
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/core/rig.h"
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
@@ -83,12 +94,30 @@ struct CornerOptions {
   double focal_prior = 0.05, centre_prior = 0.05, distortion_prior = 0.2;
   int max_iterations = 100;
   int max_noise_rounds = 30;  // noise estimated with a prior's weight at stake: solve / estimate alternations
+  /// With the pixel sigma estimated: Auto tests whether the images share one pixel
+  /// noise (Bartlett's test of their residual variances at 99.9%) and, when they do
+  /// not, gives each image its own sigma (On: always; Off: never).
+  JointOptions::Robust robust = JointOptions::Robust::Auto;
+  double homogeneity_level = 0.999;
+  /// An image whose corners leave fewer degrees of freedom than this shares the
+  /// sigma of the other such images rather than getting its own.
+  double min_image_dof = 8.0;
 };
 
 struct ImageReprojection {
   std::string name;
   int points = 0;
   double rms_px = 0.0;
+  double sigma_px = 0.0;  // the pixel sigma its corners were weighed with
+  double dof = 0.0;       // its corners' share of the degrees of freedom
+};
+
+/// Bartlett's test that every image has the same pixel noise: chi2 on `dof`
+/// (images - 1) degrees of freedom against its `bound` at homogeneity_level.
+struct HomogeneityTest {
+  double chi2 = 0.0, bound = 0.0;
+  int dof = 0;
+  bool passed = true;
 };
 
 struct CornerCalibration {
@@ -102,6 +131,11 @@ struct CornerCalibration {
   double rms_px = 0.0;         // over every corner
   double chi2 = 0.0;           // the corners' sum r^T C^-1 r / sigma^2 (= dof when sigma is estimated)
   std::vector<ImageReprojection> images;
+  /// With the pixel sigma estimated: the test of one sigma for all images (at the
+  /// one-sigma fit), and whether each image got its own (then pixel_sigma is their
+  /// pooled value, for reports).
+  std::optional<HomogeneityTest> homogeneity;
+  bool per_image_sigma = false;
   /// With refine_intrinsics: fx, fy, cx, cy, k1, k2 and their covariance.
   std::optional<IntrinsicsVector> intrinsics;
   Matrix6d intrinsics_covariance = Matrix6d::Zero();
@@ -153,7 +187,7 @@ struct CornerMethodResult {
 CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibration& pose_level, CornerOptions options = {});
 
 /// The session's hook for method corners (SessionSettings::refine_corners):
-/// refine_with_corners with `options`.
+/// refine_with_corners with `options`, its robust mode the session's.
 CornerRefiner corner_refiner(CornerOptions options = {});
 
 }  // namespace handeye

@@ -168,8 +168,13 @@ struct Calibration {
       std::string name;
       int corners = 0;
       double rms_px = 0.0;
+      double sigma_px = 0.0;  // the pixel sigma it was weighed with
     };
     std::vector<Image> images;
+    /// The test of one pixel sigma for every image and what followed ("one pixel
+    /// sigma: Bartlett chi2 12.3 on 11 dof, 99.9% bound 31.3", or each image its own).
+    std::string pixel_noise;
+    bool per_image_sigma = false;
     std::string robot;  // how the robot poses entered: "exact" or their prior
     /// Refined intrinsics fx, fy, cx, cy (px), k1, k2 and their 1 sigma; empty when kept.
     std::vector<double> intrinsics, intrinsics_sigma;
@@ -207,10 +212,5 @@ Calibration solve(const MotionSet& motions, const SolverOptions& options = {});
 /// is propagated into every motion that uses it, so their correlation is in the
 /// covariance.
 Calibration solve(const SampleSet& samples, const SolverOptions& options = {});
-
-/// Method corners, after the pose-level estimate of the same samples: X and Y
-/// refined from the samples' corners (corners/corner_calibration.h: corner_refiner).
-/// A hook, so that a session runs it without linking Ceres or OpenCV itself.
-using CornerRefiner = std::function<Calibration(const SampleSet& samples, const Calibration& pose_level)>;
 
 }  // namespace handeye

@@ -113,4 +113,11 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options = 
 /// (options: the joint estimator's; the pairs estimator takes its defaults.)
 Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options = {});
 
+/// Method corners, after the pose-level estimate of the same samples: X and Y
+/// refined from the samples' corners (corners/corner_calibration.h: corner_refiner),
+/// with the session's robust setting. A hook, so that a session runs it without
+/// linking Ceres or OpenCV itself.
+using CornerRefiner =
+    std::function<Calibration(const SampleSet& samples, const Calibration& pose_level, JointOptions::Robust robust)>;
+
 }  // namespace handeye
