@@ -52,6 +52,7 @@ struct SessionResult {
   Vector6d poses_error, corners_error;
   Matrix6d poses_covariance, corners_covariance, bound;
   double focal = 0.0, focal_sigma = 0.0, true_focal = 0.0;
+  bool per_image = false;  // the fit weighed each image by its own sigma
 };
 
 SessionResult run_session(const std::string& kind, int index, int n, double focal_error) {
@@ -105,15 +106,25 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     out.corners_error = pose_error(corners.calibration.T_parent_camera, truth.X);
     out.poses_covariance = poses.pose_covariance;
     out.corners_covariance = corners.calibration.pose_covariance;
-    // The corner model's bound: its information at the truth, the detected corners'
-    // structure and noise model, sigma as the fit estimated it.
+    out.per_image = corners.fit.per_image_sigma;
+    // The corner model's bound: its information at the truth, with the detected
+    // corners' structure and noise model of the images the fit kept, each at the
+    // sigma the fit weighed it with.
+    std::map<std::string, double> sigma_of;
+    for (const ImageReprojection& image : corners.fit.images) sigma_of[image.name] = image.sigma_px;
     std::vector<CornerView> detected;
+    std::vector<double> row_weight;
     for (const PoseSample& sample : found.samples.samples) {
+      const auto kept = sigma_of.find(sample.corners->source);
+      if (kept == sigma_of.end()) continue;
       detected.push_back({sample.T_base_effector, sample.corners->points, sample.corners->source});
+      row_weight.insert(row_weight.end(), 2 * sample.corners->points.image.size(), 1.0 / kept->second);
     }
     const CornerResiduals at_truth = corner_residuals(rig, camera, detected, truth.X, truth.T_world_pattern);
-    const double sigma = corners.fit.pixel_sigma;
-    const Eigen::Matrix<double, 12, 12> information = at_truth.jacobian.transpose() * at_truth.jacobian / (sigma * sigma);
+    const Eigen::MatrixXd weighted =
+        Eigen::Map<const Eigen::VectorXd>(row_weight.data(), static_cast<Eigen::Index>(row_weight.size())).asDiagonal() *
+        at_truth.jacobian;
+    const Eigen::Matrix<double, 12, 12> information = weighted.transpose() * weighted;
     out.bound = information.inverse().topLeftCorner<6, 6>();
     if (corners.fit.intrinsics) {
       out.focal = (*corners.fit.intrinsics)[0];
@@ -130,7 +141,7 @@ struct Summary {
   int sessions = 0, failed = 0;
   double images = 0.0;
   Eigen::Vector2d poses_ms = Eigen::Vector2d::Zero(), corners_ms = Eigen::Vector2d::Zero(), bound_ms = Eigen::Vector2d::Zero();
-  double nees_poses = 0.0, nees_corners = 0.0, focal_within_2_sigma = 0.0;
+  double nees_poses = 0.0, nees_corners = 0.0, focal_within_2_sigma = 0.0, per_image = 0.0;
   Vector6d bias_poses = Vector6d::Zero(), bias_corners = Vector6d::Zero();
   std::string first_failure;
 };
@@ -165,6 +176,7 @@ Summary study(const std::string& kind, int M, int n, double focal_error, int thr
     s.nees_corners += r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
     s.bias_poses += r.poses_error.cwiseQuotient(r.poses_covariance.diagonal().cwiseSqrt());
     s.bias_corners += r.corners_error.cwiseQuotient(r.corners_covariance.diagonal().cwiseSqrt());
+    s.per_image += r.per_image ? 1.0 : 0.0;
     if (r.focal_sigma > 0.0) s.focal_within_2_sigma += std::abs(r.focal - r.true_focal) < 2.0 * r.focal_sigma;
   }
   const double m = std::max(1, s.sessions);
@@ -177,6 +189,7 @@ Summary study(const std::string& kind, int M, int n, double focal_error, int thr
   s.bias_poses /= m;
   s.bias_corners /= m;
   s.focal_within_2_sigma /= m;
+  s.per_image /= m;
   return s;
 }
 
@@ -204,8 +217,8 @@ int main(int argc, char** argv) {
   const double deg = 180.0 / M_PI;
   if (focal_error == 0.0) {
     std::printf("| target | sessions (images used) | X RMS poses [mm / deg] | X RMS corners [mm / deg] | corners / poses | "
-                "corner-model bound [mm / deg] | corners / bound | NEES X poses | NEES X corners |\n");
-    std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+                "corner-model bound [mm / deg] | corners / bound | NEES X poses | NEES X corners | per-image sigma |\n");
+    std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   } else {
     std::printf("| target | sessions | focal within 2 sigma | X bias / sigma, corners (worst axis) | X bias / sigma, poses "
                 "(worst axis) | NEES X corners | NEES X poses |\n");
@@ -217,10 +230,11 @@ int main(int argc, char** argv) {
     const Summary s = study(kind, M, n, focal_error, threads);
     const Eigen::Vector2d poses = s.poses_ms.cwiseSqrt(), corners = s.corners_ms.cwiseSqrt(), bound = s.bound_ms.cwiseSqrt();
     if (focal_error == 0.0) {
-      std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2f | %.2f |\n",
+      std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2f | %.2f | "
+                  "%.0f%% |\n",
                   kind.c_str(), s.sessions, s.images, poses[0] * 1e3, poses[1] * deg, corners[0] * 1e3, corners[1] * deg,
                   corners[0] / poses[0], corners[1] / poses[1], bound[0] * 1e3, bound[1] * deg, corners[0] / bound[0],
-                  corners[1] / bound[1], s.nees_poses, s.nees_corners);
+                  corners[1] / bound[1], s.nees_poses, s.nees_corners, 100.0 * s.per_image);
     } else {
       std::printf("| %s | %d | %.0f%% | %.2f | %.2f | %.2f | %.2f |\n", kind.c_str(), s.sessions,
                   100.0 * s.focal_within_2_sigma, s.bias_corners.cwiseAbs().maxCoeff(), s.bias_poses.cwiseAbs().maxCoeff(),
