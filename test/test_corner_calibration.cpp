@@ -346,7 +346,7 @@ TEST(CornerCalibration, RefusesWhatItCannotUse) {
   EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, bad, s.X, s.Y); }), "InvalidNoise");
   bad = views;
   bad[1].points.image.pop_back();
-  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, bad, s.X, s.Y); }), "NoData");
+  EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, bad, s.X, s.Y); }), "WrongLength");
   CornerOptions robot;
   robot.robot_covariance = Matrix6d::Zero();
   EXPECT_EQ(code_of([&] { calibrate_corners(s.rig, camera, views, s.X, s.Y, robot); }), "InvalidNoise");

@@ -1,6 +1,8 @@
 // Round trips across the only ROS <-> Eigen seam.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/session/session_config.h"
@@ -127,21 +129,36 @@ TEST(MsgConversion, ADetectionsCornersRoundTrip) {
   std::optional<Detection> chosen = select_detection(tags, {}, refusal);
   ASSERT_TRUE(chosen && chosen->corners);
   EXPECT_EQ(chosen->corners->source, "image at 10.5 s");
+  // Unusable corners are dropped with the reason; the pose is kept (method joint needs only it).
+  const auto problem_of = [&](const std::function<void(TagDetection&)>& edit) {
+    tags.detections[0] = detection;
+    edit(tags.detections[0]);
+    const std::optional<Detection> d = select_detection(tags, {}, refusal);
+    EXPECT_FALSE(refusal);
+    if (!d) return std::string("no detection");
+    EXPECT_FALSE(d->corners);
+    return d->corners_problem;
+  };
+  EXPECT_NE(problem_of([](TagDetection& d) { d.image_points.pop_back(); }).find("image_points"), std::string::npos);
+  EXPECT_NE(problem_of([](TagDetection& d) { d.camera_info.K[0] = 0.0; }).find("pinhole"), std::string::npos);
+  EXPECT_NE(problem_of([](TagDetection& d) { d.corner_covariance.resize(10); }).find("corner_covariance"), std::string::npos);
+  EXPECT_NE(problem_of([](TagDetection& d) { d.corner_covariance[0] = -1.0; }).find("positive definite"), std::string::npos);
+  EXPECT_NE(problem_of([](TagDetection& d) { d.corner_block = 32; }).find("corner_block"), std::string::npos);
+  EXPECT_NE(problem_of([](TagDetection& d) { d.object_points.resize(1001); }).find("at most 1000"), std::string::npos);
+  // make_observation carries the reason on.
+  tf2::BufferCore tf;
+  geometry_msgs::TransformStamped robot;
+  robot.header.frame_id = "base_link";
+  robot.child_frame_id = "tool0";
+  robot.transform.rotation.w = 1.0;
+  robot.header.stamp = ros::Time(10.5);
+  tf.setTransform(robot, "test");
+  tags.detections[0] = detection;
   tags.detections[0].image_points.pop_back();
-  EXPECT_FALSE(select_detection(tags, {}, refusal));
-  ASSERT_TRUE(refusal);
-  EXPECT_EQ(refusal->kind, "bad_corners");
-  EXPECT_NE(refusal->message.find("image_points"), std::string::npos) << refusal->message;
-  tags.detections[0] = detection;
-  tags.detections[0].camera_info.K[0] = 0.0;  // fx 0: not a pinhole camera
-  EXPECT_FALSE(select_detection(tags, {}, refusal));
-  ASSERT_TRUE(refusal);
-  EXPECT_EQ(refusal->kind, "bad_corners");
-  tags.detections[0] = detection;
-  tags.detections[0].corner_covariance.resize(10);
-  EXPECT_FALSE(select_detection(tags, {}, refusal));
-  ASSERT_TRUE(refusal);
-  EXPECT_NE(refusal->message.find("corner_covariance"), std::string::npos) << refusal->message;
+  const ObservationResult r = make_observation(tf, SessionConfig{}.rig, *select_detection(tags, {}, refusal));
+  ASSERT_TRUE(r.observation);
+  EXPECT_FALSE(r.observation->corners);
+  EXPECT_NE(r.corners_dropped.find("image_points"), std::string::npos) << r.corners_dropped;
 }
 
 TEST(Observations, EveryBadDetectionIsRefusedWithItsKindAndReason) {

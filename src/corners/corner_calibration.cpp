@@ -97,7 +97,7 @@ struct ImageCorners {
   PoseBlock robot;                           // E_i as measured
 };
 
-constexpr int kMaxBlock = 16;
+constexpr int kMaxBlock = kMaxCornerBlock;
 
 // The reprojection cost of one image. Parameter blocks: X (7), Y (7), then the
 // robot pose's perturbation xi_E (6) when kRobot, then the intrinsics (6) when
@@ -224,22 +224,9 @@ ceres::CostFunction* image_cost(bool robot, bool intrinsics, const ImageCorners*
 ImageCorners image_corners(const CornerView& view, std::size_t index) {
   const PointCorrespondences& points = view.points;
   const std::string where = "corner view " + std::to_string(index) + (view.name.empty() ? "" : " (" + view.name + ")");
-  if (points.image.empty() || points.object.size() != points.image.size()) {
-    throw HandEyeError(ErrorCode::NoData,
-                       "has " + std::to_string(points.image.size()) + " image points and " +
-                           std::to_string(points.object.size()) + " target points",
-                       where, "give every image's detected corners with their target points");
-  }
+  check_corners(points, where);
   const int m = static_cast<int>(2 * points.image.size());
   const int block = points.corner_covariance.size() == 0 ? 2 : points.blocks;
-  if (block < 2 || block % 2 != 0 || block > kMaxBlock || m % block != 0 ||
-      (points.corner_covariance.size() != 0 && (points.corner_covariance.rows() != m || points.corner_covariance.cols() != m))) {
-    throw HandEyeError(ErrorCode::WrongLength,
-                       "its corner covariance is " + std::to_string(points.corner_covariance.rows()) + " x " +
-                           std::to_string(points.corner_covariance.cols()) + " in blocks of " +
-                           std::to_string(points.blocks) + " for " + std::to_string(m) + " coordinates",
-                       where, "give a (2n x 2n) block-diagonal corner covariance in even blocks of at most 16, or none");
-  }
   ImageCorners out;
   out.object = points.object;
   out.image = points.image;
@@ -248,13 +235,7 @@ ImageCorners image_corners(const CornerView& view, std::size_t index) {
     Eigen::MatrixXd C = points.corner_covariance.size() == 0
                             ? Eigen::MatrixXd::Identity(block, block)
                             : Eigen::MatrixXd(points.corner_covariance.block(start, start, block, block));
-    Eigen::LLT<Eigen::MatrixXd> llt(C);
-    if (!C.allFinite() || llt.info() != Eigen::Success) {
-      throw HandEyeError(ErrorCode::InvalidNoise,
-                         "the corner covariance of coordinates " + std::to_string(start) + ".." +
-                             std::to_string(start + block - 1) + " is not positive definite",
-                         where, "check the detector's corner-noise model");
-    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(C);  // positive definite: check_corners
     out.block_start.push_back(start);
     out.block_size.push_back(block);
     out.whitening.push_back(llt.matrixL().solve(Eigen::MatrixXd::Identity(block, block)));
@@ -302,20 +283,29 @@ CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k
 
 namespace {
 
-// Bartlett's test of equal variances over the images with at least 1 dof:
-// (N ln s_p^2 - sum nu_i ln s_i^2) / C ~ chi2(k - 1), N = sum nu_i,
-// C = 1 + (sum 1 / nu_i - 1 / N) / (3 (k - 1)).
+// Bartlett's test of equal variances over the groups the per-image weighting
+// would use (each image with at least min_dof, and the others pooled as one):
+// (N ln s_p^2 - sum nu_g ln s_g^2) / C ~ chi2(k - 1), N = sum nu_g,
+// C = 1 + (sum 1 / nu_g - 1 / N) / (3 (k - 1)). It is sensitive to heavy tails
+// within an image too, which the per-image weighting then absorbs as noise.
 HomogeneityTest homogeneity_test(const std::vector<double>& rss, const std::vector<ImageReprojection>& images,
-                                 double level) {
+                                 double level, double min_dof) {
+  std::vector<std::pair<double, double>> groups;  // (rss, nu)
+  std::pair<double, double> few{0.0, 0.0};
+  for (std::size_t i = 0; i < rss.size(); ++i) {
+    const double nu = std::max(0.0, images[i].dof);
+    if (nu >= min_dof) groups.emplace_back(rss[i], nu);
+    else few = {few.first + rss[i], few.second + nu};
+  }
+  if (few.second >= 1.0) groups.push_back(few);
   double N = 0.0, pooled = 0.0, weighted_log = 0.0, inverse = 0.0;
   int k = 0;
-  for (std::size_t i = 0; i < rss.size(); ++i) {
-    const double nu = images[i].dof;
-    if (nu < 1.0 || !(rss[i] > 0.0)) continue;
+  for (const auto& [group_rss, nu] : groups) {
+    if (!(group_rss > 0.0)) continue;
     ++k;
     N += nu;
-    pooled += rss[i];
-    weighted_log += nu * std::log(rss[i] / nu);
+    pooled += group_rss;
+    weighted_log += nu * std::log(group_rss / nu);
     inverse += 1.0 / nu;
   }
   HomogeneityTest test;
@@ -471,9 +461,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   const bool may_test = result.pixel_sigma_estimated && options.robust == JointOptions::Robust::Auto;
   bool sigma_rounds = (result.pixel_sigma_estimated && (robot_free || intrinsics_free)) || options.estimate_robot_noise ||
                       per_image;
-  const int rounds = sigma_rounds || may_test ? std::max(1, options.max_noise_rounds) : 1;
-  result.per_image_sigma = per_image;
-  std::vector<double> image_sigma(views.size(), sigma);
+  int rounds = sigma_rounds || may_test ? std::max(1, options.max_noise_rounds) : 1;
   Eigen::MatrixXd xy_covariance;  // unit: the whitening's sigma
   double corner_rss = 0.0;        // px^2 per unit sigma^2, at the solution
   double weighted_chi2 = 0.0;     // sum r^T C^-1 r / sigma_i^2, each image at its sigma
@@ -631,18 +619,25 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
       }
       // The one-sigma fit is final: do the images share that sigma?
       if (may_test) {
-        result.homogeneity = homogeneity_test(image_rss, result.images, options.homogeneity_level);
+        result.homogeneity = homogeneity_test(image_rss, result.images, options.homogeneity_level, options.min_image_dof);
         per_image = !result.homogeneity->passed;
       }
       if (!per_image) {
-        // Without a prior at stake the solution does not depend on sigma: the covariance scales with it.
-        if (!sigma_rounds) xy_covariance *= (estimate * estimate) / (sigma * sigma);
-        sigma = estimate;
+        // Without a prior at stake the solution does not depend on sigma: the
+        // covariance scales with it. With one, it is the last solve's, at its sigma
+        // (settled: within 0.1% of the estimate; else the rounds ran out).
+        if (!sigma_rounds) {
+          xy_covariance *= (estimate * estimate) / (sigma * sigma);
+          sigma = estimate;
+        }
+        for (ImageReprojection& image : result.images) image.sigma_px = sigma;
         weighted_chi2 = corner_rss / (sigma * sigma);
         break;
       }
-      sigma_rounds = true;  // the images' own sigmas move the solution: alternate from here
+      // The images' own sigmas move the solution: alternate from here, with rounds of their own.
+      sigma_rounds = true;
       settled = false;
+      rounds = std::max(rounds, round + 1 + std::max(1, options.max_noise_rounds));
     }
     // Each image its own sigma; those with few dof share theirs.
     result.per_image_sigma = true;

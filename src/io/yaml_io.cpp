@@ -343,6 +343,10 @@ TargetCorners read_corners(const YAML::Node& node, const Location& at) {
   const std::vector<double> object = as_number_list(require(node, "object", at, hint), at / "object", "x, y, z per point");
   const std::vector<double> image = as_number_list(require(node, "image", at, hint), at / "image", "u, v per point");
   const std::size_t n = image.size() / 2;
+  if (n > kMaxTargetPoints) {  // before its 2n x 2n covariance is allocated
+    throw HandEyeError(ErrorCode::WrongLength, std::to_string(n) + " points", (at / "image").str(),
+                       "a target has at most " + std::to_string(kMaxTargetPoints) + " points");
+  }
   if (object.size() % 3 != 0 || image.size() % 2 != 0 || object.size() / 3 != n) {
     throw HandEyeError(ErrorCode::WrongLength,
                        std::to_string(object.size()) + " object numbers for " + std::to_string(image.size()) +
@@ -358,7 +362,9 @@ TargetCorners read_corners(const YAML::Node& node, const Location& at) {
       c.points.ids.push_back(static_cast<int>(std::clamp(id, -1e9, 1e9)));
     }
   }
-  if (node["block"]) c.points.blocks = as_integer(node["block"], at / "block", 2, 64, "block (coordinates per block)");
+  if (node["block"]) {
+    c.points.blocks = as_integer(node["block"], at / "block", 2, kMaxCornerBlock, "block (coordinates per block)");
+  }
   const int b = c.points.blocks;
   if (b % 2 != 0 || (2 * n) % static_cast<std::size_t>(b) != 0) {
     throw HandEyeError(ErrorCode::WrongLength, "block " + std::to_string(b) + " does not divide the " + std::to_string(2 * n) +
@@ -382,6 +388,8 @@ TargetCorners read_corners(const YAML::Node& node, const Location& at) {
         for (int q = 0; q < b; ++q)
           c.points.corner_covariance(static_cast<Eigen::Index>(start) + r, static_cast<Eigen::Index>(start) + q) = blocks[k++];
   }
+  check_camera_model(c.camera, (at / "camera").str());
+  check_corners(c.points, at.str());
   return c;
 }
 

@@ -422,6 +422,13 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, Calib
             detection = detection_of(*with_covariance);
           } else if (const auto plain = m.instantiate<geometry_msgs::PoseStamped>()) {
             detection = detection_of(*plain);
+          } else if (m.getDataType() == ros::message_traits::DataType<TagDetectionArray>::value()) {
+            throw no_data("`" + config.detections_topic + "` carries another version of " + m.getDataType() + " (md5 " +
+                              m.getMD5Sum() + ", this build reads " +
+                              ros::message_traits::MD5Sum<TagDetectionArray>::value() +
+                              "): TagDetection gained the detection's corners",
+                          path, "replay it with the package version that recorded it, or record the camera images and "
+                                "give --target so that this version detects them");
           } else {
             throw no_data("`" + config.detections_topic + "` carries " + m.getDataType() +
                               ", not a TagDetectionArray, PoseWithCovarianceStamped or PoseStamped",

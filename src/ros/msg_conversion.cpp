@@ -121,6 +121,10 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
   if (detection.object_points.empty() && detection.image_points.empty()) return nullptr;
   const std::string where = "a detection's corners";
   const std::size_t n = detection.object_points.size();
+  if (n > kMaxTargetPoints) {  // before its 2n x 2n covariance is allocated
+    throw HandEyeError(ErrorCode::WrongLength, std::to_string(n) + " object_points", where,
+                       "a target has at most " + std::to_string(kMaxTargetPoints) + " points");
+  }
   if (detection.image_points.size() != 2 * n) {
     throw HandEyeError(ErrorCode::WrongLength,
                        std::to_string(detection.image_points.size()) + " image_points for " + std::to_string(n) +
@@ -128,7 +132,7 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
                        where, "send u, v per object point, in the same order");
   }
   const int block = detection.corner_block == 0 ? 2 : detection.corner_block;
-  if (block < 2 || block % 2 != 0 || (2 * n) % static_cast<std::size_t>(block) != 0) {
+  if (block < 2 || block % 2 != 0 || block > kMaxCornerBlock || (2 * n) % static_cast<std::size_t>(block) != 0) {
     throw HandEyeError(ErrorCode::WrongLength, "corner_block " + std::to_string(block) + " does not divide " +
                                                    std::to_string(2 * n) + " coordinates into whole points",
                        where, "2 for independent corners, 8 for an AprilTag's four");
@@ -149,9 +153,6 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
     const geometry_msgs::Point& o = detection.object_points[i];
     p.object.emplace_back(o.x, o.y, o.z);
     p.image.emplace_back(detection.image_points[2 * i], detection.image_points[2 * i + 1]);
-    if (!p.object.back().allFinite() || !p.image.back().allFinite()) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in point " + std::to_string(i), where, "fix the detector");
-    }
   }
   if (!detection.corner_covariance.empty()) {
     const auto m = static_cast<Eigen::Index>(2 * n);
@@ -160,10 +161,8 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
     for (Eigen::Index start = 0; start < m; start += block)
       for (Eigen::Index r = 0; r < block; ++r)
         for (Eigen::Index c = 0; c < block; ++c) p.corner_covariance(start + r, start + c) = detection.corner_covariance[k++];
-    if (!p.corner_covariance.allFinite()) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in corner_covariance", where, "fix the detector");
-    }
   }
+  check_corners(p, where);
   return corners;
 }
 

@@ -29,8 +29,8 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
           detection.corners = std::move(corners);
         }
       } catch (const HandEyeError& e) {
-        refusal = Refusal{"bad_corners", std::string("a detection's corners are unusable: ") + e.what()};
-        return std::nullopt;
+        detection.corners_problem = std::string("a detection's corners are unusable, the pose is used without them: ") +
+                                    e.what();
       }
       return detection;
     }
@@ -116,7 +116,9 @@ ObservationResult make_observation(const tf2::BufferCore& tf, const Rig& rig, co
   }
   o.T_camera_pattern = pattern.pose;
   if (detection.covariance) o.pattern_noise = PoseNoise::from_pose_covariance(pattern.covariance);
-  if (detection.corners && !detection.frame.empty() && detection.frame != rig.frames.camera) {
+  if (!detection.corners_problem.empty()) {
+    result.corners_dropped = detection.corners_problem;
+  } else if (detection.corners && !detection.frame.empty() && detection.frame != rig.frames.camera) {
     result.corners_dropped = "the detection's corners are in frame `" + detection.frame + "`'s image, not `" +
                              rig.frames.camera + "`'s; set tracking_base_frame to `" + detection.frame +
                              "` for method corners";

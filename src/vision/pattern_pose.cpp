@@ -340,19 +340,28 @@ PointCorrespondences raw_pixels(const PointCorrespondences& rectified, const Cam
                     distortion(camera), raw, jacobian);
   PointCorrespondences out = rectified;
   const std::size_t n = rectified.image.size();
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 2 * n);  // d raw / d rectified, 2x2 blocks
+  std::vector<Eigen::Matrix2d> J(n);  // d raw / d rectified, per corner
   const Eigen::Matrix2d K2_inverse = K_inverse.topLeftCorner<2, 2>();
   for (std::size_t i = 0; i < n; ++i) {
     out.image[i] = Eigen::Vector2d(raw[i].x, raw[i].y);
     Eigen::Matrix2d d_raw_d_normalised;
     for (int r = 0; r < 2; ++r)
       for (int c = 0; c < 2; ++c) d_raw_d_normalised(r, c) = jacobian.at<double>(static_cast<int>(2 * i) + r, 3 + c);
-    J.block<2, 2>(2 * i, 2 * i) = d_raw_d_normalised * K2_inverse;
+    J[i] = d_raw_d_normalised * K2_inverse;
   }
-  const Eigen::MatrixXd C =
-      rectified.corner_covariance.size() == 0 ? Eigen::MatrixXd::Identity(2 * n, 2 * n) : rectified.corner_covariance;
-  out.corner_covariance = J * C * J.transpose();
-  out.blocks = rectified.corner_covariance.size() == 0 ? 2 : rectified.blocks;
+  // The covariance is block-diagonal and so is J: J C J^T block by block (a dense
+  // product would cost O(n^3) per image, 1 GFLOP for a board of 400 corners).
+  const bool identity = rectified.corner_covariance.size() == 0;
+  const Eigen::Index s = identity ? 2 : rectified.blocks, m = static_cast<Eigen::Index>(2 * n);
+  out.blocks = static_cast<int>(s);
+  out.corner_covariance = Eigen::MatrixXd::Zero(m, m);
+  for (Eigen::Index start = 0; start < m; start += s) {
+    Eigen::MatrixXd Jb = Eigen::MatrixXd::Zero(s, s);
+    for (Eigen::Index k = 0; k < s / 2; ++k) Jb.block<2, 2>(2 * k, 2 * k) = J[static_cast<std::size_t>(start / 2 + k)];
+    const Eigen::MatrixXd Cb =
+        identity ? Eigen::MatrixXd(Eigen::MatrixXd::Identity(s, s)) : Eigen::MatrixXd(rectified.corner_covariance.block(start, start, s, s));
+    out.corner_covariance.block(start, start, s, s) = Jb * Cb * Jb.transpose();
+  }
   return out;
 }
 

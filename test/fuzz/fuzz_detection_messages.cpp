@@ -111,6 +111,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (in.ConsumeBool()) {
         for (double& c : t.pose.pose.covariance) c = any_double(in);
       }
+      if (in.ConsumeBool()) {  // the corners behind the pose (method corners), of any shape
+        const int points = in.ConsumeIntegralInRange<int>(0, 12);
+        for (int k = 0; k < points; ++k) {
+          geometry_msgs::Point o;
+          o.x = any_double(in), o.y = any_double(in), o.z = any_double(in);
+          t.object_points.push_back(o);
+        }
+        for (int k = in.ConsumeIntegralInRange<int>(0, 2 * points + 1); k > 0; --k) t.image_points.push_back(any_double(in));
+        t.corner_block = in.ConsumeIntegralInRange<int>(-1, 20);
+        for (int k = in.ConsumeIntegralInRange<int>(0, 40); k > 0; --k) t.corner_covariance.push_back(any_double(in));
+        t.camera_info.width = in.ConsumeIntegralInRange<unsigned>(0, 2000);
+        t.camera_info.height = in.ConsumeIntegralInRange<unsigned>(0, 2000);
+        for (double& k : t.camera_info.K) k = any_double(in);
+        if (in.ConsumeBool()) t.camera_info.K = {600, 0, 320, 0, 600, 240, 0, 0, 1};
+        t.camera_info.distortion_model = in.ConsumeBool() ? "plumb_bob" : any_frame(in);
+        for (int k = in.ConsumeIntegralInRange<int>(0, 6); k > 0; --k) t.camera_info.D.push_back(any_double(in));
+      }
       msg.detections.push_back(t);
     }
     previous = msg;

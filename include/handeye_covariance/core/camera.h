@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,19 @@ struct PointCorrespondences {
   Eigen::MatrixXd corner_covariance;
   int blocks = 2;
 };
+
+/// What a target's corners may be: the corner estimator whitens blocks of at most
+/// kMaxCornerBlock coordinates, and a target of more than kMaxTargetPoints points
+/// (its dense 2n x 2n covariance) is refused before it is allocated.
+constexpr int kMaxCornerBlock = 16;
+constexpr std::size_t kMaxTargetPoints = 1000;
+
+/// Throws HandEyeError naming what is wrong with `points` at `where`: no points
+/// or more than kMaxTargetPoints (NoData), object and image of different lengths
+/// or a covariance that is not 2n x 2n in even blocks of at most kMaxCornerBlock
+/// (WrongLength), NaN or Inf (NonFinite), a block that is not positive definite
+/// (InvalidNoise).
+void check_corners(const PointCorrespondences& points, const std::string& where);
 
 /// The corners behind one detected pattern pose, in the raw pixels (distortion
 /// included) of the camera that saw them.

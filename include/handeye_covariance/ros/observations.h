@@ -25,6 +25,7 @@ struct Detection {
   geometry_msgs::Pose pose;
   std::optional<Matrix6d> covariance;  // the full 6x6, ROS order, when the detector sent a non-zero one
   std::shared_ptr<const TargetCorners> corners;  // the corners behind the pose, when the detector sent them
+  std::string corners_problem;  // why the corners it sent were dropped (conversions::to_corners); the pose is kept
 };
 
 /// Why a detection gave no observation: `kind` is short and stable (for counts),
@@ -36,7 +37,8 @@ struct Refusal {
 
 /// The detection of the configured pattern (`tag_ids`, or the lone detection
 /// when tag_ids is empty), or a refusal; nothing at all for an empty message.
-/// Corners that do not fit together (conversions::to_corners) are a refusal too.
+/// Corners that do not fit together (conversions::to_corners) are dropped, the
+/// pose kept, and Detection::corners_problem says why.
 std::optional<Detection> select_detection(const TagDetectionArray& msg, const std::vector<int>& tag_ids,
                                           std::optional<Refusal>& refusal);
 Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg);
@@ -48,7 +50,8 @@ Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern)
 /// another frame of the same camera (camera_link for camera_optical_frame) is
 /// moved into the camera frame, its covariance with it (the adjoint of the
 /// frame change, through compose()); its corners are then dropped, as they
-/// belong to the detector's camera frame (`corners_dropped` says so).
+/// belong to the detector's camera frame (`corners_dropped` says so, as it says
+/// why unusable corners were).
 struct ObservationResult {
   std::optional<Observation> observation;
   std::optional<Refusal> refusal;
