@@ -649,10 +649,13 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
       }
     }
     const double pooled = std::sqrt(pooled_rss / std::max(pooled_dof, 1.0));
+    // A weight 1 / s^2 from nu dof is too large on average by nu / (nu - 2) (the mean
+    // of an inverse chi2): each variance is taken as RSS / (nu - 2), so the
+    // information of the weighting is not overstated.
     for (std::size_t i = 0; i < views.size(); ++i) {
       const double nu = result.images[i].dof;
-      double s_i = nu >= options.min_image_dof ? std::sqrt(image_rss[i] / nu)
-                                               : (few_dof >= 1.0 ? std::sqrt(few_rss / few_dof) : pooled);
+      double s_i = nu >= options.min_image_dof ? std::sqrt(image_rss[i] / (nu - 2.0))
+                                               : (few_dof > 3.0 ? std::sqrt(few_rss / (few_dof - 2.0)) : pooled);
       s_i = std::max(s_i, 0.1 * pooled);  // an image that fits perfectly is not infinitely certain
       settled = settled && std::abs(s_i * inverse_sigma[i] - 1.0) < 1e-3;
       inverse_sigma[i] = 1.0 / s_i;
