@@ -63,4 +63,25 @@ void check_corners(const PointCorrespondences& points, const std::string& where)
   }
 }
 
+std::vector<double> covariance_blocks(const PointCorrespondences& points) {
+  const Eigen::MatrixXd& C = points.corner_covariance;
+  const Eigen::Index b = points.blocks;
+  std::vector<double> values;
+  for (Eigen::Index start = 0; C.size() > 0 && start < C.rows(); start += b)
+    for (Eigen::Index r = 0; r < b; ++r)
+      for (Eigen::Index c = 0; c < b; ++c) values.push_back(C(start + r, start + c));
+  return values;
+}
+
+Eigen::MatrixXd from_covariance_blocks(const std::vector<double>& values, int block) {
+  const auto b = static_cast<Eigen::Index>(block);
+  const auto m = static_cast<Eigen::Index>(values.size()) / b;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(m, m);
+  std::size_t k = 0;
+  for (Eigen::Index start = 0; start < m; start += b)
+    for (Eigen::Index r = 0; r < b; ++r)
+      for (Eigen::Index c = 0; c < b; ++c) C(start + r, start + c) = values[k++];
+  return C;
+}
+
 }  // namespace handeye

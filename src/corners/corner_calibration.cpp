@@ -97,8 +97,6 @@ struct ImageCorners {
   PoseBlock robot;                           // E_i as measured
 };
 
-constexpr int kMaxBlock = kMaxCornerBlock;
-
 // The reprojection cost of one image. Parameter blocks: X (7), Y (7), then the
 // robot pose's perturbation xi_E (6) when kRobot, then the intrinsics (6) when
 // kIntrinsics. The camera sees the pattern at P = X^-1 V Y, V = E^-1 eye-in-hand
@@ -169,7 +167,7 @@ class ImageCost {
     const T k1 = intrinsics ? intrinsics[4] : T(c.distortion[0]), k2 = intrinsics ? intrinsics[5] : T(c.distortion[1]);
 
     const ImageCorners& image = *corners_;
-    T difference[kMaxBlock];
+    T difference[kMaxCornerBlock];
     for (std::size_t b = 0; b < image.block_start.size(); ++b) {
       const int start = image.block_start[b], size = image.block_size[b];
       for (int i = 0; i < size / 2; ++i) {
@@ -288,16 +286,24 @@ namespace {
 // (N ln s_p^2 - sum nu_g ln s_g^2) / C ~ chi2(k - 1), N = sum nu_g,
 // C = 1 + (sum 1 / nu_g - 1 / N) / (3 (k - 1)). It is sensitive to heavy tails
 // within an image too, which the per-image weighting then absorbs as noise.
+// The images with under min_dof degrees of freedom, which share one sigma: their
+// summed RSS and dof.
+std::pair<double, double> pooled_few(const std::vector<double>& rss, const std::vector<ImageReprojection>& images,
+                                     double min_dof) {
+  std::pair<double, double> few{0.0, 0.0};
+  for (std::size_t i = 0; i < rss.size(); ++i) {
+    if (images[i].dof < min_dof) few = {few.first + rss[i], few.second + std::max(0.0, images[i].dof)};
+  }
+  return few;
+}
+
 HomogeneityTest homogeneity_test(const std::vector<double>& rss, const std::vector<ImageReprojection>& images,
                                  double level, double min_dof) {
   std::vector<std::pair<double, double>> groups;  // (rss, nu)
-  std::pair<double, double> few{0.0, 0.0};
   for (std::size_t i = 0; i < rss.size(); ++i) {
-    const double nu = std::max(0.0, images[i].dof);
-    if (nu >= min_dof) groups.emplace_back(rss[i], nu);
-    else few = {few.first + rss[i], few.second + nu};
+    if (images[i].dof >= min_dof) groups.emplace_back(rss[i], images[i].dof);
   }
-  if (few.second >= 1.0) groups.push_back(few);
+  if (const auto few = pooled_few(rss, images, min_dof); few.second >= 1.0) groups.push_back(few);
   double N = 0.0, pooled = 0.0, weighted_log = 0.0, inverse = 0.0;
   int k = 0;
   for (const auto& [group_rss, nu] : groups) {
@@ -602,12 +608,6 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
                          "the corners leave " + number_text(dof) + " degrees of freedom for the pixel noise",
                          "corner calibration", "give the pixel sigma, or more corners");
     }
-    // Each image's variance s_i^2 = RSS_i / nu_i, and the pooled one.
-    double pooled_rss = 0.0, pooled_dof = 0.0;
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      pooled_rss += image_rss[i];
-      pooled_dof += result.images[i].dof;
-    }
     if (!per_image) {
       const double estimate = std::sqrt(corner_rss / dof);
       settled = settled && std::abs(estimate / sigma - 1.0) < 1e-3;
@@ -640,15 +640,10 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
       rounds = std::max(rounds, round + 1 + std::max(1, options.max_noise_rounds));
     }
     // Each image its own sigma; those with few dof share theirs.
-    result.per_image_sigma = true;
-    double few_rss = 0.0, few_dof = 0.0;
-    for (std::size_t i = 0; i < views.size(); ++i) {
-      if (result.images[i].dof < options.min_image_dof) {
-        few_rss += image_rss[i];
-        few_dof += std::max(0.0, result.images[i].dof);
-      }
-    }
-    const double pooled = std::sqrt(pooled_rss / std::max(pooled_dof, 1.0));
+    double pooled_dof = 0.0;
+    for (const ImageReprojection& image : result.images) pooled_dof += image.dof;
+    const double pooled = std::sqrt(corner_rss / std::max(pooled_dof, 1.0));
+    const auto [few_rss, few_dof] = pooled_few(image_rss, result.images, options.min_image_dof);
     // A weight 1 / s^2 from nu dof is too large on average by nu / (nu - 2) (the mean
     // of an inverse chi2): each variance is taken as RSS / (nu - 2), so the
     // information of the weighting is not overstated.

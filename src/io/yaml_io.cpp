@@ -304,14 +304,10 @@ void emit_corners(YAML::Emitter& out, const TargetCorners& c) {
   emit_numbers(out, c.camera.distortion.data(), c.camera.distortion.size());
   out << YAML::Key << "width" << YAML::Value << c.camera.width << YAML::Key << "height" << YAML::Value << c.camera.height;
   out << YAML::EndMap;
-  std::vector<double> object, image, covariance;
+  std::vector<double> object, image;
   for (const Vector3d& o : p.object) object.insert(object.end(), {o.x(), o.y(), o.z()});
   for (const Eigen::Vector2d& u : p.image) image.insert(image.end(), {u.x(), u.y()});
-  const Eigen::Index b = p.blocks;
-  for (Eigen::Index start = 0; p.corner_covariance.size() > 0 && start < p.corner_covariance.rows(); start += b) {
-    for (Eigen::Index r = 0; r < b; ++r)
-      for (Eigen::Index k = 0; k < b; ++k) covariance.push_back(p.corner_covariance(start + r, start + k));
-  }
+  const std::vector<double> covariance = covariance_blocks(p);
   out << YAML::Key << "object" << YAML::Value;
   emit_numbers(out, object.data(), object.size());
   out << YAML::Key << "image" << YAML::Value;
@@ -381,12 +377,7 @@ TargetCorners read_corners(const YAML::Node& node, const Location& at) {
                              std::to_string(b) + "), got " + std::to_string(blocks.size()),
                          (at / "covariance").str(), "give each block's numbers row-major, the blocks in order");
     }
-    c.points.corner_covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
-    std::size_t k = 0;
-    for (std::size_t start = 0; start < m; start += static_cast<std::size_t>(b))
-      for (int r = 0; r < b; ++r)
-        for (int q = 0; q < b; ++q)
-          c.points.corner_covariance(static_cast<Eigen::Index>(start) + r, static_cast<Eigen::Index>(start) + q) = blocks[k++];
+    c.points.corner_covariance = from_covariance_blocks(blocks, b);
   }
   check_camera_model(c.camera, (at / "camera").str());
   check_corners(c.points, at.str());

@@ -303,7 +303,7 @@ std::vector<Detection> detect_bag_images(rosbag::Bag& bag, const ImageTopics& to
       d.stamp = header.stamp;
       d.frame = header.frame_id;
       d.corners = std::make_shared<const TargetCorners>(
-          TargetCorners{camera, *frame.corners, "image at " + number_text(header.stamp.toSec(), 12) + " s"});
+          TargetCorners{camera, *frame.corners, image_at(header.stamp)});
       found.emplace_back(detector.size() - 1, d);
     } else {
       ++replay.refusals["no_target_pose"];

@@ -144,8 +144,7 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
                        where, "send the diagonal blocks (corner_block^2 numbers each, row-major), or none");
   }
   auto corners = std::make_shared<TargetCorners>();
-  corners->camera = to_camera_model(detection.camera_info);
-  check_camera_model(corners->camera, where);
+  corners->camera = to_camera_model(detection.camera_info);  // checked there
   PointCorrespondences& p = corners->points;
   p.blocks = block;
   p.ids.assign(detection.point_ids.begin(), detection.point_ids.end());
@@ -155,12 +154,7 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection) {
     p.image.emplace_back(detection.image_points[2 * i], detection.image_points[2 * i + 1]);
   }
   if (!detection.corner_covariance.empty()) {
-    const auto m = static_cast<Eigen::Index>(2 * n);
-    p.corner_covariance = Eigen::MatrixXd::Zero(m, m);
-    std::size_t k = 0;
-    for (Eigen::Index start = 0; start < m; start += block)
-      for (Eigen::Index r = 0; r < block; ++r)
-        for (Eigen::Index c = 0; c < block; ++c) p.corner_covariance(start + r, start + c) = detection.corner_covariance[k++];
+    p.corner_covariance = from_covariance_blocks(detection.corner_covariance, block);
   }
   check_corners(p, where);
   return corners;
@@ -170,7 +164,6 @@ void set_corners(const TargetCorners& corners, TagDetection& detection) {
   const PointCorrespondences& p = corners.points;
   detection.object_points.clear();
   detection.image_points.clear();
-  detection.corner_covariance.clear();
   for (std::size_t i = 0; i < p.object.size(); ++i) {
     geometry_msgs::Point o;
     o.x = p.object[i].x();
@@ -182,9 +175,7 @@ void set_corners(const TargetCorners& corners, TagDetection& detection) {
   }
   detection.point_ids.assign(p.ids.begin(), p.ids.end());
   detection.corner_block = p.blocks;
-  for (Eigen::Index start = 0; p.corner_covariance.size() > 0 && start < p.corner_covariance.rows(); start += p.blocks)
-    for (Eigen::Index r = 0; r < p.blocks; ++r)
-      for (Eigen::Index c = 0; c < p.blocks; ++c) detection.corner_covariance.push_back(p.corner_covariance(start + r, start + c));
+  detection.corner_covariance = covariance_blocks(p);
   detection.camera_info = to_camera_info(corners.camera);
 }
 

@@ -11,6 +11,8 @@
 
 namespace handeye {
 
+std::string image_at(const ros::Time& stamp) { return "image at " + number_text(stamp.toSec(), 12) + " s"; }
+
 std::optional<Detection> select_detection(const TagDetectionArray& msg, const std::vector<int>& tag_ids,
                                           std::optional<Refusal>& refusal) {
   refusal.reset();
@@ -25,7 +27,7 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
       detection.covariance = conversions::covariance_if_nonzero(d.pose.pose.covariance);
       try {
         if (std::shared_ptr<TargetCorners> corners = conversions::to_corners(d)) {
-          corners->source = "image at " + number_text(detection.stamp.toSec(), 12) + " s";
+          corners->source = image_at(detection.stamp);
           detection.corners = std::move(corners);
         }
       } catch (const HandEyeError& e) {

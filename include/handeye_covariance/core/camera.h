@@ -49,6 +49,13 @@ constexpr std::size_t kMaxTargetPoints = 1000;
 /// (InvalidNoise).
 void check_corners(const PointCorrespondences& points, const std::string& where);
 
+/// How files and messages carry a corner covariance: its diagonal blocks of
+/// `points.blocks` rows, each row-major, in order; empty when there is none.
+std::vector<double> covariance_blocks(const PointCorrespondences& points);
+/// The block-diagonal matrix of such blocks (`values.size()` a multiple of
+/// block^2, checked by the caller): values.size() / block rows.
+Eigen::MatrixXd from_covariance_blocks(const std::vector<double>& values, int block);
+
 /// The corners behind one detected pattern pose, in the raw pixels (distortion
 /// included) of the camera that saw them.
 struct TargetCorners {

@@ -30,7 +30,8 @@
 // its share of p_eff (the shared parameters' by its rows, its robot pose's own), is
 // tested for one common sigma (Bartlett: chi2 on images - 1 dof). When the test
 // fails (robust auto; or robust on), each image is weighed by its own sigma_i^2 =
-// s_i^2, alternating with the solve (the images with under min_image_dof share one),
+// RSS_i / (nu_i - 2) (a weight from nu_i dof is too large by nu_i / (nu_i - 2) on
+// average), alternating with the solve (the images with under min_image_dof share one),
 // so a noisy image counts less and the covariance is the information of that
 // weighting. The corner-level counterpart of the joint estimator's robust mode: an
 // image's corners tell its own noise, which one pose residual cannot.

@@ -28,6 +28,9 @@ struct Detection {
   std::string corners_problem;  // why the corners it sent were dropped (conversions::to_corners); the pose is kept
 };
 
+/// How a sample's corners name their image: "image at 12.345 s" (its stamp).
+std::string image_at(const ros::Time& stamp);
+
 /// Why a detection gave no observation: `kind` is short and stable (for counts),
 /// `message` is the full reason with the fix.
 struct Refusal {
