@@ -55,13 +55,16 @@ Scene scene(Rng& rng, Setup setup, int n) {
   return out;
 }
 
-// The corners of view i as `camera` sees them, with independent Gaussian noise.
-CornerView corners(const Scene& s, std::size_t i, const CameraModel& camera, Rng& rng, double sigma_px) {
+// The corners of view i as `camera` sees them, with independent Gaussian noise;
+// the target's points printed `printed[j]` off the nominal grid, when given.
+CornerView corners(const Scene& s, std::size_t i, const CameraModel& camera, Rng& rng, double sigma_px,
+                   const std::vector<Vector3d>& printed = {}) {
   std::normal_distribution<double> noise(0.0, sigma_px);
   CornerView v;
   v.T_base_effector = s.effector[i];
   v.points.object = grid();
-  for (const Vector3d& o : v.points.object) {
+  for (std::size_t j = 0; j < v.points.object.size(); ++j) {
+    const Vector3d o = v.points.object[j] + (printed.empty() ? Vector3d::Zero() : printed[j]);
     v.points.image.push_back(project(camera, s.view[i] * o) + Vector2d(noise(rng), noise(rng)));
   }
   v.name = "view " + std::to_string(i);
@@ -168,14 +171,16 @@ struct Honesty {
   double rounds = 0.0, iterations = 0.0;                   // mean noise rounds and Ceres iterations
   Eigen::Vector2d rms_X = Eigen::Vector2d::Zero();         // RMS error of X: translation (m), rotation (rad)
   double per_image = 0.0;                                  // share of sessions that weighed each image by its own sigma
+  double target_sigma = 0.0;                               // root of the mean target point variance estimate (m)
 };
 
 // M sessions of n views: noisy corners (0.3 px), the robot's measured poses
 // perturbed by `robot_noise`, the camera given with its focal length scaled by
 // `focal_error`; the calibration started 1 mm / 0.1 deg off the truth. `noisy`
-// images of each session, drawn at random, have 5x the pixel noise.
+// images of each session, drawn at random, have 5x the pixel noise. The target's
+// points are printed off the grid by `target_sigma` (m, per axis), anew each session.
 Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const std::optional<Matrix6d>& robot_noise,
-                double focal_error, int noisy = 0) {
+                double focal_error, int noisy = 0, double target_sigma = 0.0) {
   const CameraModel truth_camera = simulated_camera();
   CameraModel given = truth_camera;
   given.K(0, 0) *= 1.0 + focal_error;
@@ -188,9 +193,14 @@ Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const s
     std::vector<std::size_t> order(s.view.size());
     std::iota(order.begin(), order.end(), 0);
     if (noisy > 0) std::shuffle(order.begin(), order.end(), rng);
+    std::vector<Vector3d> printed;
+    if (target_sigma > 0.0) {
+      std::normal_distribution<double> error(0.0, target_sigma);
+      for (std::size_t j = 0; j < grid().size(); ++j) printed.emplace_back(error(rng), error(rng), error(rng));
+    }
     for (std::size_t i = 0; i < s.view.size(); ++i) {
       const bool is_noisy = std::find(order.begin(), order.begin() + noisy, i) != order.begin() + noisy;
-      CornerView v = corners(s, i, truth_camera, rng, is_noisy ? 1.5 : 0.3);
+      CornerView v = corners(s, i, truth_camera, rng, is_noisy ? 1.5 : 0.3, printed);
       if (robot_noise) v.T_base_effector = perturb(rng, v.T_base_effector, PoseNoise::from_pose_covariance(*robot_noise));
       views.push_back(v);
     }
@@ -207,12 +217,14 @@ Honesty honesty(Setup setup, int M, int n, const CornerOptions& options, const s
     h.bias += eX.cwiseQuotient(CX.diagonal().cwiseSqrt()) / M;
     h.rms_X += Eigen::Vector2d(eX.head<3>().squaredNorm(), eX.tail<3>().squaredNorm()) / M;
     h.per_image += (c.per_image_sigma ? 1.0 : 0.0) / M;
+    h.target_sigma += c.target_point_sigma * c.target_point_sigma / M;  // the mean variance, rooted below
     if (c.intrinsics) {
       const double f_sigma = std::sqrt(c.intrinsics_covariance(0, 0));
       h.focal_within_2_sigma += (std::abs((*c.intrinsics)[0] - truth_camera.K(0, 0)) < 2.0 * f_sigma ? 1.0 : 0.0) / M;
     }
   }
   h.robot_sigma = h.robot_sigma.cwiseSqrt();
+  h.target_sigma = std::sqrt(h.target_sigma);
   h.rms_X = h.rms_X.cwiseSqrt();
   return h;
 }
@@ -324,6 +336,39 @@ TEST(CornerCalibration, ImagesOfDifferentNoiseAreEachWeighedByTheirOwn) {
   EXPECT_LT(robust.nees_Y, band.second * 1.05);
   EXPECT_LT(robust.rms_X[0], 0.85 * plain.rms_X[0]);
   EXPECT_LT(robust.rms_X[1], 0.85 * plain.rms_X[1]);
+}
+
+// A target printed off its nominal geometry (each point 0.2 mm per axis, the same
+// in every image): the per-image noise averages out over the images, the target's
+// error does not. Taken as exact, the covariance is overconfident; with the
+// target's error estimated from the corners and carried into the covariance, it is
+// honest. On an exact target the estimate is small and the covariance stays honest
+// (CovarianceIsHonestWithTheRobotExact runs with it on).
+TEST(CornerCalibration, TargetGeometryErrorIsEstimatedAndCarried) {
+  const int M = 200;
+  const auto band = chi2_band(M, 6);
+  CornerOptions exact;
+  exact.target_point_sigma = 0.0;
+  CornerOptions given;
+  given.target_point_sigma = 0.2e-3;
+  const Honesty estimated = honesty(Setup::EyeInHand, M, 15, CornerOptions{}, std::nullopt, 0.0, 0, 0.2e-3);
+  const Honesty known = honesty(Setup::EyeInHand, M, 15, given, std::nullopt, 0.0, 0, 0.2e-3);
+  const Honesty ignored = honesty(Setup::EyeInHand, M, 15, exact, std::nullopt, 0.0, 0, 0.2e-3);
+  const Honesty none = honesty(Setup::EyeInHand, 50, 15, CornerOptions{}, std::nullopt, 0.0, 0, 0.0);
+  std::printf("target points off by 0.2 mm per axis: estimated %.4f mm, NEES X %.2f, Y %.2f; given: NEES X %.2f, Y %.2f "
+              "(band %.2f..%.2f); taken as exact: NEES X %.2f, Y %.2f; exact target: estimated %.4f mm\n",
+              estimated.target_sigma * 1e3, estimated.nees_X, estimated.nees_Y, known.nees_X, known.nees_Y, band.first,
+              band.second, ignored.nees_X, ignored.nees_Y, none.target_sigma * 1e3);
+  EXPECT_NEAR(estimated.target_sigma, 0.2e-3, 0.02e-3);
+  EXPECT_LT(none.target_sigma, 0.03e-3);
+  for (const Honesty& h : {estimated, known}) {
+    EXPECT_GT(h.nees_X, band.first);
+    EXPECT_LT(h.nees_X, band.second * 1.05);
+    EXPECT_GT(h.nees_Y, band.first);
+    EXPECT_LT(h.nees_Y, band.second * 1.05);
+  }
+  EXPECT_GT(ignored.nees_X, band.second);
+  EXPECT_GT(ignored.nees_Y, 1.5 * band.second);
 }
 
 TEST(CornerCalibration, RefusesWhatItCannotUse) {

@@ -2,6 +2,7 @@
 
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/autodiff_manifold.h>
+#include <ceres/jet.h>
 #include <ceres/covariance.h>
 #include <ceres/normal_prior.h>
 #include <ceres/problem.h>
@@ -12,9 +13,12 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <memory>
 
 #include "handeye_covariance/core/errors.h"
@@ -81,8 +85,9 @@ void distort(const T& x, const T& y, const T& k1, const T& k2, const std::array<
 
 // What every image's cost needs of the camera and the setup.
 struct Projection {
-  double fx, fy, cx, cy, skew;
-  std::array<double, 12> distortion{};  // k1, k2 here too (used when the intrinsics are fixed)
+  std::array<double, 6> intrinsics{};   // fx, fy, cx, cy, k1, k2 (used when they are fixed)
+  double skew = 0.0;
+  std::array<double, 12> distortion{};  // OpenCV's order; k1, k2 are taken from the intrinsics
   bool eye_in_hand = true;
 };
 
@@ -96,6 +101,53 @@ struct ImageCorners {
   std::vector<Eigen::MatrixXd> whitening;    // L_b^-1
   PoseBlock robot;                           // E_i as measured
 };
+
+// The camera's pose of the pattern, P = X^-1 V Y (q_P, t_P; Ceres's quaternion
+// order), V = E^-1 eye-in-hand and E eye-to-hand, with E = exp(xi_E) E_measured
+// (xi_E = `robot`, or none when null).
+template <typename T>
+void pattern_in_camera(const PoseBlock& E, bool eye_in_hand, const T* x, const T* y, const T* robot, T* q_P, T* t_P) {
+  T q_E[4], t_E[3];
+  for (int k = 0; k < 4; ++k) q_E[k] = T(E[3 + k]);
+  for (int k = 0; k < 3; ++k) t_E[k] = T(E[k]);
+  if (robot != nullptr) {
+    T q_delta[4];
+    ceres::AngleAxisToQuaternion(robot + 3, q_delta);
+    const T q_measured[4] = {q_E[0], q_E[1], q_E[2], q_E[3]};
+    ceres::QuaternionProduct(q_delta, q_measured, q_E);
+    for (int k = 0; k < 3; ++k) t_E[k] += robot[k];
+  }
+  T q_V[4], t_V[3];
+  if (eye_in_hand) {
+    q_V[0] = q_E[0];
+    for (int k = 1; k < 4; ++k) q_V[k] = -q_E[k];
+    ceres::UnitQuaternionRotatePoint(q_V, t_E, t_V);
+    for (int k = 0; k < 3; ++k) t_V[k] = -t_V[k];
+  } else {
+    for (int k = 0; k < 4; ++k) q_V[k] = q_E[k];
+    for (int k = 0; k < 3; ++k) t_V[k] = t_E[k];
+  }
+  const T q_X_inverse[4] = {x[3], -x[4], -x[5], -x[6]};
+  T q_VY[4];
+  ceres::QuaternionProduct(q_V, y + 3, q_VY);
+  ceres::QuaternionProduct(q_X_inverse, q_VY, q_P);
+  T Vt_Y[3];
+  ceres::UnitQuaternionRotatePoint(q_V, y, Vt_Y);
+  const T d[3] = {Vt_Y[0] + t_V[0] - x[0], Vt_Y[1] + t_V[1] - x[1], Vt_Y[2] + t_V[2] - x[2]};
+  ceres::UnitQuaternionRotatePoint(q_X_inverse, d, t_P);
+}
+
+// The pixel of pattern point o seen at (R_P row-major, t_P), through the camera's
+// (fx, fy, cx, cy, k1, k2) and the rest of `c`'s distortion.
+template <typename T, typename O>
+void project_point(const Projection& c, const T* k, const T* R_P, const T* t_P, const O* o, T* uv) {
+  const T p[3] = {R_P[0] * o[0] + R_P[1] * o[1] + R_P[2] * o[2] + t_P[0], R_P[3] * o[0] + R_P[4] * o[1] + R_P[5] * o[2] + t_P[1],
+                  R_P[6] * o[0] + R_P[7] * o[1] + R_P[8] * o[2] + t_P[2]};
+  T xd, yd;
+  distort<T>(p[0] / p[2], p[1] / p[2], k[4], k[5], c.distortion, xd, yd);
+  uv[0] = k[0] * xd + c.skew * yd + k[2];
+  uv[1] = k[1] * yd + k[3];
+}
 
 // The reprojection cost of one image. Parameter blocks: X (7), Y (7), then the
 // robot pose's perturbation xi_E (6) when kRobot, then the intrinsics (6) when
@@ -126,60 +178,23 @@ class ImageCost {
  private:
   template <typename T>
   bool evaluate(const T* x, const T* y, const T* robot, const T* intrinsics, T* residuals) const {
-    const PoseBlock& E = corners_->robot;
-    // E = exp(xi_E) E_measured: rotation q_E, translation t_E.
-    T q_E[4], t_E[3];
-    for (int k = 0; k < 4; ++k) q_E[k] = T(E[3 + k]);
-    for (int k = 0; k < 3; ++k) t_E[k] = T(E[k]);
-    if (robot != nullptr) {
-      T q_delta[4];
-      ceres::AngleAxisToQuaternion(robot + 3, q_delta);
-      const T q_measured[4] = {q_E[0], q_E[1], q_E[2], q_E[3]};
-      ceres::QuaternionProduct(q_delta, q_measured, q_E);
-      for (int k = 0; k < 3; ++k) t_E[k] += robot[k];
-    }
-    // V = E^-1 (eye-in-hand) or E (eye-to-hand).
-    T q_V[4], t_V[3];
-    if (projection_->eye_in_hand) {
-      q_V[0] = q_E[0];
-      for (int k = 1; k < 4; ++k) q_V[k] = -q_E[k];
-      ceres::UnitQuaternionRotatePoint(q_V, t_E, t_V);
-      for (int k = 0; k < 3; ++k) t_V[k] = -t_V[k];
-    } else {
-      for (int k = 0; k < 4; ++k) q_V[k] = q_E[k];
-      for (int k = 0; k < 3; ++k) t_V[k] = t_E[k];
-    }
-    // P = X^-1 V Y.
-    const T q_X_inverse[4] = {x[3], -x[4], -x[5], -x[6]};
-    T q_VY[4], q_P[4];
-    ceres::QuaternionProduct(q_V, y + 3, q_VY);
-    ceres::QuaternionProduct(q_X_inverse, q_VY, q_P);
-    T Vt_Y[3];
-    ceres::UnitQuaternionRotatePoint(q_V, y, Vt_Y);
-    const T d[3] = {Vt_Y[0] + t_V[0] - x[0], Vt_Y[1] + t_V[1] - x[1], Vt_Y[2] + t_V[2] - x[2]};
-    T t_P[3], R_P[9];
-    ceres::UnitQuaternionRotatePoint(q_X_inverse, d, t_P);
+    T q_P[4], t_P[3], R_P[9];
+    pattern_in_camera<T>(corners_->robot, projection_->eye_in_hand, x, y, robot, q_P, t_P);
     ceres::QuaternionToRotation(q_P, R_P);  // row-major
 
     const Projection& c = *projection_;
-    const T fx = intrinsics ? intrinsics[0] : T(c.fx), fy = intrinsics ? intrinsics[1] : T(c.fy);
-    const T cx = intrinsics ? intrinsics[2] : T(c.cx), cy = intrinsics ? intrinsics[3] : T(c.cy);
-    const T k1 = intrinsics ? intrinsics[4] : T(c.distortion[0]), k2 = intrinsics ? intrinsics[5] : T(c.distortion[1]);
-
+    T k[6];
+    for (int i = 0; i < 6; ++i) k[i] = intrinsics ? intrinsics[i] : T(c.intrinsics[i]);
     const ImageCorners& image = *corners_;
     T difference[kMaxCornerBlock];
     for (std::size_t b = 0; b < image.block_start.size(); ++b) {
       const int start = image.block_start[b], size = image.block_size[b];
       for (int i = 0; i < size / 2; ++i) {
         const int corner = start / 2 + i;
-        const Vector3d& o = image.object[corner];
-        const T p[3] = {R_P[0] * o.x() + R_P[1] * o.y() + R_P[2] * o.z() + t_P[0],
-                        R_P[3] * o.x() + R_P[4] * o.y() + R_P[5] * o.z() + t_P[1],
-                        R_P[6] * o.x() + R_P[7] * o.y() + R_P[8] * o.z() + t_P[2]};
-        T xd, yd;
-        distort<T>(p[0] / p[2], p[1] / p[2], k1, k2, c.distortion, xd, yd);
-        difference[2 * i] = fx * xd + c.skew * yd + cx - image.image[corner].x();
-        difference[2 * i + 1] = fy * yd + cy - image.image[corner].y();
+        T uv[2];
+        project_point<T, double>(c, k, R_P, t_P, image.object[corner].data(), uv);
+        difference[2 * i] = uv[0] - image.image[corner].x();
+        difference[2 * i + 1] = uv[1] - image.image[corner].y();
       }
       const Eigen::MatrixXd& W = image.whitening[b];
       for (int r = 0; r < size; ++r) {
@@ -244,10 +259,9 @@ ImageCorners image_corners(const CornerView& view, std::size_t index) {
 Projection projection_of(const CameraModel& camera, const Rig& rig) {
   check_camera_model(camera, "the corner calibration's camera");
   Projection p;
-  p.fx = camera.K(0, 0);
-  p.fy = camera.K(1, 1);
-  p.cx = camera.K(0, 2);
-  p.cy = camera.K(1, 2);
+  p.intrinsics = {camera.K(0, 0), camera.K(1, 1), camera.K(0, 2), camera.K(1, 2),
+                  camera.distortion.size() > 0 ? camera.distortion[0] : 0.0,
+                  camera.distortion.size() > 1 ? camera.distortion[1] : 0.0};
   p.skew = camera.K(0, 1);
   for (std::size_t k = 0; k < camera.distortion.size() && k < p.distortion.size(); ++k) p.distortion[k] = camera.distortion[k];
   if (camera.distortion.size() == 14 && (camera.distortion[12] != 0.0 || camera.distortion[13] != 0.0)) {
@@ -322,6 +336,114 @@ HomogeneityTest homogeneity_test(const std::vector<double>& rss, const std::vect
   test.bound = boost::math::quantile(boost::math::chi_squared(k - 1), level);
   test.passed = test.chi2 <= test.bound;
   return test;
+}
+
+
+// The target's geometry as a consider parameter (header: "Target geometry"). The
+// whitened corner residuals' Jacobian by every target point's 3-d offset, D (m x
+// 3N), against the fit's own J (every row, the priors too; columns `blocks` in
+// tangent space, the shared ones first), H = J^T J: the fit ignores the offsets,
+// so its estimate moves by S delta, S = H^-1 J^T D, and their variance tau^2 adds
+// tau^2 S S^T to its covariance. tau^2 from the residuals r (MINQUE on the fit's
+// projection M = I - J H^-1 J^T): E[r^T r] = s nu + tau^2 t1, E[|D^T r|^2] =
+// s t1 + tau^2 t2, with t1 = tr(D^T M D), t2 = |D^T M D|_F^2 and s the corners'
+// variance scale (1 when the pixel sigma is given).
+struct TargetPointTerm {
+  double variance = 0.0;   // tau^2, m^2 per axis
+  double corner_scale = 1.0;  // s: the share of the corners' residual variance that is theirs
+  Eigen::MatrixXd covariance;  // of the first `shared` tangent coordinates: (s J_c^T J_c + J_p^T J_p) sandwiched, + tau^2 S S^T
+  int points = 0;          // N
+};
+
+TargetPointTerm target_point_term(ceres::Problem& problem, const std::vector<double*>& blocks, int shared,
+                                  const std::vector<ceres::ResidualBlockId>& residual_blocks, int m,
+                                  const std::vector<ImageCorners>& images, const std::vector<double>& inverse_sigma,
+                                  const Projection& projection, const double* x, const double* y,
+                                  const std::vector<std::array<double, 6>>* robot, const double* k,
+                                  double given_variance, bool sigma_estimated, double dof) {
+  TargetPointTerm out;
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = blocks;
+  evaluate.residual_blocks = residual_blocks;
+  std::vector<double> residuals;
+  ceres::CRSMatrix crs;
+  problem.Evaluate(evaluate, nullptr, &residuals, nullptr, &crs);
+  using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  const Eigen::Map<const RowSparse> J(crs.num_rows, crs.num_cols, static_cast<Eigen::Index>(crs.values.size()),
+                                      crs.rows.data(), crs.cols.data(), crs.values.data());
+  // The target's points, by their coordinates (every image's come from one target).
+  std::map<std::array<double, 3>, int> index;
+  for (const ImageCorners& image : images) {
+    for (const Vector3d& o : image.object) index.emplace(std::array<double, 3>{o.x(), o.y(), o.z()}, 0);
+  }
+  for (auto& [point, i] : index) i = out.points++;
+  using Jet = ceres::Jet<double, 3>;
+  std::vector<Eigen::Triplet<double>> entries;
+  int row = 0;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const ImageCorners& image = images[i];
+    double q_P[4], t_P[3], R_P[9];
+    pattern_in_camera<double>(image.robot, projection.eye_in_hand, x, y, robot ? (*robot)[i].data() : nullptr, q_P, t_P);
+    ceres::QuaternionToRotation(q_P, R_P);
+    Jet R[9], t[3], intrinsics[6];
+    for (int a = 0; a < 9; ++a) R[a] = Jet(R_P[a]);
+    for (int a = 0; a < 3; ++a) t[a] = Jet(t_P[a]);
+    for (int a = 0; a < 6; ++a) intrinsics[a] = Jet(k ? k[a] : projection.intrinsics[a]);
+    for (std::size_t b = 0; b < image.block_start.size(); ++b) {
+      const int start = image.block_start[b], size = image.block_size[b];
+      Eigen::MatrixXd du(size, 3 * (size / 2));  // the block's pixels by its points' offsets
+      du.setZero();
+      for (int c = 0; c < size / 2; ++c) {
+        const Vector3d& o = image.object[start / 2 + c];
+        const Jet point[3] = {Jet(o.x(), 0), Jet(o.y(), 1), Jet(o.z(), 2)};
+        Jet uv[2];
+        project_point<Jet, Jet>(projection, intrinsics, R, t, point, uv);
+        du.block<1, 3>(2 * c, 3 * c) = uv[0].v.transpose();
+        du.block<1, 3>(2 * c + 1, 3 * c) = uv[1].v.transpose();
+      }
+      Eigen::MatrixXd whitened = image.whitening[b] * du;  // L^-1 is lower-triangular
+      whitened *= inverse_sigma[i];
+      for (int c = 0; c < size / 2; ++c) {
+        const Vector3d& o = image.object[start / 2 + c];
+        const int column = 3 * index.at({o.x(), o.y(), o.z()});
+        for (int r = 0; r < size; ++r)
+          for (int a = 0; a < 3; ++a) {
+            if (whitened(r, 3 * c + a) != 0.0) entries.emplace_back(row + start + r, column + a, whitened(r, 3 * c + a));
+          }
+      }
+    }
+    row += static_cast<int>(2 * image.image.size());
+  }
+  Eigen::SparseMatrix<double> D(m, 3 * out.points);
+  D.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> H = Eigen::SparseMatrix<double>(J.transpose() * J);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(H);
+  if (ldlt.info() != Eigen::Success) return out;  // Ceres inverted it: does not happen
+  const Eigen::MatrixXd G = Eigen::MatrixXd(Eigen::SparseMatrix<double>(J.topRows(m).transpose() * D));
+  const Eigen::MatrixXd S = ldlt.solve(G);
+  const Eigen::MatrixXd DMD = Eigen::MatrixXd(Eigen::SparseMatrix<double>(D.transpose() * D)) - G.transpose() * S;
+  const double t1 = DMD.trace(), t2 = DMD.squaredNorm();
+  const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), m);
+  const double rss = r.squaredNorm(), q = (D.transpose() * r).squaredNorm();
+  if (given_variance >= 0.0) {
+    out.variance = given_variance;
+  } else if (sigma_estimated) {
+    const double determinant = dof * t2 - t1 * t1;
+    if (determinant > 0.0) out.variance = (dof * q - t1 * rss) / determinant;
+  } else if (t2 > 0.0) {
+    out.variance = (q - t1) / t2;
+  }
+  out.variance = std::isfinite(out.variance) ? std::max(0.0, out.variance) : 0.0;
+  // With the pixel sigma estimated, the corners' residual variance held the
+  // target's share too: s = (RSS - tau^2 t1) / nu of it is theirs.
+  if (sigma_estimated && dof > 0.0) out.corner_scale = std::clamp((rss - out.variance * t1) / dof, 0.1, 1.0);
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(J.cols(), shared);
+  unit.topRows(shared).setIdentity();
+  const Eigen::MatrixXd Z = ldlt.solve(unit);  // H^-1's first `shared` columns
+  const Eigen::MatrixXd JZ = J.topRows(m) * Z;
+  out.covariance = Z.topRows(shared) - (1.0 - out.corner_scale) * JZ.transpose() * JZ +
+                   out.variance * S.topRows(shared) * S.topRows(shared).transpose();
+  return out;
 }
 
 }  // namespace
@@ -433,12 +555,13 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   };
   if (robot_free) set_robot_priors();
   Vector6d prior_sigma;
+  ceres::ResidualBlockId intrinsics_prior = nullptr;
   if (intrinsics_free) {
     const double width = camera.width > 0 ? camera.width : 2.0 * camera.K(0, 2);
     prior_sigma << options.focal_prior * k0[0], options.focal_prior * k0[1], options.centre_prior * width,
         options.centre_prior * width, options.distortion_prior, options.distortion_prior;
     const ceres::Matrix A = prior_sigma.cwiseInverse().asDiagonal();
-    problem.AddResidualBlock(new ceres::NormalPrior(A, k0), nullptr, k.data());
+    intrinsics_prior = problem.AddResidualBlock(new ceres::NormalPrior(A, k0), nullptr, k.data());
   }
 
   ceres::Solver::Options solver;
@@ -659,6 +782,37 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     if (settled) break;
     if (options.estimate_robot_noise) set_robot_priors();
   }
+  // The target's geometry: what its points' errors, shared by every image, add to
+  // the covariance (consider parameters; target_point_term).
+  if (options.target_point_sigma != 0.0 && views.size() >= 2) {
+    if (!per_image) std::fill(inverse_sigma.begin(), inverse_sigma.end(), 1.0 / sigma);  // the final weighting
+    std::vector<double*> parameters = {x.data(), y.data()};
+    if (intrinsics_free) parameters.push_back(k.data());
+    const int shared = static_cast<int>(6 * parameters.size());
+    if (robot_free) for (auto& r : robot) parameters.push_back(r.data());
+    std::vector<ceres::ResidualBlockId> rows = image_blocks;
+    rows.insert(rows.end(), robot_priors.begin(), robot_priors.end());
+    if (intrinsics_prior != nullptr) rows.push_back(intrinsics_prior);
+    const TargetPointTerm term = target_point_term(
+        problem, parameters, shared, rows, m, images, inverse_sigma, projection, x.data(), y.data(),
+        robot_free ? &robot : nullptr, intrinsics_free ? k.data() : nullptr,
+        options.target_point_sigma > 0.0 ? options.target_point_sigma * options.target_point_sigma : -1.0,
+        result.pixel_sigma_estimated, m - absorbed);
+    result.target_point_sigma = std::sqrt(term.variance);
+    result.target_point_sigma_estimated = options.target_point_sigma < 0.0;
+    if (term.variance > 0.0) {
+      const Matrix6d before = xy_covariance.topLeftCorner<6, 6>();
+      xy_covariance = term.covariance.topLeftCorner(12, 12);
+      if (intrinsics_free) result.intrinsics_covariance = term.covariance.block<6, 6>(12, 12);
+      result.target_inflation << std::sqrt(xy_covariance.topLeftCorner<3, 3>().trace() / before.topLeftCorner<3, 3>().trace()),
+          std::sqrt(xy_covariance.block<3, 3>(3, 3).trace() / before.bottomRightCorner<3, 3>().trace());
+      // The pixel noise without the target's share.
+      const double scale = std::sqrt(term.corner_scale);
+      sigma *= scale;
+      for (ImageReprojection& image : result.images) image.sigma_px *= scale;
+      weighted_chi2 /= term.corner_scale;
+    }
+  }
   result.pixel_sigma = sigma;
   result.chi2 = weighted_chi2;
   result.per_image_sigma = per_image;
@@ -670,6 +824,17 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 }
 
 namespace {
+
+// What the fit took of the target's geometry, for the noise model's line.
+std::string target_points_text(const CornerCalibration& f) {
+  if (f.target_point_sigma == 0.0) {
+    return f.target_point_sigma_estimated ? "target points exact (the corners show no error of theirs)" : "target exact";
+  }
+  return "target points 1 sigma " + number_text(f.target_point_sigma * 1e3, 3) + " mm" +
+         (f.target_point_sigma_estimated ? " estimated from the corners" : " given") + ": X's 1 sigma x" +
+         number_text(f.target_inflation[0], 3) + " in translation, x" + number_text(f.target_inflation[1], 3) +
+         " in rotation";
+}
 
 bool same_camera(const CameraModel& a, const CameraModel& b) {
   return a.K == b.K && a.distortion == b.distortion && a.width == b.width && a.height == b.height;
@@ -754,7 +919,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
                   number_text(f.pixel_sigma, 3) + " px" +
                   (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
                   " under the detector's corner-noise model; robot poses " + robot +
-                  (f.intrinsics ? "; intrinsics refined" : "");
+                  (f.intrinsics ? "; intrinsics refined" : "") + "; " + target_points_text(f);
   c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
   c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;
   c.rotation_stage.dof = c.translation_stage.dof = f.degrees_of_freedom;

@@ -1,6 +1,8 @@
 // handeye_images: `handeye images` runs it (it links OpenCV and libapriltag;
 // `handeye` links neither). A folder of images and one robot pose per image, the
 // camera and the target files, through the images library and the session.
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <unistd.h>
@@ -22,6 +24,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string images_dir, poses, camera_path, target_path, setup_name, output, samples_out, robust = "auto";
   std::string method = "joint";
   bool refine_intrinsics = false;
+  std::string target_error = "estimate";
   po::options_description options("images: calibrate from a folder of images and one robot pose per image");
   options.add_options()("help,h", "show this help")(
       "images", po::value(&images_dir)->required(), "folder of .png/.jpg images (sorted by name)")(
@@ -39,6 +42,9 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
       "refine-intrinsics", po::bool_switch(&refine_intrinsics),
       "with --method corners: also refine fx, fy, cx, cy, k1, k2, the camera file as their prior (the pose-level "
       "start then rejects no image: wrong intrinsics make the images disagree)")(
+      "target-error-mm", po::value(&target_error),
+      "with --method corners: the printed target's points off their nominal positions by this 1 sigma per axis "
+      "(mm), the same in every image; 0: the target is exact; default `estimate`, from the corners")(
       "output,o", po::value(&output), "result file (YAML); default: <images folder>_result.yaml here")(
       "samples-out", po::value(&samples_out), "also write the samples (each detection with its covariance) for "
                                               "`handeye solve`");
@@ -55,6 +61,19 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (refine_intrinsics && method != "corners") {
     throw HandEyeError(ErrorCode::MalformedFile, "--refine-intrinsics needs the corners", "--refine-intrinsics",
                        "add --method corners");
+  }
+  double target_point_sigma = -1.0;  // estimated
+  if (target_error != "estimate") {
+    char* end = nullptr;
+    target_point_sigma = std::strtod(target_error.c_str(), &end) * 1e-3;
+    if (end == target_error.c_str() || *end != '\0' || !(target_point_sigma >= 0.0) || !std::isfinite(target_point_sigma)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "`" + target_error + "` is not a length", "--target-error-mm",
+                         "give the target points' 1 sigma in mm (0 for an exact target), or `estimate`");
+    }
+    if (method != "corners") {
+      throw HandEyeError(ErrorCode::MalformedFile, "--target-error-mm needs the corners", "--target-error-mm",
+                         "add --method corners");
+    }
   }
   if (output.empty()) output = default_result_path(std::filesystem::path(images_dir).lexically_normal().string());
   const CameraModel camera = images::read_camera(camera_path);
@@ -96,6 +115,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (method == "corners") {
     CornerOptions corner_options;
     corner_options.refine_intrinsics = refine_intrinsics;
+    corner_options.target_point_sigma = target_point_sigma;
     settings.method = Method::Corners;
     settings.refine_corners = corner_refiner(corner_options);
   }
