@@ -828,9 +828,9 @@ namespace {
 // What the fit took of the target's geometry, for the noise model's line.
 std::string target_points_text(const CornerCalibration& f) {
   if (f.target_point_sigma == 0.0) {
-    return f.target_point_sigma_estimated ? "target points exact (the corners show no error of theirs)" : "target exact";
+    return f.target_point_sigma_estimated ? "exact (the corners show no error of theirs)" : "exact (as given)";
   }
-  return "target points 1 sigma " + number_text(f.target_point_sigma * 1e3, 3) + " mm" +
+  return "1 sigma " + number_text(f.target_point_sigma * 1e3, 3) + " mm" +
          (f.target_point_sigma_estimated ? " estimated from the corners" : " given") + ": X's 1 sigma x" +
          number_text(f.target_inflation[0], 3) + " in translation, x" + number_text(f.target_inflation[1], 3) +
          " in rotation";
@@ -919,7 +919,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
                   number_text(f.pixel_sigma, 3) + " px" +
                   (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
                   " under the detector's corner-noise model; robot poses " + robot +
-                  (f.intrinsics ? "; intrinsics refined" : "") + "; " + target_points_text(f);
+                  (f.intrinsics ? "; intrinsics refined" : "");
   c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
   c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;
   c.rotation_stage.dof = c.translation_stage.dof = f.degrees_of_freedom;
@@ -929,6 +929,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   fit.pixel_sigma_estimated = f.pixel_sigma_estimated;
   fit.rms_px = f.rms_px;
   fit.robot = robot;
+  fit.target_points = target_points_text(f);
+  fit.target_point_sigma = f.target_point_sigma;
   for (const ImageReprojection& image : f.images) {
     fit.corners += image.points;
     fit.images.push_back({image.name, image.points, image.rms_px, image.sigma_px});

@@ -114,6 +114,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
       out += line("  reprojection          RMS %.3f px over every corner; worst image %s at %.3f px", c.corner_fit->rms_px,
                   worst.c_str(), worst_rms);
       if (!c.corner_fit->pixel_noise.empty()) out += "  pixel noise           " + c.corner_fit->pixel_noise + "\n";
+      if (!c.corner_fit->target_points.empty()) out += "  target points         " + c.corner_fit->target_points + "\n";
     }
   } else if (c.noise_origin == NoiseOrigin::EstimatedFromResiduals) {
     std::string estimated = "  noise                 ESTIMATED from the residuals (no noise block given); camera 1 sigma x y z [mm] " +

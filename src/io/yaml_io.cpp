@@ -667,6 +667,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "rms_px" << YAML::Value << fit.rms_px;
     out << YAML::Key << "corners" << YAML::Value << fit.corners;
     out << YAML::Key << "robot_poses" << YAML::Value << fit.robot;
+    out << YAML::Key << "target_point_sigma" << YAML::Value << fit.target_point_sigma;  // m, per axis
+    if (!fit.target_points.empty()) out << YAML::Key << "target_points" << YAML::Value << fit.target_points;
     if (!fit.pixel_noise.empty()) out << YAML::Key << "pixel_noise" << YAML::Value << fit.pixel_noise;
     out << YAML::Key << "per_image_sigma" << YAML::Value << fit.per_image_sigma;
     if (!fit.intrinsics.empty()) {  // refined: fx, fy, cx, cy (px), k1, k2, each with its 1 sigma

@@ -176,6 +176,10 @@ struct Calibration {
     std::string pixel_noise;
     bool per_image_sigma = false;
     std::string robot;  // how the robot poses entered: "exact" or their prior
+    /// The printed target's points' 1 sigma (m, per axis; estimated or given, 0:
+    /// exact) and how it entered the covariance.
+    double target_point_sigma = 0.0;
+    std::string target_points;
     /// Refined intrinsics fx, fy, cx, cy (px), k1, k2 and their 1 sigma; empty when kept.
     std::vector<double> intrinsics, intrinsics_sigma;
   };
