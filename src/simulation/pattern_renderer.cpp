@@ -1,6 +1,7 @@
 #include "handeye_covariance/simulation/pattern_renderer.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -141,12 +142,21 @@ void PatternRenderer::build_distortion_map() {
       camera_.distortion.empty() ? cv::Mat::zeros(1, 4, CV_64F) : cv::Mat(camera_.distortion, true).reshape(1, 1);
   cv::undistortPoints(sensor, ideal, K, D, cv::noArray(), K,
                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-6));
+  // The sensor sees beyond the ideal image's frame (barrel distortion: about 13 px at
+  // the simulated camera's corners): the ideal image is rendered with a margin that
+  // covers all of it, not its border replicated there.
+  double overshoot = 0.0;
+  for (const cv::Point2f& p : ideal) {
+    overshoot = std::max({overshoot, -static_cast<double>(p.x), -static_cast<double>(p.y), p.x - (camera_.width - 1.0),
+                          p.y - (camera_.height - 1.0)});
+  }
+  ideal_margin_ = static_cast<int>(std::ceil(overshoot)) + 2;
   map_x_.create(camera_.height, camera_.width, CV_32F);
   map_y_.create(camera_.height, camera_.width, CV_32F);
   for (int v = 0; v < camera_.height; ++v) {
     for (int u = 0; u < camera_.width; ++u) {
-      map_x_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].x;
-      map_y_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].y;
+      map_x_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].x + static_cast<float>(ideal_margin_);
+      map_y_.at<float>(v, u) = ideal[static_cast<std::size_t>(v) * camera_.width + u].y + static_cast<float>(ideal_margin_);
     }
   }
 }
@@ -156,8 +166,12 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
   // Ideal pixel (x, y) -> supersampled pixel: pixel centres at integers in both.
   Matrix3d S;
   S << s, 0, 0.5 * (s - 1), 0, s, 0.5 * (s - 1), 0, 0, 1;
-  const Matrix3d KS = S * camera_.K;
-  cv::Mat canvas(camera_.height * s, camera_.width * s, CV_32F, cv::Scalar(options_.background));
+  Matrix3d K = camera_.K;  // the ideal image, with its margin on every side
+  K(0, 2) += ideal_margin_;
+  K(1, 2) += ideal_margin_;
+  const Matrix3d KS = S * K;
+  const int width = camera_.width + 2 * ideal_margin_, height = camera_.height + 2 * ideal_margin_;
+  cv::Mat canvas(height * s, width * s, CV_32F, cv::Scalar(options_.background));
 
   const auto project = [&](const Vector3d& p_camera) {
     const Vector3d h = KS * p_camera;
@@ -209,7 +223,7 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
   }
   if (options_.blur_sigma_px > 0.0) cv::GaussianBlur(canvas, canvas, cv::Size(), options_.blur_sigma_px * s);
   cv::Mat ideal;
-  cv::resize(canvas, ideal, cv::Size(camera_.width, camera_.height), 0, 0, cv::INTER_AREA);
+  cv::resize(canvas, ideal, cv::Size(width, height), 0, 0, cv::INTER_AREA);
   cv::Mat sensor;
   cv::remap(ideal, sensor, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   if (options_.noise_sigma > 0.0) {

@@ -55,7 +55,8 @@ class PatternRenderer {
   RenderOptions options_;
   std::vector<Plane> planes_;
   std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
-  cv::Mat map_x_, map_y_;                       // distorted pixel -> ideal pixel
+  cv::Mat map_x_, map_y_;                       // distorted pixel -> ideal pixel (margin included)
+  int ideal_margin_ = 0;                        // px of ideal image beyond the camera's frame, every side
 };
 
 /// A camera like a typical industrial 640 x 480 camera with mild barrel
