@@ -342,7 +342,9 @@ TEST(CornerCalibration, ImagesOfDifferentNoiseAreEachWeighedByTheirOwn) {
 // in every image): the per-image noise averages out over the images, the target's
 // error does not. Taken as exact, the covariance is overconfident; with the
 // target's error estimated from the corners and carried into the covariance, it is
-// honest. On an exact target the estimate is small and the covariance stays honest
+// honest, and the pixel sigma gives the target's share back (0.3 px). Also with the
+// robot poses free (their priors are rows of the fit the estimate accounts for). On
+// an exact target the estimate is small and the covariance stays honest
 // (CovarianceIsHonestWithTheRobotExact runs with it on).
 TEST(CornerCalibration, TargetGeometryErrorIsEstimatedAndCarried) {
   const int M = 200;
@@ -351,21 +353,30 @@ TEST(CornerCalibration, TargetGeometryErrorIsEstimatedAndCarried) {
   exact.target_point_sigma = 0.0;
   CornerOptions given;
   given.target_point_sigma = 0.2e-3;
+  Matrix6d robot = Matrix6d::Zero();
+  robot.diagonal() << Vector3d::Constant(std::pow(0.3e-3, 2)), Vector3d::Constant(std::pow(0.03 * M_PI / 180.0, 2));
+  CornerOptions robot_free;
+  robot_free.robot_covariance = robot;
   const Honesty estimated = honesty(Setup::EyeInHand, M, 15, CornerOptions{}, std::nullopt, 0.0, 0, 0.2e-3);
   const Honesty known = honesty(Setup::EyeInHand, M, 15, given, std::nullopt, 0.0, 0, 0.2e-3);
+  const Honesty free = honesty(Setup::EyeToHand, M, 15, robot_free, robot, 0.0, 0, 0.2e-3);
   const Honesty ignored = honesty(Setup::EyeInHand, M, 15, exact, std::nullopt, 0.0, 0, 0.2e-3);
   const Honesty none = honesty(Setup::EyeInHand, 50, 15, CornerOptions{}, std::nullopt, 0.0, 0, 0.0);
-  std::printf("target points off by 0.2 mm per axis: estimated %.4f mm, NEES X %.2f, Y %.2f; given: NEES X %.2f, Y %.2f "
+  std::printf("target points off by 0.2 mm per axis: estimated %.4f mm (pixel sigma %.4f px), NEES X %.2f, Y %.2f; "
+              "given: NEES X %.2f, Y %.2f; robot poses free (eye-to-hand): estimated %.4f mm, NEES X %.2f, Y %.2f "
               "(band %.2f..%.2f); taken as exact: NEES X %.2f, Y %.2f; exact target: estimated %.4f mm\n",
-              estimated.target_sigma * 1e3, estimated.nees_X, estimated.nees_Y, known.nees_X, known.nees_Y, band.first,
-              band.second, ignored.nees_X, ignored.nees_Y, none.target_sigma * 1e3);
+              estimated.target_sigma * 1e3, estimated.sigma, estimated.nees_X, estimated.nees_Y, known.nees_X,
+              known.nees_Y, free.target_sigma * 1e3, free.nees_X, free.nees_Y, band.first, band.second, ignored.nees_X,
+              ignored.nees_Y, none.target_sigma * 1e3);
   EXPECT_NEAR(estimated.target_sigma, 0.2e-3, 0.02e-3);
+  EXPECT_NEAR(free.target_sigma, 0.2e-3, 0.02e-3);
+  EXPECT_NEAR(estimated.sigma, 0.3, 0.006);
   EXPECT_LT(none.target_sigma, 0.03e-3);
-  for (const Honesty& h : {estimated, known}) {
+  for (const Honesty& h : {estimated, known, free}) {
     EXPECT_GT(h.nees_X, band.first);
-    EXPECT_LT(h.nees_X, band.second * 1.05);
+    EXPECT_LT(h.nees_X, band.second);
     EXPECT_GT(h.nees_Y, band.first);
-    EXPECT_LT(h.nees_Y, band.second * 1.05);
+    EXPECT_LT(h.nees_Y, band.second);
   }
   EXPECT_GT(ignored.nees_X, band.second);
   EXPECT_GT(ignored.nees_Y, 1.5 * band.second);

@@ -418,29 +418,49 @@ TargetPointTerm target_point_term(ceres::Problem& problem, const std::vector<dou
   D.setFromTriplets(entries.begin(), entries.end());
   const Eigen::SparseMatrix<double> H = Eigen::SparseMatrix<double>(J.transpose() * J);
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(H);
-  if (ldlt.info() != Eigen::Success) return out;  // Ceres inverted it: does not happen
-  const Eigen::MatrixXd G = Eigen::MatrixXd(Eigen::SparseMatrix<double>(J.topRows(m).transpose() * D));
+  if (ldlt.info() != Eigen::Success) {
+    throw HandEyeError(ErrorCode::PoorlyConstrained, "the fit's information cannot be factored for the target's error",
+                       "corner calibration", "add views from more varied robot poses, or give --target-error-mm 0");
+  }
+  const Eigen::SparseMatrix<double> Jc = J.topRows(m), Jp = J.bottomRows(J.rows() - m);  // corners, priors
+  const Eigen::MatrixXd G = Eigen::MatrixXd(Eigen::SparseMatrix<double>(Jc.transpose() * D));
   const Eigen::MatrixXd S = ldlt.solve(G);
-  const Eigen::MatrixXd DMD = Eigen::MatrixXd(Eigen::SparseMatrix<double>(D.transpose() * D)) - G.transpose() * S;
-  const double t1 = DMD.trace(), t2 = DMD.squaredNorm();
+  // t1 = tr(D^T M_cc D) and t2 = |D^T M_cc D|_F^2 with D^T M_cc D = A - G^T S, A = D^T D
+  // (block-diagonal, one block per tag or point), without forming the 3N x 3N.
+  const Eigen::SparseMatrix<double> A = D.transpose() * D;
+  const double t1 = A.diagonal().sum() - G.cwiseProduct(S).sum();
+  const Eigen::MatrixXd GA = G * A;
+  const double t2 = A.squaredNorm() - 2.0 * GA.cwiseProduct(S).sum() +
+                    (G * G.transpose()).cwiseProduct(S * S.transpose()).sum();
+  // The prior rows' share (M_cc is not idempotent when priors are fitted): u = |J_p S|^2
+  // of D's, w = |J_c H^-1 J_p^T|^2 = tr(B) - tr(B^2), B = H^-1 J_p^T J_p, of the corners'.
+  double u = 0.0, w = 0.0;
+  if (Jp.rows() > 0) {
+    u = Eigen::MatrixXd(Jp * S).squaredNorm();
+    const Eigen::MatrixXd B = ldlt.solve(Eigen::MatrixXd(Eigen::SparseMatrix<double>(Jp.transpose() * Jp)));
+    w = B.trace() - B.cwiseProduct(B.transpose()).sum();
+  }
   const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), m);
   const double rss = r.squaredNorm(), q = (D.transpose() * r).squaredNorm();
+  // E[r^T r] = s (nu - w) + w + tau^2 (t1 - u),  E[|D^T r|^2] = s (t1 - u) + u + tau^2 t2.
   if (given_variance >= 0.0) {
     out.variance = given_variance;
   } else if (sigma_estimated) {
-    const double determinant = dof * t2 - t1 * t1;
-    if (determinant > 0.0) out.variance = (dof * q - t1 * rss) / determinant;
+    const double a = dof - w, b = t1 - u, determinant = a * t2 - b * b;
+    if (determinant > 0.0) out.variance = (a * (q - u) - b * (rss - w)) / determinant;
   } else if (t2 > 0.0) {
     out.variance = (q - t1) / t2;
   }
   out.variance = std::isfinite(out.variance) ? std::max(0.0, out.variance) : 0.0;
   // With the pixel sigma estimated, the corners' residual variance held the
-  // target's share too: s = (RSS - tau^2 t1) / nu of it is theirs.
-  if (sigma_estimated && dof > 0.0) out.corner_scale = std::clamp((rss - out.variance * t1) / dof, 0.1, 1.0);
+  // target's share too: s of it is theirs.
+  if (sigma_estimated && dof - w > 0.0) {
+    out.corner_scale = std::clamp((rss - w - out.variance * (t1 - u)) / (dof - w), 0.1, 1.0);
+  }
   Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(J.cols(), shared);
   unit.topRows(shared).setIdentity();
   const Eigen::MatrixXd Z = ldlt.solve(unit);  // H^-1's first `shared` columns
-  const Eigen::MatrixXd JZ = J.topRows(m) * Z;
+  const Eigen::MatrixXd JZ = Jc * Z;
   out.covariance = Z.topRows(shared) - (1.0 - out.corner_scale) * JZ.transpose() * JZ +
                    out.variance * S.topRows(shared) * S.topRows(shared).transpose();
   return out;
@@ -481,6 +501,11 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   if (views.size() < 3) {
     throw HandEyeError(ErrorCode::NoData, "only " + std::to_string(views.size()) + " views with corners, need at least 3",
                        "corner calibration", "take more images of the target from different robot poses");
+  }
+  if (!std::isfinite(options.target_point_sigma)) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "target point sigma " + number_text(options.target_point_sigma) + " m",
+                       "corner calibration options", "give the target points' 1 sigma in m, 0 for an exact target, "
+                       "or a negative number to estimate it");
   }
   if (!(options.pixel_sigma >= 0.0) || !std::isfinite(options.pixel_sigma)) {
     throw HandEyeError(ErrorCode::InvalidNoise, "pixel sigma " + number_text(options.pixel_sigma) + " px",
@@ -784,8 +809,19 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
   }
   // The target's geometry: what its points' errors, shared by every image, add to
   // the covariance (consider parameters; target_point_term).
-  if (options.target_point_sigma != 0.0 && views.size() >= 2) {
+  if (options.target_point_sigma != 0.0) {
     if (!per_image) std::fill(inverse_sigma.begin(), inverse_sigma.end(), 1.0 / sigma);  // the final weighting
+    // The whitened residuals' expected sum without a target error: the fit's dof, less
+    // 2 for each sigma taken as RSS / (nu - 2) from its own residuals (per image).
+    double expected_rss = m - absorbed;
+    if (per_image) {
+      double few_dof = 0.0;
+      for (const ImageReprojection& image : result.images) {
+        if (image.dof >= options.min_image_dof) expected_rss -= 2.0;
+        else few_dof += std::max(0.0, image.dof);
+      }
+      if (few_dof > 3.0) expected_rss -= 2.0;
+    }
     std::vector<double*> parameters = {x.data(), y.data()};
     if (intrinsics_free) parameters.push_back(k.data());
     const int shared = static_cast<int>(6 * parameters.size());
@@ -797,7 +833,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
         problem, parameters, shared, rows, m, images, inverse_sigma, projection, x.data(), y.data(),
         robot_free ? &robot : nullptr, intrinsics_free ? k.data() : nullptr,
         options.target_point_sigma > 0.0 ? options.target_point_sigma * options.target_point_sigma : -1.0,
-        result.pixel_sigma_estimated, m - absorbed);
+        result.pixel_sigma_estimated, expected_rss);
     result.target_point_sigma = std::sqrt(term.variance);
     result.target_point_sigma_estimated = options.target_point_sigma < 0.0;
     if (term.variance > 0.0) {
@@ -810,7 +846,6 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
       const double scale = std::sqrt(term.corner_scale);
       sigma *= scale;
       for (ImageReprojection& image : result.images) image.sigma_px *= scale;
-      weighted_chi2 /= term.corner_scale;
     }
   }
   result.pixel_sigma = sigma;

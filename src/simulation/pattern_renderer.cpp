@@ -150,6 +150,11 @@ void PatternRenderer::build_distortion_map() {
     overshoot = std::max({overshoot, -static_cast<double>(p.x), -static_cast<double>(p.y), p.x - (camera_.width - 1.0),
                           p.y - (camera_.height - 1.0)});
   }
+  if (!(overshoot <= std::max(camera_.width, camera_.height))) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "the distortion maps the image's edge " + std::to_string(overshoot) + " px beyond its frame",
+                       "renderer camera", "check the distortion coefficients (OpenCV's order: k1, k2, p1, p2, k3)");
+  }
   ideal_margin_ = static_cast<int>(std::ceil(overshoot)) + 2;
   map_x_.create(camera_.height, camera_.width, CV_32F);
   map_y_.create(camera_.height, camera_.width, CV_32F);

@@ -37,17 +37,21 @@
 // image's corners tell its own noise, which one pose residual cannot.
 //
 // Target geometry. A printed board's points are off their nominal positions (print
-// scale and accuracy, a board that is not flat) by the same amount in every image:
+// accuracy, a board that is not flat) by the same amount in every image:
 // that error does not average out over the images as the pixel noise does. Each
 // point's 3-d offset delta_j ~ N(0, tau^2 I) is a consider parameter (Schmidt): the
 // fit keeps the nominal target, and the covariance of what it estimates gains
 // tau^2 S S^T, S = H^-1 J^T D the estimate's sensitivity to the offsets (D the
 // whitened corners' Jacobian by them, J and H = J^T J the fit's own). tau^2 is
-// given, or estimated from the residuals r left by the fit (MINQUE with the fit's
-// projection M = I - J H^-1 J^T: E[r^T r] = s nu + tau^2 tr(D^T M D) and
-// E[|D^T r|^2] = s tr(D^T M D) + tau^2 |D^T M D|_F^2, s the corners' own share of
-// the pixel variance, by which the pixel sigma and the corners' part of the
-// covariance are then scaled). On simulated targets printed 0.2 mm off per axis:
+// given, or estimated from the corner residuals r left by the fit (MINQUE with the
+// fit's projection M = I - J H^-1 J^T, its corner block M_cc: E[r^T r] = s tr(M_cc^2)
+// + |M_cp|^2 + tau^2 tr(D^T M_cc^2 D) and E[|D^T r|^2] = s tr(D^T M_cc^2 D) +
+// |M_pc D|^2 + tau^2 |D^T M_cc D|_F^2, the priors' rows of unit variance; s the
+// corners' own share of the pixel variance, by which the pixel sigma and the
+// corners' part of the covariance are then scaled). One uniform print scale is a
+// single number, not independent point errors: it is not what tau covers. With each
+// image's own sigma (taken from its residuals, target share included) tau is an
+// approximation. On simulated targets printed 0.2 mm off per axis:
 // estimated 0.200 mm, NEES of X 5.85 (7.31 taken as exact); on an exact target
 // the estimate averages 0.019 mm and the NEES stays 6.2 (test_corner_calibration).
 //
@@ -119,9 +123,9 @@ struct CornerOptions {
   /// sigma of the other such images rather than getting its own.
   double min_image_dof = 8.0;
   /// The target's points off their nominal positions by an isotropic 3-d error of
-  /// this 1 sigma (m), each the same in every image (print scale and accuracy, a
-  /// board not flat, a detector's bias at each corner): negative, estimated from
-  /// the corners; 0, the target exact; positive, as given.
+  /// this 1 sigma (m), each the same in every image (print accuracy, a board not
+  /// flat, a detector's bias at each corner): negative, estimated from the corners;
+  /// 0, the target exact; positive, as given. NaN or Inf: InvalidNoise.
   double target_point_sigma = -1.0;
 };
 
@@ -146,7 +150,7 @@ struct CornerCalibration {
   Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();  // T_base_pattern or T_effector_pattern
   /// Of (xi_X, xi_Y), ROS order each: X's 6x6, Y's 6x6 and their cross block.
   Eigen::Matrix<double, 12, 12> covariance = Eigen::Matrix<double, 12, 12>::Zero();
-  double pixel_sigma = 0.0;    // px: as given, or the estimate
+  double pixel_sigma = 0.0;    // px: as given, or the estimate (less the target's share when one is found)
   bool pixel_sigma_estimated = false;
   int degrees_of_freedom = 0;  // corner residuals m minus what the fit absorbs (rounded)
   double rms_px = 0.0;         // over every corner
@@ -159,7 +163,7 @@ struct CornerCalibration {
   bool per_image_sigma = false;
   /// With refine_intrinsics: fx, fy, cx, cy, k1, k2 and their covariance.
   std::optional<IntrinsicsVector> intrinsics;
-  Matrix6d intrinsics_covariance = Matrix6d::Zero();
+  Matrix6d intrinsics_covariance = Matrix6d::Zero();  // the target's error carried, as X's
   /// With estimate_robot_noise: the robot's 1 sigma per axis, translation (m) and
   /// rotation (rad); 1e-6 where the residuals do not support any.
   bool robot_noise_estimated = false;
