@@ -259,6 +259,8 @@ TEST(RealData, HandeyeImagesWithCornersOnTheRealChessboardFolder) {
   EXPECT_NE(out.find("exact (as given)"), std::string::npos) << out;
   EXPECT_EQ(run(common + " --method corners --target-error-mm 0.1mm -o " + result, out), 2);
   EXPECT_NE(out.find("--target-error-mm"), std::string::npos) << out;
+  EXPECT_EQ(run(common + " --target-error-mm 0.1 -o " + result, out), 2);
+  EXPECT_NE(out.find("add --method corners"), std::string::npos) << out;
   // The intrinsics need the corners: said before any image is read.
   EXPECT_EQ(run(common + " --refine-intrinsics -o " + result, out), 2);
   EXPECT_NE(out.find("--method corners"), std::string::npos) << out;
