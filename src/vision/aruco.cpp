@@ -13,6 +13,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/vision/chessboard.h"
+#include "edge_refinement.h"
 
 namespace handeye {
 namespace {
@@ -52,7 +53,7 @@ cv::Ptr<cv::aruco::CharucoBoard> charuco_board(const CharucoTarget& t) {
 }
 
 /// OpenCV finds and decodes the markers; the corners are then refined here (see
-/// refine_marker_corners, to 0.014 px RMS on rendered markers), so OpenCV's own
+/// refine_marker_edges, to 0.014 px RMS on rendered markers), so OpenCV's own
 /// refinement is off. Measured on
 /// rendered markers (test_targets), OpenCV's refinements are biased towards the
 /// marker's centre by 0.55 px (none, contour) or 0.20 px (cornerSubPix), i.e.
@@ -63,69 +64,6 @@ cv::Ptr<cv::aruco::DetectorParameters> marker_parameters() {
   cv::Ptr<cv::aruco::DetectorParameters> p = cv::aruco::DetectorParameters::create();
   p->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
   return p;
-}
-
-/// Bilinear gray level, or NaN outside the image.
-double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
-  const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-  if (x < 0 || y < 0 || x + 1 >= gray.cols || y + 1 >= gray.rows) return std::nan("");
-  const double fx = p.x() - x, fy = p.y() - y;
-  const auto at = [&](int u, int v) { return static_cast<double>(gray.at<std::uint8_t>(v, u)); };
-  return (1 - fy) * ((1 - fx) * at(x, y) + fx * at(x + 1, y)) + fy * ((1 - fx) * at(x, y + 1) + fx * at(x + 1, y + 1));
-}
-
-/// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit
-/// corner model describes: along each side of the black square, at one point per
-/// 4 px (at least 16), the edge's position across the side is the gradient-weighted
-/// mean within +-2 px; a line is fitted to those points, and each corner is where
-/// two lines meet. Returns false (corners untouched) when a side has too few
-/// edge points (the marker at the image border).
-bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners) {
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector2d& c : corners) centre += 0.25 * c;
-  std::array<Eigen::Vector2d, 4> point_on, direction;  // the four fitted lines
-  for (int e = 0; e < 4; ++e) {
-    const Eigen::Vector2d a = corners[e], b = corners[(e + 1) % 4];
-    const double length = (b - a).norm();
-    if (!(length > 4.0)) return false;
-    const Eigen::Vector2d along = (b - a) / length;
-    Eigen::Vector2d normal(-along.y(), along.x());
-    if (normal.dot(0.5 * (a + b) - centre) < 0.0) normal = -normal;  // outwards, black to white
-    const int samples = std::max(16, static_cast<int>(length / 4.0));
-    std::vector<Eigen::Vector2d> edge;
-    for (int i = 0; i < samples; ++i) {
-      const Eigen::Vector2d p = a + (b - a) * ((i + 1.0) / (samples + 1.0));
-      double weight_sum = 0.0, offset_sum = 0.0;
-      for (double n = -2.0; n <= 2.0; n += 0.25) {
-        const double outer = sample(gray, p + (n + 1.0) * normal), inner = sample(gray, p + (n - 1.0) * normal);
-        if (!(outer > inner)) continue;  // NaN outside the image, or a gradient the wrong way
-        const double w = (outer - inner) * (outer - inner);
-        weight_sum += w;
-        offset_sum += w * n;
-      }
-      if (weight_sum > 0.0) edge.push_back(p + (offset_sum / weight_sum) * normal);
-    }
-    if (edge.size() < 8) return false;
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const Eigen::Vector2d& q : edge) mean += q / static_cast<double>(edge.size());
-    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-    for (const Eigen::Vector2d& q : edge) scatter += (q - mean) * (q - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
-    point_on[e] = mean;
-    direction[e] = eig.eigenvectors().col(1);
-  }
-  std::array<Eigen::Vector2d, 4> refined;
-  for (int c = 0; c < 4; ++c) {
-    const int previous = (c + 3) % 4;  // corner c is where side c - 1 ends and side c starts
-    Eigen::Matrix2d A;
-    A << direction[previous], -direction[c];
-    if (std::abs(A.determinant()) < 1e-6) return false;
-    const Eigen::Vector2d st = A.lu().solve(point_on[c] - point_on[previous]);
-    refined[c] = point_on[previous] + st(0) * direction[previous];
-    if (!((refined[c] - corners[c]).norm() < 3.0)) return false;  // not the same corner
-  }
-  corners = refined;
-  return true;
 }
 
 
@@ -195,20 +133,7 @@ std::vector<TagCorners> ArucoDetector::detect(const cv::Mat& gray) const {
     // OpenCV: top-left, top-right, bottom-right, bottom-left; ours starts bottom-left.
     const int order[4] = {3, 2, 1, 0};
     for (int c = 0; c < 4; ++c) tag.corners[c] = Eigen::Vector2d(corners[i][order[c]].x, corners[i][order[c]].y);
-    // Until the corners stop moving: each pass centres the +-2 px window on the
-    // last lines, and from OpenCV's corners (about 0.5 px inside) two passes
-    // leave them 0.011 px inside on average, a depth bias of 0.15 mm for a 0.1 m
-    // marker at 0.6 m that the covariance cannot know; four or five passes leave
-    // 0.0004 px (rendered views, test_targets).
-    bool refined = true;
-    for (int pass = 0; refined && pass < 10; ++pass) {
-      const std::array<Eigen::Vector2d, 4> before = tag.corners;
-      refined = refine_marker_corners(gray, tag.corners);
-      double moved = 0.0;
-      for (int c = 0; c < 4; ++c) moved = std::max(moved, (tag.corners[c] - before[c]).norm());
-      if (moved < 1e-3) break;
-    }
-    if (!refined) continue;
+    if (!refine_marker_edges(gray, tag.corners)) continue;
     tags.push_back(tag);
   }
   std::sort(tags.begin(), tags.end(), [](const TagCorners& a, const TagCorners& b) { return a.id < b.id; });

@@ -1,0 +1,88 @@
+#include "edge_refinement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace handeye {
+namespace {
+
+/// Bilinear gray level, or NaN outside the image.
+double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
+  const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+  if (x < 0 || y < 0 || x + 1 >= gray.cols || y + 1 >= gray.rows) return std::nan("");
+  const double fx = p.x() - x, fy = p.y() - y;
+  const auto at = [&](int u, int v) { return static_cast<double>(gray.at<std::uint8_t>(v, u)); };
+  return (1 - fy) * ((1 - fx) * at(x, y) + fx * at(x + 1, y)) + fy * ((1 - fx) * at(x, y + 1) + fx * at(x + 1, y + 1));
+}
+
+/// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit
+/// corner model describes: along each side of the black square, at one point per
+/// 4 px (at least 16), the edge's position across the side is the gradient-weighted
+/// mean within +-2 px; a line is fitted to those points, and each corner is where
+/// two lines meet. Returns false (corners untouched) when a side has too few
+/// edge points (the marker at the image border).
+bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners) {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& c : corners) centre += 0.25 * c;
+  std::array<Eigen::Vector2d, 4> point_on, direction;  // the four fitted lines
+  for (int e = 0; e < 4; ++e) {
+    const Eigen::Vector2d a = corners[e], b = corners[(e + 1) % 4];
+    const double length = (b - a).norm();
+    if (!(length > 4.0)) return false;
+    const Eigen::Vector2d along = (b - a) / length;
+    Eigen::Vector2d normal(-along.y(), along.x());
+    if (normal.dot(0.5 * (a + b) - centre) < 0.0) normal = -normal;  // outwards, black to white
+    const int samples = std::max(16, static_cast<int>(length / 4.0));
+    std::vector<Eigen::Vector2d> edge;
+    for (int i = 0; i < samples; ++i) {
+      const Eigen::Vector2d p = a + (b - a) * ((i + 1.0) / (samples + 1.0));
+      double weight_sum = 0.0, offset_sum = 0.0;
+      for (double n = -2.0; n <= 2.0; n += 0.25) {
+        const double outer = sample(gray, p + (n + 1.0) * normal), inner = sample(gray, p + (n - 1.0) * normal);
+        if (!(outer > inner)) continue;  // NaN outside the image, or a gradient the wrong way
+        const double w = (outer - inner) * (outer - inner);
+        weight_sum += w;
+        offset_sum += w * n;
+      }
+      if (weight_sum > 0.0) edge.push_back(p + (offset_sum / weight_sum) * normal);
+    }
+    if (edge.size() < 8) return false;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& q : edge) mean += q / static_cast<double>(edge.size());
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (const Eigen::Vector2d& q : edge) scatter += (q - mean) * (q - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(scatter);
+    point_on[e] = mean;
+    direction[e] = eig.eigenvectors().col(1);
+  }
+  std::array<Eigen::Vector2d, 4> refined;
+  for (int c = 0; c < 4; ++c) {
+    const int previous = (c + 3) % 4;  // corner c is where side c - 1 ends and side c starts
+    Eigen::Matrix2d A;
+    A << direction[previous], -direction[c];
+    if (std::abs(A.determinant()) < 1e-6) return false;
+    const Eigen::Vector2d st = A.lu().solve(point_on[c] - point_on[previous]);
+    refined[c] = point_on[previous] + st(0) * direction[previous];
+    if (!((refined[c] - corners[c]).norm() < 3.0)) return false;  // not the same corner
+  }
+  corners = refined;
+  return true;
+}
+
+}  // namespace
+
+bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners) {
+  for (int pass = 0; pass < 10; ++pass) {
+    const std::array<Eigen::Vector2d, 4> before = corners;
+    if (!refine_marker_corners(gray, corners)) return false;
+    double moved = 0.0;
+    for (int c = 0; c < 4; ++c) moved = std::max(moved, (corners[c] - before[c]).norm());
+    if (moved < 1e-3) break;
+  }
+  return true;
+}
+
+}  // namespace handeye
