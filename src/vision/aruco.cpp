@@ -133,7 +133,7 @@ std::vector<TagCorners> ArucoDetector::detect(const cv::Mat& gray) const {
     // OpenCV: top-left, top-right, bottom-right, bottom-left; ours starts bottom-left.
     const int order[4] = {3, 2, 1, 0};
     for (int c = 0; c < 4; ++c) tag.corners[c] = Eigen::Vector2d(corners[i][order[c]].x, corners[i][order[c]].y);
-    if (!refine_marker_edges(gray, tag.corners)) continue;
+    if (!refine_marker_edges(gray, tag.corners, 2.0)) continue;
     tags.push_back(tag);
   }
   std::sort(tags.begin(), tags.end(), [](const TagCorners& a, const TagCorners& b) { return a.id < b.id; });

@@ -21,10 +21,10 @@ double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
 /// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit
 /// corner model describes: along each side of the black square, at one point per
 /// 4 px (at least 16), the edge's position across the side is the gradient-weighted
-/// mean within +-2 px; a line is fitted to those points, and each corner is where
-/// two lines meet. Returns false (corners untouched) when a side has too few
-/// edge points (the marker at the image border).
-bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners) {
+/// mean within +-`range` px (libapriltag: 2); a line is fitted to those points, and
+/// each corner is where two lines meet. Returns false (corners untouched) when a
+/// side has too few edge points (the marker at the image border).
+bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double range) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& c : corners) centre += 0.25 * c;
   std::array<Eigen::Vector2d, 4> point_on, direction;  // the four fitted lines
@@ -40,7 +40,7 @@ bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& 
     for (int i = 0; i < samples; ++i) {
       const Eigen::Vector2d p = a + (b - a) * ((i + 1.0) / (samples + 1.0));
       double weight_sum = 0.0, offset_sum = 0.0;
-      for (double n = -2.0; n <= 2.0; n += 0.25) {
+      for (double n = -range; n <= range; n += 0.25) {
         const double outer = sample(gray, p + (n + 1.0) * normal), inner = sample(gray, p + (n - 1.0) * normal);
         if (!(outer > inner)) continue;  // NaN outside the image, or a gradient the wrong way
         const double w = (outer - inner) * (outer - inner);
@@ -74,13 +74,15 @@ bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& 
 
 }  // namespace
 
-bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners) {
+bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range) {
+  double moved = INFINITY;
   for (int pass = 0; pass < 10; ++pass) {
     const std::array<Eigen::Vector2d, 4> before = corners;
-    if (!refine_marker_corners(gray, corners)) return false;
-    double moved = 0.0;
+    const bool settled = moved < 0.05;  // the lines within 0.05 px: the window may narrow
+    if (!refine_marker_corners(gray, corners, settled ? settled_range : 2.0)) return false;
+    moved = 0.0;
     for (int c = 0; c < 4; ++c) moved = std::max(moved, (corners[c] - before[c]).norm());
-    if (moved < 1e-3) break;
+    if (settled && moved < 1e-3) break;
   }
   return true;
 }

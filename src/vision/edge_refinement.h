@@ -11,17 +11,28 @@ namespace handeye {
 
 /// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit
 /// corner model describes, repeated until the corners stop moving (< 0.001 px,
-/// at most 10 passes). One pass searches +-2 px about the current lines, so it
-/// keeps part of its start's error: measured on rendered views (test_targets),
-/// from OpenCV's corners (about 0.5 px inside) two passes leave them 0.011 px
-/// inside on average, a depth bias of 0.15 mm for a 0.1 m marker at 0.6 m that
-/// the covariance cannot know, and four or five leave 0.0004 px; from
-/// libapriltag's own single pass, a shift of about -0.002 px in x and y that is
-/// shared by every corner of every image (a bias of X, rendered sessions in
-/// corners_study). `corners` in OpenCV's pixel convention (centres at
-/// integers), consecutive around the marker. Returns false (corners untouched
-/// or partly moved) when a side has too few edge points (the marker at the
-/// image border) or the lines do not meet near the corners.
-bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners);
+/// at most 10 passes). A pass finds each edge point within +-2 px of the current
+/// lines, so one pass keeps part of its start's error: from OpenCV's corners
+/// (about 0.5 px inside) two passes leave them 0.011 px inside on average, four
+/// or five 0.0004 px (test_targets); libapriltag's own single pass leaves a shift
+/// of about (-0.0024, -0.0020) px shared by every corner (test_vision). Once the
+/// lines are within 0.05 px the window is +-`settled_range` px.
+///
+/// Why the window may narrow: the gradients within +-2 px also see the border's
+/// inner side, where white data cells lighten it, and the fitted edge moves
+/// outwards. Measured on rendered sessions (corners_study, mean outward shift per
+/// corner): a 2 x 2 board of 60 mm AprilTags at 0.4-1.0 m 0.0024 px with +-2 px,
+/// 0.0010 with +-1.5, 0.0002 with +-1; small enough to bias X and a refined focal
+/// length once the pixel noise is a few hundredths of a pixel (2 sigma coverage
+/// of the focal length 8%, 52%, 82%). A +-1 px window is noisier, and on single
+/// 0.1 m markers at 0.4-0.8 m it shifts the corners inwards (0.0010-0.0015 px),
+/// which leaves one ArUco marker's X less honest (test_images: NEES 9.9 against
+/// 8.1 with +-2): the AprilTag detector narrows it, the ArUco detector does not.
+///
+/// `corners` in OpenCV's pixel convention (centres at integers), consecutive
+/// around the marker. Returns false (corners untouched or partly moved) when a
+/// side has too few edge points (the marker at the image border) or the lines
+/// do not meet near the corners.
+bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range);
 
 }  // namespace handeye
