@@ -15,7 +15,7 @@ namespace handeye {
 /// lines, so one pass keeps part of its start's error: from OpenCV's corners
 /// (about 0.5 px inside) two passes leave them 0.011 px inside on average, four
 /// or five 0.0004 px (test_targets); libapriltag's own single pass leaves a shift
-/// of about (-0.0024, -0.0020) px shared by every corner (test_vision). Once the
+/// of (-0.0025, -0.0034) px shared by every corner (test_vision). Once the
 /// lines are within 0.05 px the window is +-`settled_range` px.
 ///
 /// Why the window may narrow: the gradients within +-2 px also see the border's
