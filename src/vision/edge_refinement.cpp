@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -21,10 +23,11 @@ double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
 /// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit
 /// corner model describes: along each side of the black square, at one point per
 /// 4 px (at least 16), the edge's position across the side is the gradient-weighted
-/// mean within +-`range` px (libapriltag: 2); a line is fitted to those points, and
-/// each corner is where two lines meet. Returns false (corners untouched) when a
-/// side has too few edge points (the marker at the image border).
-bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double range) {
+/// mean within +-`range` px (libapriltag: quad_decimate + 1); a line is fitted to
+/// those points, and each corner is where two lines meet. Returns false (corners
+/// untouched) when a side has too few edge points (the marker at the image border).
+bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double range,
+                           bool dark_inside) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& c : corners) centre += 0.25 * c;
   std::array<Eigen::Vector2d, 4> point_on, direction;  // the four fitted lines
@@ -34,7 +37,8 @@ bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& 
     if (!(length > 4.0)) return false;
     const Eigen::Vector2d along = (b - a) / length;
     Eigen::Vector2d normal(-along.y(), along.x());
-    if (normal.dot(0.5 * (a + b) - centre) < 0.0) normal = -normal;  // outwards, black to white
+    if (normal.dot(0.5 * (a + b) - centre) < 0.0) normal = -normal;  // outwards
+    if (!dark_inside) normal = -normal;  // from dark to bright, as libapriltag's reversed_border
     const int samples = std::max(16, static_cast<int>(length / 4.0));
     std::vector<Eigen::Vector2d> edge;
     for (int i = 0; i < samples; ++i) {
@@ -74,15 +78,16 @@ bool refine_marker_corners(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& 
 
 }  // namespace
 
-bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range) {
-  double moved = INFINITY;
+bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range,
+                         bool dark_inside) {
+  double moved = std::numeric_limits<double>::infinity();
   for (int pass = 0; pass < 10; ++pass) {
     const std::array<Eigen::Vector2d, 4> before = corners;
-    const bool settled = moved < 0.05;  // the lines within 0.05 px: the window may narrow
-    if (!refine_marker_corners(gray, corners, settled ? settled_range : 2.0)) return false;
+    const double range = moved < 0.05 ? settled_range : 2.0;  // the lines within 0.05 px: the window may narrow
+    if (!refine_marker_corners(gray, corners, range, dark_inside)) return false;
     moved = 0.0;
     for (int c = 0; c < 4; ++c) moved = std::max(moved, (corners[c] - before[c]).norm());
-    if (settled && moved < 1e-3) break;
+    if (range == settled_range && moved < 1e-3) break;
   }
   return true;
 }

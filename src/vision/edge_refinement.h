@@ -14,9 +14,11 @@ namespace handeye {
 /// at most 10 passes). A pass finds each edge point within +-2 px of the current
 /// lines, so one pass keeps part of its start's error: from OpenCV's corners
 /// (about 0.5 px inside) two passes leave them 0.011 px inside on average, four
-/// or five 0.0004 px (test_targets); libapriltag's own single pass leaves a shift
-/// of (-0.0025, -0.0034) px shared by every corner (test_vision). Once the
-/// lines are within 0.05 px the window is +-`settled_range` px.
+/// or five 0.0004 px (test_targets); libapriltag's own single pass (nearest-pixel
+/// samples within +-(quad_decimate + 1) px of its thresholded quad) leaves
+/// (-0.0025, -0.0034) px on average, the same for every corner of every view
+/// (test_vision). Once the lines are within 0.05 px the window is
+/// +-`settled_range` px.
 ///
 /// Why the window may narrow: the gradients within +-2 px also see the border's
 /// inner side, where white data cells lighten it, and the fitted edge moves
@@ -24,15 +26,19 @@ namespace handeye {
 /// corner): a 2 x 2 board of 60 mm AprilTags at 0.4-1.0 m 0.0024 px with +-2 px,
 /// 0.0010 with +-1.5, 0.0002 with +-1; small enough to bias X and a refined focal
 /// length once the pixel noise is a few hundredths of a pixel (2 sigma coverage
-/// of the focal length 8%, 52%, 82%). A +-1 px window is noisier, and on single
-/// 0.1 m markers at 0.4-0.8 m it shifts the corners inwards (0.0010-0.0015 px),
-/// which leaves one ArUco marker's X less honest (test_images: NEES 9.9 against
-/// 8.1 with +-2): the AprilTag detector narrows it, the ArUco detector does not.
+/// of the focal length 8%, 52%, 82%). It does not vanish: one 48 mm tag keeps
+/// 0.0034 px outwards with +-1 px (0.011 px at 0.85-1.0 m, its cells 3.6 px
+/// wide). And a +-1 px window is noisier, and on single 0.1 m markers at
+/// 0.4-0.8 m it shifts the corners inwards (0.0010-0.0015 px), which leaves one
+/// ArUco marker's X less honest (test_images: NEES 9.9 against 8.1 with +-2):
+/// the AprilTag detector narrows it, the ArUco detector does not.
 ///
 /// `corners` in OpenCV's pixel convention (centres at integers), consecutive
-/// around the marker. Returns false (corners untouched or partly moved) when a
-/// side has too few edge points (the marker at the image border) or the lines
-/// do not meet near the corners.
-bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range);
+/// around the marker; `dark_inside` false for a square brighter than around it
+/// (libapriltag's reversed_border families). Returns false (corners untouched or
+/// partly moved) when a side has too few edge points (the marker at the image
+/// border) or the lines do not meet near the corners.
+bool refine_marker_edges(const cv::Mat& gray, std::array<Eigen::Vector2d, 4>& corners, double settled_range,
+                         bool dark_inside = true);
 
 }  // namespace handeye

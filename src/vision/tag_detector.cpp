@@ -106,13 +106,14 @@ std::vector<TagCorners> TagDetector::detect(const cv::Mat& gray) const {
     // and CameraInfo put them at integers. Without the shift every pose is off
     // by half a pixel (0.4 mm sideways at 0.5 m here; test_vision sees it).
     for (int c = 0; c < 4; ++c) tag.corners[c] = Eigen::Vector2d(det->p[c][0] - 0.5, det->p[c][1] - 0.5);
-    // libapriltag fits the edges once, within +-2 px of its thresholded quad, and
-    // keeps part of that quad's offset; refitting until the lines stop moving, the
-    // last passes within +-1 px, removes it (see refine_marker_edges). At the image
-    // border, where a side has too few edge points, libapriltag's corners stay.
+    // libapriltag fits each edge once, from nearest-pixel samples about its
+    // thresholded quad, and its corners share an offset of a few thousandths of a
+    // pixel; refitting until the lines stop moving, the last passes within +-1 px,
+    // takes most of it out (see refine_marker_edges). At the image border, where a
+    // side has too few edge points, libapriltag's corners stay.
     if (options_.refine_edges) {
       std::array<Eigen::Vector2d, 4> refitted = tag.corners;
-      if (refine_marker_edges(contiguous, refitted, 1.0)) tag.corners = refitted;
+      if (refine_marker_edges(contiguous, refitted, 1.0, !impl_->family->reversed_border)) tag.corners = refitted;
     }
     tags.push_back(tag);
   }
