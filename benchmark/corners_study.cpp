@@ -13,7 +13,16 @@
 // the sessions), the 6-dof NEES of X by both, and with --focal-error the refined
 // focal length's coverage and X's bias in sigma.
 //
+// With --corner-bias, each detected corner is also compared with its true
+// projection, and the mean error is printed per target kind: in the image's x
+// and y, along the board's x and y axes, outwards from the board's centre and
+// from each marker's centre, and away from the principal point. A shift that
+// every corner shares (a few thousandths of a pixel) biases X once the pixel
+// noise is a few hundredths; this is how libapriltag's shift and ChArUco's were
+// found (README, "Where it falls short"). --distances lo,hi narrows the views.
+//
 //   handeye_corners_study --sessions 300 [--kinds apriltag,charuco,chessboard,apriltag_single] [--focal-error 0.01]
+//                         [--corner-bias] [--distances 0.4,1.0]
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -32,6 +41,7 @@
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
+#include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {
 namespace {
@@ -45,6 +55,54 @@ Target target_of(const std::string& kind) {
   throw HandEyeError(ErrorCode::MalformedFile, "unknown target kind " + kind, "--kinds", "use apriltag, charuco, chessboard, apriltag_single");
 }
 
+/// Sums over detected corners of their error against the true projection (px),
+/// and of its components (see the file's comment).
+struct CornerBias {
+  int corners = 0, marker_corners = 0;
+  Eigen::Vector2d image = Eigen::Vector2d::Zero(), board_axes = Eigen::Vector2d::Zero();
+  double from_board_centre = 0.0, from_marker_centre = 0.0, from_principal_point = 0.0, squares = 0.0;
+
+  void add(const CornerBias& o) {
+    corners += o.corners;
+    marker_corners += o.marker_corners;
+    image += o.image;
+    board_axes += o.board_axes;
+    from_board_centre += o.from_board_centre;
+    from_marker_centre += o.from_marker_centre;
+    from_principal_point += o.from_principal_point;
+    squares += o.squares;
+  }
+};
+
+/// One image's corners (raw pixels) against their projection at the true pose.
+CornerBias corner_bias(const CameraModel& camera, const Eigen::Isometry3d& T_camera_face, const PointCorrespondences& seen) {
+  CornerBias b;
+  Eigen::Vector2d board_centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& u : seen.image) board_centre += u / static_cast<double>(seen.image.size());
+  const Eigen::Vector2d principal_point(camera.K(0, 2), camera.K(1, 2));
+  const auto direction = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& step) {
+    return (project(camera, T_camera_face * (p + step)) - project(camera, T_camera_face * p)).normalized();
+  };
+  for (std::size_t k = 0; k < seen.image.size(); ++k) {
+    const Eigen::Vector3d& p = seen.object[k];
+    const Eigen::Vector2d& u = seen.image[k];
+    const Eigen::Vector2d e = u - project(camera, T_camera_face * p);
+    ++b.corners;
+    b.image += e;
+    b.board_axes += Eigen::Vector2d(e.dot(direction(p, Eigen::Vector3d(1e-4, 0, 0))), e.dot(direction(p, Eigen::Vector3d(0, 1e-4, 0))));
+    b.from_board_centre += e.dot((u - board_centre).normalized());
+    b.from_principal_point += e.dot((u - principal_point).normalized());
+    b.squares += e.squaredNorm();
+    if (seen.blocks == 8) {  // a marker's four corners, one block under the edge-fit model
+      Eigen::Vector2d marker_centre = Eigen::Vector2d::Zero();
+      for (std::size_t j = k / 4 * 4; j < k / 4 * 4 + 4; ++j) marker_centre += 0.25 * seen.image[j];
+      b.from_marker_centre += e.dot((u - marker_centre).normalized());
+      ++b.marker_corners;
+    }
+  }
+  return b;
+}
+
 struct SessionResult {
   bool ok = false;
   std::string why;
@@ -53,9 +111,10 @@ struct SessionResult {
   Matrix6d poses_covariance, corners_covariance, bound;
   double focal = 0.0, focal_sigma = 0.0, true_focal = 0.0;
   bool per_image = false;  // the fit weighed each image by its own sigma
+  CornerBias bias;
 };
 
-SessionResult run_session(const std::string& kind, int index, int n, double focal_error) {
+SessionResult run_session(const std::string& kind, int index, int n, double focal_error, const Eigen::Vector2d& distances) {
   SessionResult out;
   const Target target = target_of(kind);
   const CameraModel camera = simulated_camera();
@@ -65,8 +124,8 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
   out.true_focal = camera.K(0, 0);
   Rng rng(static_cast<std::uint64_t>(18000 + index));
   ViewpointOptions views;
-  views.min_distance = 0.4;
-  views.max_distance = 1.0;
+  views.min_distance = distances[0];
+  views.max_distance = distances[1];
   SimulatedSession truth = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), n, MeasurementNoise{}, views);
   // The views look at the pattern frame's origin; make them look at the printed face.
   const Eigen::Isometry3d face_inverse = target_face(target).inverse();
@@ -89,6 +148,10 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     if (out.images < 6) {
       out.why = "only " + std::to_string(out.images) + " images detected";
       return out;
+    }
+    for (const PoseSample& sample : found.samples.samples) {  // named view_<i>.png
+      const std::size_t i = std::stoul(sample.corners->source.substr(5));
+      out.bias.add(corner_bias(camera, truth.samples.samples[i].T_camera_pattern * face_inverse, sample.corners->points));
     }
     SessionSettings settings = session_settings(found.samples);
     // As `handeye images --refine-intrinsics`: wrong intrinsics make the images' poses
@@ -143,6 +206,7 @@ struct Summary {
   Eigen::Vector2d poses_ms = Eigen::Vector2d::Zero(), corners_ms = Eigen::Vector2d::Zero(), bound_ms = Eigen::Vector2d::Zero();
   double nees_poses = 0.0, nees_corners = 0.0, focal_within_2_sigma = 0.0, per_image = 0.0;
   Vector6d bias_poses = Vector6d::Zero(), bias_corners = Vector6d::Zero();
+  CornerBias corner_bias;
   std::string first_failure;
 };
 
@@ -150,13 +214,13 @@ struct Summary {
 Eigen::Vector2d squares(const Vector6d& e) { return {e.head<3>().squaredNorm(), e.tail<3>().squaredNorm()}; }
 Eigen::Vector2d traces(const Matrix6d& C) { return {C.topLeftCorner<3, 3>().trace(), C.bottomRightCorner<3, 3>().trace()}; }
 
-Summary study(const std::string& kind, int M, int n, double focal_error, int threads) {
+Summary study(const std::string& kind, int M, int n, double focal_error, const Eigen::Vector2d& distances, int threads) {
   std::vector<SessionResult> results(static_cast<std::size_t>(M));
   std::atomic<int> next{0};
   std::vector<std::thread> workers;
   for (int t = 0; t < threads; ++t) {
     workers.emplace_back([&] {
-      for (int k = next++; k < M; k = next++) results[static_cast<std::size_t>(k)] = run_session(kind, k, n, focal_error);
+      for (int k = next++; k < M; k = next++) results[static_cast<std::size_t>(k)] = run_session(kind, k, n, focal_error, distances);
     });
   }
   for (std::thread& w : workers) w.join();
@@ -169,6 +233,7 @@ Summary study(const std::string& kind, int M, int n, double focal_error, int thr
     }
     ++s.sessions;
     s.images += r.images;
+    s.corner_bias.add(r.bias);
     s.poses_ms += squares(r.poses_error);
     s.corners_ms += squares(r.corners_error);
     s.bound_ms += traces(r.bound);
@@ -201,17 +266,33 @@ int main(int argc, char** argv) {
   int M = 300, n = 30, threads = 2;
   double focal_error = 0.0;
   std::string kinds = "apriltag,charuco,chessboard";
-  for (int i = 1; i + 1 < argc; i += 2) {
+  bool print_corner_bias = false;
+  Eigen::Vector2d distances(0.4, 1.0);  // m, camera to the pattern
+  const auto usage = [&] {
+    std::fprintf(stderr, "usage: %s [--sessions M] [--images n] [--kinds apriltag,charuco,chessboard] "
+                         "[--focal-error e] [--threads t] [--corner-bias] [--distances lo,hi (m)]\n", argv[0]);
+    return 2;
+  };
+  for (int i = 1; i < argc; ++i) {
     const std::string key = argv[i];
-    if (key == "--sessions") M = std::atoi(argv[i + 1]);
-    else if (key == "--images") n = std::atoi(argv[i + 1]);
-    else if (key == "--threads") threads = std::max(1, std::atoi(argv[i + 1]));
-    else if (key == "--focal-error") focal_error = std::atof(argv[i + 1]);
-    else if (key == "--kinds") kinds = argv[i + 1];
-    else {
-      std::fprintf(stderr, "usage: %s [--sessions M] [--images n] [--kinds apriltag,charuco,chessboard] "
-                           "[--focal-error e] [--threads t]\n", argv[0]);
-      return 2;
+    if (key == "--corner-bias") {
+      print_corner_bias = true;
+      continue;
+    }
+    if (i + 1 >= argc) return usage();
+    const char* value = argv[++i];
+    if (key == "--sessions") M = std::atoi(value);
+    else if (key == "--images") n = std::atoi(value);
+    else if (key == "--threads") threads = std::max(1, std::atoi(value));
+    else if (key == "--focal-error") focal_error = std::atof(value);
+    else if (key == "--kinds") kinds = value;
+    else if (key == "--distances") {
+      if (std::sscanf(value, "%lf,%lf", &distances[0], &distances[1]) != 2 || !(distances[0] > 0.0) ||
+          !(distances[1] >= distances[0])) {
+        return usage();
+      }
+    } else {
+      return usage();
     }
   }
   const double deg = 180.0 / M_PI;
@@ -227,7 +308,7 @@ int main(int argc, char** argv) {
   std::stringstream list(kinds);
   std::string kind;
   while (std::getline(list, kind, ',')) {
-    const Summary s = study(kind, M, n, focal_error, threads);
+    const Summary s = study(kind, M, n, focal_error, distances, threads);
     const Eigen::Vector2d poses = s.poses_ms.cwiseSqrt(), corners = s.corners_ms.cwiseSqrt(), bound = s.bound_ms.cwiseSqrt();
     if (focal_error == 0.0) {
       std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2f | %.2f | "
@@ -239,6 +320,15 @@ int main(int argc, char** argv) {
       std::printf("| %s | %d | %.0f%% | %.2f | %.2f | %.2f | %.2f |\n", kind.c_str(), s.sessions,
                   100.0 * s.focal_within_2_sigma, s.bias_corners.cwiseAbs().maxCoeff(), s.bias_poses.cwiseAbs().maxCoeff(),
                   s.nees_corners, s.nees_poses);
+    }
+    if (print_corner_bias && s.corner_bias.corners > 0) {
+      const CornerBias& b = s.corner_bias;
+      const double c = b.corners;
+      std::printf("\n%s corner bias over %d corners [px]: image (%.4f, %.4f), board axes (%.4f, %.4f), outwards from the "
+                  "board's centre %.4f, from each marker's %.4f, from the principal point %.4f; RMS %.4f\n\n",
+                  kind.c_str(), b.corners, b.image.x() / c, b.image.y() / c, b.board_axes.x() / c, b.board_axes.y() / c,
+                  b.from_board_centre / c, b.marker_corners > 0 ? b.from_marker_centre / b.marker_corners : 0.0,
+                  b.from_principal_point / c, std::sqrt(b.squares / c));
     }
     if (s.failed > 0) std::printf("\n%d %s session(s) failed, the first: %s\n\n", s.failed, kind.c_str(), s.first_failure.c_str());
     std::fflush(stdout);
