@@ -433,12 +433,13 @@ TargetPointTerm target_point_term(ceres::Problem& problem, const std::vector<dou
   const double t2 = A.squaredNorm() - 2.0 * GA.cwiseProduct(S).sum() +
                     (G * G.transpose()).cwiseProduct(S * S.transpose()).sum();
   // The prior rows' share (M_cc is not idempotent when priors are fitted): u = |J_p S|^2
-  // of D's, w = |J_c H^-1 J_p^T|^2 = tr(B) - tr(B^2), B = H^-1 J_p^T J_p, of the corners'.
+  // of D's, w = |J_c H^-1 J_p^T|^2 = tr(C) - |C|_F^2, C = J_p H^-1 J_p^T (one solve per
+  // prior row; H = J_c^T J_c + J_p^T J_p), of the corners'.
   double u = 0.0, w = 0.0;
   if (Jp.rows() > 0) {
     u = Eigen::MatrixXd(Jp * S).squaredNorm();
-    const Eigen::MatrixXd B = ldlt.solve(Eigen::MatrixXd(Eigen::SparseMatrix<double>(Jp.transpose() * Jp)));
-    w = B.trace() - B.cwiseProduct(B.transpose()).sum();
+    const Eigen::MatrixXd C = Jp * ldlt.solve(Eigen::MatrixXd(Jp.transpose()));
+    w = C.trace() - C.squaredNorm();
   }
   const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), m);
   const double rss = r.squaredNorm(), q = (D.transpose() * r).squaredNorm();
