@@ -131,6 +131,17 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
   const std::string nul = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
                                         "/test/fuzz/corpus/files/regression-opencv-nul-byte.xml");  // OpenCV segfaults on it
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(nul, "nul"); }).find("a NUL byte at offset 14"), std::string::npos);
+  // OpenCV's XML parser reads NULL on a cut-short document (the fuzzer's find);
+  // tinyxml2 turns it, and a camera.xml cut in half, into a named error.
+  const std::string cut = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
+                                        "/test/fuzz/corpus/files/regression-opencv-xml-cut-attribute.xml");
+  EXPECT_NE(error_of([&] { images::parse_opencv_camera(cut, "cut"); }).find("not well-formed XML (line 1)"),
+            std::string::npos);
+  const std::string xml = io::read_file((dir / "camera.xml").string());
+  const std::string half = xml.substr(0, xml.size() / 2);
+  const std::string half_error = error_of([&] { images::parse_opencv_camera(half, "half.xml"); });
+  EXPECT_NE(half_error.find("not well-formed XML"), std::string::npos) << half_error;
+  EXPECT_NE(half_error.find("half.xml"), std::string::npos) << half_error;
 }
 
 TEST(TargetFile, ReadsEveryKindAndNamesBadEntries) {

@@ -1,11 +1,12 @@
 // OpenCV's camera files, read with cv::FileStorage from memory (so the fuzzer
-// can drive it without files). Only opencv_core: test/sanitize builds this file
-// alone into fuzz_camera_files.
+// can drive it without files). Only opencv_core and tinyxml2: test/sanitize
+// builds this file alone into fuzz_camera_files.
 #include <cmath>
 #include <limits>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
+#include <tinyxml2.h>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/images/image_folder.h"
@@ -53,6 +54,22 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
   return m;
 }
 
+/// OpenCV 4.6's XML parser reads past the end of a malformed document (a NULL
+/// dereference on "<?xml versio...=" cut short: test/fuzz/corpus/files/
+/// regression-opencv-xml-cut-attribute.xml), so an XML file is checked by a real
+/// XML parser first; OpenCV only ever sees well-formed XML.
+void require_well_formed_xml(const std::string& text, const std::string& source, const std::string& hint) {
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos || text[first] != '<') return;  // YAML or JSON: OpenCV's own parsers
+  tinyxml2::XMLDocument document;
+  if (document.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "not well-formed XML (line " + std::to_string(document.ErrorLineNum()) +
+                           "): " + document.ErrorStr(),
+                       source, hint);
+  }
+}
+
 }  // namespace
 
 CameraModel parse_opencv_camera(const std::string& text, const std::string& source) {
@@ -65,6 +82,7 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
     throw HandEyeError(ErrorCode::MalformedFile, "a NUL byte at offset " + std::to_string(nul) + ": not a text file",
                        source, hint);
   }
+  require_well_formed_xml(text, source, hint);
   try {
     cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     if (!storage.isOpened()) throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it", source, hint);
