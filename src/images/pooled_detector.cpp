@@ -17,7 +17,7 @@ const PooledDetector::Frame& PooledDetector::add(const cv::Mat& gray, const Came
     camera_ = camera;
   }
   Frame frame;
-  const TargetObservation seen = detector_.detect(rectifier_->rectify(gray));
+  const TargetObservation seen = detector_.detect(gray, *rectifier_);
   frame.why = seen.refusal;
   if (seen.points) {
     // A refused frame adds nothing to the pool (estimate_pose adds only what it accepts).

@@ -80,7 +80,7 @@ void TargetDetectorNode::on_image(const sensor_msgs::Image::ConstPtr& image) {
     ROS_ERROR_THROTTLE(5.0, "target_detector: cannot convert a `%s` image to mono8: %s", image->encoding.c_str(), e.what());
     return;
   }
-  const TargetObservation seen = detector_->detect(rectifier_->rectify(mono->image));
+  const TargetObservation seen = detector_->detect(mono->image, *rectifier_);
   TagDetectionArray array;
   array.header = image->header;
   if (seen.points) {

@@ -207,7 +207,8 @@ TargetObservation detect_charuco(const cv::Mat& gray, const CharucoTarget& t, in
   // NEES of 6.4. cornerSubPix again, to convergence, lands on each saddle point
   // whatever the start.
   // The window stays clear of the markers in the white squares around a corner.
-  refine_saddle_points(gray, corners, board_corner_spacing(board, ids, corners) * static_cast<float>(1.0 - t.marker / t.square));
+  out.saddle_half_window =
+      refine_saddle_points(gray, corners, board_corner_spacing(board, ids, corners) * static_cast<float>(1.0 - t.marker / t.square));
   PointCorrespondences points;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const cv::Point3f& p = board->chessboardCorners[static_cast<std::size_t>(ids[i])];

@@ -64,7 +64,7 @@ Eigen::Vector2d project(const CameraModel& camera, const Vector3d& p_camera) {
   return {pixels[0].x, pixels[0].y};
 }
 
-ImageRectifier::ImageRectifier(const CameraModel& camera) : rectified_(camera) {
+ImageRectifier::ImageRectifier(const CameraModel& camera) : camera_(camera), rectified_(camera) {
   check_camera_model(camera, "camera");
   rectified_.distortion.clear();
   bool distorted = false;
@@ -82,7 +82,34 @@ ImageRectifier::ImageRectifier(const CameraModel& camera) : rectified_(camera) {
 cv::Mat ImageRectifier::rectify(const cv::Mat& image) const {
   if (map_x_.empty()) return image;
   cv::Mat out;
-  cv::remap(image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(image, out, map_x_, map_y_, cv::INTER_LANCZOS4, cv::BORDER_CONSTANT);
+  return out;
+}
+
+std::vector<cv::Point2f> ImageRectifier::to_raw(const std::vector<Eigen::Vector2d>& rectified_pixels) const {
+  std::vector<cv::Point2f> raw;
+  if (rectified_pixels.empty()) return raw;
+  const Eigen::Matrix3d K_inverse = camera_.K.inverse();
+  std::vector<cv::Point3d> normalised;
+  for (const Eigen::Vector2d& u : rectified_pixels) {
+    const Vector3d p = K_inverse * Vector3d(u.x(), u.y(), 1.0);
+    normalised.emplace_back(p.x() / p.z(), p.y() / p.z(), 1.0);
+  }
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(normalised, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), camera_matrix(camera_),
+                    distortion(camera_), projected);
+  for (const cv::Point2d& p : projected) raw.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+  return raw;
+}
+
+std::vector<Eigen::Vector2d> ImageRectifier::from_raw(const std::vector<cv::Point2f>& raw_pixels) const {
+  std::vector<Eigen::Vector2d> out;
+  if (raw_pixels.empty()) return out;
+  std::vector<cv::Point2d> raw(raw_pixels.begin(), raw_pixels.end()), rectified;
+  const cv::Mat K = camera_matrix(camera_);
+  cv::undistortPoints(raw, rectified, K, distortion(camera_), cv::noArray(), K,
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
+  for (const cv::Point2d& p : rectified) out.emplace_back(p.x, p.y);
   return out;
 }
 

@@ -58,4 +58,12 @@ TargetObservation TargetDetector::detect(const cv::Mat& gray) const {
   return found;
 }
 
+TargetObservation TargetDetector::detect(const cv::Mat& raw_gray, const ImageRectifier& rectifier) const {
+  TargetObservation seen = detect(rectifier.rectify(raw_gray));
+  if (seen.points) {
+    refine_saddle_points_in_raw_image(raw_gray, rectifier, seen.saddle_half_window, seen.points->image);
+  }
+  return seen;
+}
+
 }  // namespace handeye

@@ -1,8 +1,9 @@
 // Images of a calibration target seen by a camera at a known pose, for the tests
 // and the simulated rig: the target's printed planes (libapriltag's tag bitmaps,
 // OpenCV's ArUco markers and ChArUco board, a drawn chessboard) warped by OpenCV
-// onto a supersampled ideal (pinhole) image, blurred, area-averaged to the sensor
-// resolution, distorted with the camera's distortion model, and given Gaussian
+// onto a supersampled ideal (pinhole) image, blurred, distorted with the camera's
+// distortion model at the supersampled resolution, area-averaged to the sensor's
+// pixels (as a sensor integrates light over each pixel), and given Gaussian
 // pixel noise. No ROS.
 #pragma once
 
@@ -22,6 +23,12 @@ struct RenderOptions {
   int supersample = 3;          // ideal image at supersample x resolution, for anti-aliasing
   int texels_per_cell = 8;      // marker bitmap upscaling before the warp
   int texels_per_square = 96;   // chessboard and ChArUco textures
+  // ChArUco boards are drawn at no less than this printer resolution: OpenCV's
+  // CharucoBoard::draw puts each marker on whole pixels of its image (up to one
+  // pixel off its place), as on a real print; at 96 px a square (0.36 mm a pixel)
+  // that moved the saddle points near the markers by (-0.011, -0.007) px at 1 m,
+  // more than a board printed at 300 dpi from an image at that resolution has.
+  double print_dpi = 300.0;
   double board_margin_cells = 1.0;  // white board beyond the markers' quiet zones (planar marker layouts)
   double board_margin_squares = 0.75;  // white board beyond a chessboard's or ChArUco board's squares
 };
@@ -55,7 +62,7 @@ class PatternRenderer {
   RenderOptions options_;
   std::vector<Plane> planes_;
   std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
-  cv::Mat map_x_, map_y_;                       // distorted pixel -> ideal pixel (margin included)
+  cv::Mat map_x_, map_y_;  // supersampled distorted pixel -> supersampled ideal canvas pixel (margin included)
   int ideal_margin_ = 0;                        // px of ideal image beyond the camera's frame, every side
 };
 

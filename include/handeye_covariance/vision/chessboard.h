@@ -34,9 +34,20 @@ std::vector<Eigen::Vector3d> chessboard_points(const ChessboardTarget& target);
 
 /// cornerSubPix to convergence on chessboard saddle points (chessboards and
 /// ChArUco boards), with a half window of 0.4 x `spacing` (the smallest distance
-/// between neighbouring corners, px), 2 to 5 px.
-void refine_saddle_points(const cv::Mat& gray, std::vector<cv::Point2f>& corners, float spacing);
+/// between neighbouring corners, px), 2 to 5 px. Returns the half window.
+int refine_saddle_points(const cv::Mat& gray, std::vector<cv::Point2f>& corners, float spacing);
 int saddle_window(float spacing);
+
+/// Saddle points found in the rectified image, refined again in the raw image
+/// they came from (cornerSubPix, the same half window) and carried back to
+/// rectified pixels. Why: a sensor's pixels average the light over their own
+/// area, and any resampling moves a saddle point's fit. Measured on rendered
+/// sessions (corners_study --corner-bias, k1 = -0.12), the mean shift towards
+/// the image centre: 0.012 px on the bilinearly rectified image, 0.0016 px on
+/// the Lanczos-rectified one, 0.0008 px refined in the raw image. A corner whose
+/// window leaves the raw image keeps its rectified position.
+void refine_saddle_points_in_raw_image(const cv::Mat& raw_gray, const ImageRectifier& rectifier, int half_window,
+                                       std::vector<Eigen::Vector2d>& rectified_pixels);
 
 /// The board's inner corners in an 8-bit image (every corner, or a refusal).
 TargetObservation detect_chessboard(const cv::Mat& gray, const ChessboardTarget& target);

@@ -38,6 +38,10 @@ class TargetDetector {
 
   /// The target's points in an 8-bit single-channel image, or why not.
   TargetObservation detect(const cv::Mat& gray) const;
+  /// The same in a raw camera image: found in its rectification (straight
+  /// edges), in rectified pixels, with a chessboard's or ChArUco board's corners
+  /// refined in the raw image itself (refine_saddle_points_in_raw_image).
+  TargetObservation detect(const cv::Mat& raw_gray, const ImageRectifier& rectifier) const;
 
   const Target& target() const { return target_; }
 
