@@ -47,7 +47,7 @@ inline Consistency consistency(const Target& target, int frames, std::uint64_t s
   const auto estimate = [&](const Eigen::Isometry3d& T) -> PatternPoseResult {
     const cv::Mat image = renderer.render(T, rng);
     const CameraModel& used = pipeline.rectify ? rectifier.rectified() : camera;
-    const TargetObservation seen = detector.detect(pipeline.rectify ? rectifier.rectify(image) : image);
+    const TargetObservation seen = pipeline.rectify ? detector.detect(image, rectifier) : detector.detect(image);
     if (!seen.points) return {std::nullopt, seen.refusal};
     return estimate_pose(used, *seen.points, noise, options.pose);
   };
