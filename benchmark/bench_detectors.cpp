@@ -49,7 +49,7 @@ void BM_DetectAndEstimate(benchmark::State& state, const std::string& kind) {
   PixelNoise noise;
   int found = 0;
   for (auto _ : state) {
-    const TargetObservation seen = detector.detect(rectifier.rectify(image));
+    const TargetObservation seen = detector.detect(image, rectifier);  // as the node and handeye images
     if (seen.points) found += estimate_pose(rectifier.rectified(), *seen.points, noise).pose.has_value();
     benchmark::ClobberMemory();
   }

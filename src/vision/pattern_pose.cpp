@@ -75,7 +75,8 @@ ImageRectifier::ImageRectifier(const CameraModel& camera) : camera_(camera), rec
                        "set width and height in the CameraInfo");
   }
   const cv::Mat K = camera_matrix(camera);
-  cv::initUndistortRectifyMap(K, distortion(camera), cv::noArray(), K, cv::Size(camera.width, camera.height), CV_32FC1,
+  // Fixed-point maps (1/32 px, what remap makes of float maps on every call anyway).
+  cv::initUndistortRectifyMap(K, distortion(camera), cv::noArray(), K, cv::Size(camera.width, camera.height), CV_16SC2,
                               map_x_, map_y_);
 }
 
