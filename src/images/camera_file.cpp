@@ -1,12 +1,14 @@
 // OpenCV's camera files, read with cv::FileStorage from memory (so the fuzzer
 // can drive it without files). Only opencv_core and tinyxml2: test/sanitize
 // builds this file alone into fuzz_camera_files.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
 #include <tinyxml2.h>
+#include <yaml-cpp/yaml.h>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/images/image_folder.h"
@@ -70,6 +72,95 @@ void require_well_formed_xml(const std::string& text, const std::string& source,
   }
 }
 
+/// OpenCV 4.6's YAML parser loops forever on some malformed files (a directive
+/// after a document start, "---%YAML:1.0" then "----"; bytes beyond ASCII in a
+/// flow sequence: test/fuzz/corpus/files/regression-opencv-yaml-*), so a YAML
+/// file is checked first: ASCII outside comments, '%' only in its first line's
+/// %YAML:1.0, and well-formed for yaml-cpp (with that line left out, which is
+/// OpenCV's, not YAML 1.2's). OpenCV then sees only what a YAML parser accepts.
+YAML::Node parse_opencv_yaml(const std::string& text, const std::string& source, const std::string& hint) {
+  std::string body;
+  int line = 1;
+  for (std::size_t start = 0; start <= text.size(); ++line) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    const std::string content = text.substr(start, end - start);
+    const std::string code = content.substr(0, content.find('#'));
+    const bool header = line == 1 && code.rfind("%YAML", 0) == 0;
+    for (const char c : code) {
+      const auto byte = static_cast<unsigned char>(c);
+      if (byte >= 0x80 || (byte < 0x20 && c != '\t' && c != '\r') || (c == '%' && !header)) {
+        throw HandEyeError(ErrorCode::MalformedFile,
+                           "line " + std::to_string(line) +
+                               (c == '%' ? " has a '%': only the first line holds a directive (%YAML:1.0)"
+                                         : " has a byte that is not printable ASCII (outside a comment)"),
+                           source, hint);
+      }
+    }
+    body += header ? "\n" : content + "\n";
+    start = end + 1;
+  }
+  try {
+    return YAML::Load(body);
+  } catch (const YAML::Exception& e) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "not well-formed YAML (line " + std::to_string(e.mark.line + 1) + "): " + e.msg, source, hint);
+  }
+}
+
+/// An opencv-matrix node's numbers (rows x cols of them, at most max_entries), read by yaml-cpp.
+cv::Mat yaml_matrix(const YAML::Node& root, const std::string& key, int max_entries, const std::string& source,
+                    const std::string& hint) {
+  const YAML::Node node = root[key];
+  if (!node) return {};
+  if (!node.IsMap() || !node["data"] || !node["data"].IsSequence()) {
+    throw HandEyeError(ErrorCode::MalformedFile, key + " is not an opencv-matrix (rows, cols, dt, data)", source, hint);
+  }
+  int dims[2] = {0, 0};
+  const char* names[2] = {"rows", "cols"};
+  for (int i = 0; i < 2; ++i) {
+    double v = -1;
+    try {
+      v = node[names[i]] ? node[names[i]].as<double>() : -1;
+    } catch (const YAML::Exception&) {
+    }
+    if (!(v >= 1 && v <= max_entries) || v != std::floor(v)) {
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         key + "." + names[i] + " must be a whole number in [1, " + std::to_string(max_entries) + "]",
+                         source, hint);
+    }
+    dims[i] = static_cast<int>(v);
+  }
+  const YAML::Node data = node["data"];
+  if (dims[0] * dims[1] > max_entries || data.size() != static_cast<std::size_t>(dims[0] * dims[1])) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       key + ".data must hold rows x cols numbers (at most " + std::to_string(max_entries) + ")", source,
+                       hint);
+  }
+  cv::Mat m(dims[0], dims[1], CV_64F);
+  for (int i = 0; i < dims[0] * dims[1]; ++i) {
+    try {
+      m.at<double>(i / dims[1], i % dims[1]) = data[static_cast<std::size_t>(i)].as<double>();
+    } catch (const YAML::Exception&) {
+      throw HandEyeError(ErrorCode::MalformedFile, key + ".data[" + std::to_string(i) + "] is not a number", source, hint);
+    }
+  }
+  return m;
+}
+
+int yaml_image_size(const YAML::Node& root, const std::string& key, const std::string& source) {
+  if (!root[key]) return 0;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  try {
+    value = root[key].as<double>();
+  } catch (const YAML::Exception&) {
+  }
+  if (!(value >= 1 && value <= 100000) || value != std::floor(value)) {
+    throw HandEyeError(ErrorCode::MalformedFile, key + " must be a whole number of pixels in [1, 100000]", source,
+                       "write the image size in pixels, or leave it out");
+  }
+  return static_cast<int>(value);
+}
+
 }  // namespace
 
 CameraModel parse_opencv_camera(const std::string& text, const std::string& source) {
@@ -83,11 +174,25 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
                        source, hint);
   }
   require_well_formed_xml(text, source, hint);
+  // YAML and JSON are read by yaml-cpp: OpenCV 4.6's YAML parser loops forever on
+  // some malformed files (parse_opencv_yaml), and OpenCV's only XML is left to it.
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const bool xml = first != std::string::npos && text[first] == '<';
+  YAML::Node yaml;
+  if (!xml) {
+    yaml = parse_opencv_yaml(text, source, hint);
+    if (!yaml.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a mapping of camera_matrix, ...", source, hint);
+  }
   try {
-    cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    if (!storage.isOpened()) throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it", source, hint);
-    cv::Mat K = small_matrix(storage["camera_matrix"], "camera_matrix", 9, source, hint);
-    cv::Mat D = small_matrix(storage["distortion_coefficients"], "distortion_coefficients", 14, source, hint);
+    cv::FileStorage storage;
+    if (xml) {
+      storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+      if (!storage.isOpened()) throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it", source, hint);
+    }
+    cv::Mat K = xml ? small_matrix(storage["camera_matrix"], "camera_matrix", 9, source, hint)
+                    : yaml_matrix(yaml, "camera_matrix", 9, source, hint);
+    cv::Mat D = xml ? small_matrix(storage["distortion_coefficients"], "distortion_coefficients", 14, source, hint)
+                    : yaml_matrix(yaml, "distortion_coefficients", 14, source, hint);
     if (K.rows != 3 || K.cols != 3 || K.channels() != 1) {
       throw HandEyeError(ErrorCode::MissingKey, "no 3 x 3 camera_matrix", source, hint);
     }
@@ -115,8 +220,10 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
         }
       }
     }
-    file.width = image_size(storage["image_width"], "image_width", source);
-    file.height = image_size(storage["image_height"], "image_height", source);
+    file.width = xml ? image_size(storage["image_width"], "image_width", source)
+                     : yaml_image_size(yaml, "image_width", source);
+    file.height = xml ? image_size(storage["image_height"], "image_height", source)
+                      : yaml_image_size(yaml, "image_height", source);
   } catch (const HandEyeError&) {
     throw;
   } catch (const std::exception& e) {
