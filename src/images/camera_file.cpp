@@ -1,6 +1,7 @@
-// OpenCV's camera files, read with cv::FileStorage from memory (so the fuzzer
-// can drive it without files). Only opencv_core and tinyxml2: test/sanitize
-// builds this file alone into fuzz_camera_files.
+// OpenCV's camera files, read from memory (so the fuzzer can drive it without
+// files): XML by cv::FileStorage after tinyxml2's check, YAML and JSON by
+// yaml-cpp. Only opencv_core, tinyxml2 and yaml-cpp: test/sanitize builds this
+// file alone into fuzz_camera_files.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -17,14 +18,39 @@ namespace handeye {
 namespace images {
 namespace {
 
-int image_size(const cv::FileNode& node, const std::string& key, const std::string& source) {
-  if (node.empty()) return 0;
-  const double value = node.isInt() || node.isReal() ? node.real() : std::numeric_limits<double>::quiet_NaN();
+/// image_width or image_height as read (NaN: not a number), checked.
+int checked_image_size(double value, const std::string& key, const std::string& source) {
   if (!(value >= 1 && value <= 100000) || value != std::floor(value)) {
     throw HandEyeError(ErrorCode::MalformedFile, key + " must be a whole number of pixels in [1, 100000]", source,
                        "write the image size in pixels, or leave it out");
   }
   return static_cast<int>(value);
+}
+
+int image_size(const cv::FileNode& node, const std::string& key, const std::string& source) {
+  if (node.empty()) return 0;
+  return checked_image_size(node.isInt() || node.isReal() ? node.real() : std::numeric_limits<double>::quiet_NaN(), key,
+                            source);
+}
+
+/// An opencv-matrix's declared rows and cols (-1: not a number) and its number of
+/// data entries, checked before anything is allocated or read.
+void check_matrix_size(const std::string& key, const double (&dims)[2], std::size_t data_entries, int max_entries,
+                       const std::string& source, const std::string& hint) {
+  const char* names[2] = {"rows", "cols"};
+  for (int i = 0; i < 2; ++i) {
+    if (!(dims[i] >= 1 && dims[i] <= max_entries) || dims[i] != std::floor(dims[i])) {
+      throw HandEyeError(ErrorCode::MalformedFile, key + "." + names[i] + " must be a whole number in [1, " +
+                                                       std::to_string(max_entries) + "]",
+                         source, hint);
+    }
+  }
+  const double entries = dims[0] * dims[1];
+  if (entries > max_entries || data_entries != static_cast<std::size_t>(entries)) {
+    throw HandEyeError(ErrorCode::WrongLength, key + ".data must hold rows x cols numbers (at most " +
+                                                   std::to_string(max_entries) + ")",
+                       source, hint);
+  }
 }
 
 /// A matrix node read only after its declared size is checked: OpenCV allocates
@@ -36,22 +62,8 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
   if (!node.isMap()) {
     throw HandEyeError(ErrorCode::MalformedFile, key + " is not an opencv-matrix", source, hint);
   }
-  double entries = 1;
-  for (const char* dim : {"rows", "cols"}) {
-    const cv::FileNode n = node[dim];
-    const double v = n.isInt() || n.isReal() ? n.real() : -1;
-    if (!(v >= 1 && v <= max_entries) || v != std::floor(v)) {
-      throw HandEyeError(ErrorCode::MalformedFile, key + "." + dim + " must be a whole number in [1, " +
-                                                       std::to_string(max_entries) + "]",
-                         source, hint);
-    }
-    entries *= v;
-  }
-  if (entries > max_entries || node["data"].size() != static_cast<std::size_t>(entries)) {
-    throw HandEyeError(ErrorCode::WrongLength, key + ".data must hold rows x cols numbers (at most " +
-                                                   std::to_string(max_entries) + ")",
-                       source, hint);
-  }
+  const auto number = [](const cv::FileNode& n) { return n.isInt() || n.isReal() ? n.real() : -1.0; };
+  check_matrix_size(key, {number(node["rows"]), number(node["cols"])}, node["data"].size(), max_entries, source, hint);
   node >> m;
   return m;
 }
@@ -62,7 +74,7 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
 /// XML parser first; OpenCV only ever sees well-formed XML.
 void require_well_formed_xml(const std::string& text, const std::string& source, const std::string& hint) {
   const std::size_t first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos || text[first] != '<') return;  // YAML or JSON: OpenCV's own parsers
+  if (first == std::string::npos || text[first] != '<') return;  // YAML or JSON: yaml-cpp (parse_opencv_yaml)
   tinyxml2::XMLDocument document;
   if (document.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
     throw HandEyeError(ErrorCode::MalformedFile,
@@ -115,31 +127,21 @@ cv::Mat yaml_matrix(const YAML::Node& root, const std::string& key, int max_entr
   if (!node.IsMap() || !node["data"] || !node["data"].IsSequence()) {
     throw HandEyeError(ErrorCode::MalformedFile, key + " is not an opencv-matrix (rows, cols, dt, data)", source, hint);
   }
-  int dims[2] = {0, 0};
-  const char* names[2] = {"rows", "cols"};
-  for (int i = 0; i < 2; ++i) {
-    double v = -1;
+  const auto number = [](const YAML::Node& n) {
     try {
-      v = node[names[i]] ? node[names[i]].as<double>() : -1;
+      return n ? n.as<double>() : -1.0;
     } catch (const YAML::Exception&) {
+      return -1.0;
     }
-    if (!(v >= 1 && v <= max_entries) || v != std::floor(v)) {
-      throw HandEyeError(ErrorCode::MalformedFile,
-                         key + "." + names[i] + " must be a whole number in [1, " + std::to_string(max_entries) + "]",
-                         source, hint);
-    }
-    dims[i] = static_cast<int>(v);
-  }
+  };
   const YAML::Node data = node["data"];
-  if (dims[0] * dims[1] > max_entries || data.size() != static_cast<std::size_t>(dims[0] * dims[1])) {
-    throw HandEyeError(ErrorCode::WrongLength,
-                       key + ".data must hold rows x cols numbers (at most " + std::to_string(max_entries) + ")", source,
-                       hint);
-  }
-  cv::Mat m(dims[0], dims[1], CV_64F);
-  for (int i = 0; i < dims[0] * dims[1]; ++i) {
+  const double dims[2] = {number(node["rows"]), number(node["cols"])};
+  check_matrix_size(key, dims, data.size(), max_entries, source, hint);
+  const int rows = static_cast<int>(dims[0]), cols = static_cast<int>(dims[1]);
+  cv::Mat m(rows, cols, CV_64F);
+  for (int i = 0; i < rows * cols; ++i) {
     try {
-      m.at<double>(i / dims[1], i % dims[1]) = data[static_cast<std::size_t>(i)].as<double>();
+      m.at<double>(i / cols, i % cols) = data[static_cast<std::size_t>(i)].as<double>();
     } catch (const YAML::Exception&) {
       throw HandEyeError(ErrorCode::MalformedFile, key + ".data[" + std::to_string(i) + "] is not a number", source, hint);
     }
@@ -154,11 +156,7 @@ int yaml_image_size(const YAML::Node& root, const std::string& key, const std::s
     value = root[key].as<double>();
   } catch (const YAML::Exception&) {
   }
-  if (!(value >= 1 && value <= 100000) || value != std::floor(value)) {
-    throw HandEyeError(ErrorCode::MalformedFile, key + " must be a whole number of pixels in [1, 100000]", source,
-                       "write the image size in pixels, or leave it out");
-  }
-  return static_cast<int>(value);
+  return checked_image_size(value, key, source);
 }
 
 }  // namespace
@@ -227,8 +225,8 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
   } catch (const HandEyeError&) {
     throw;
   } catch (const std::exception& e) {
-    // cv::Exception, and the std::length_error that OpenCV 4.6's YAML parser lets
-    // out on some malformed files (test/fuzz/corpus/files/regression-opencv-*).
+    // cv::Exception from OpenCV's XML reader. (OpenCV 4.6's YAML parser, which no
+    // longer reads these files, let std::length_error out on some: regression-opencv-length-error.yaml.)
     throw HandEyeError(ErrorCode::MalformedFile, "OpenCV cannot read it: " + std::string(e.what()), source, hint);
   }
   return file;

@@ -68,6 +68,13 @@ void put_in_opencv_frame(const cv::Mat& gray, const ChessboardTarget& t, std::ve
   if (first_square < next_square) std::reverse(corners.begin(), corners.end());
 }
 
+/// A corner closer to the border than its window is half outside the image:
+/// OpenCV places it, but badly (1.3 px off on a rendered board).
+bool clear_of_border(const cv::Mat& image, const cv::Point2f& p, int half_window) {
+  const float margin = static_cast<float>(half_window + 2);
+  return p.x >= margin && p.y >= margin && p.x <= image.cols - 1 - margin && p.y <= image.rows - 1 - margin;
+}
+
 }  // namespace
 
 int saddle_window(float spacing) { return std::max(2, std::min(5, static_cast<int>(0.4f * spacing))); }
@@ -87,13 +94,11 @@ void refine_saddle_points_in_raw_image(const cv::Mat& raw_gray, const ImageRecti
                                        std::vector<Eigen::Vector2d>& rectified_pixels) {
   if (!rectifier.distorted() || rectified_pixels.empty() || half_window <= 0) return;
   const std::vector<cv::Point2f> start = rectifier.to_raw(rectified_pixels);
-  std::vector<cv::Point2f> inside;  // cornerSubPix needs its window (and the gradients') within the image
+  std::vector<cv::Point2f> inside;
   std::vector<std::size_t> which;
-  const float margin = static_cast<float>(half_window + 2);
   for (std::size_t i = 0; i < start.size(); ++i) {
-    const cv::Point2f& p = start[i];
-    if (p.x >= margin && p.y >= margin && p.x <= raw_gray.cols - 1 - margin && p.y <= raw_gray.rows - 1 - margin) {
-      inside.push_back(p);
+    if (clear_of_border(raw_gray, start[i], half_window)) {
+      inside.push_back(start[i]);
       which.push_back(i);
     }
   }
@@ -129,11 +134,8 @@ TargetObservation detect_chessboard(const cv::Mat& gray, const ChessboardTarget&
       spacing = std::min(spacing, static_cast<float>(cv::norm(corners[i + 1] - corners[i])));
     }
   }
-  // A corner closer to the border than its window is half outside the image:
-  // OpenCV places it, but badly (1.3 px off on a rendered board).
-  const float margin = static_cast<float>(saddle_window(spacing) + 2);
   for (const cv::Point2f& c : corners) {
-    if (c.x < margin || c.y < margin || c.x > gray.cols - 1 - margin || c.y > gray.rows - 1 - margin) {
+    if (!clear_of_border(gray, c, saddle_window(spacing))) {
       out.refusal = "the chessboard touches the image border; bring the whole board, with a margin, into view";
       return out;
     }
