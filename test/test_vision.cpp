@@ -7,7 +7,9 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <atomic>
 #include <cstdio>
+#include <thread>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/estimator.h"
@@ -96,6 +98,34 @@ TEST(TagDetector, CornersMatchTheLayoutOrderOnRenderedTags) {
       }
     }
   }
+}
+
+// libapriltag's worker threads start in a detector's first detection, racing
+// the tasks it adds (tag_detector.cpp: start_worker_threads). Without that, this
+// test died of a segfault in 3 of 8 runs (a call to a wild address from inside
+// libapriltag); with it, none in 6. Two threads make 1 000 detectors each, so
+// that workers start late; every detector finds the 4 tags.
+TEST(TagDetector, WorkerThreadsStartSafely) {
+  const CameraModel camera = simulated_camera();
+  const TagLayout layout = io::read_tag_layout(board_file());
+  Rng rng(12);
+  const cv::Mat image = ImageRectifier(camera).rectify(PatternRenderer(layout, camera).render(frontal_view(), rng));
+  cv::Mat small;  // a quarter of the pixels: the first detection still adds over 8 tasks per step
+  cv::resize(image, small, cv::Size(image.cols / 2, image.rows / 2), 0, 0, cv::INTER_AREA);
+  std::atomic<int> detectors{0}, tags{0};
+  const auto make_detectors = [&] {
+    for (int i = 0; i < 1000; ++i) {
+      TagDetectorOptions options;
+      options.threads = 2;
+      tags += static_cast<int>(TagDetector(options).detect(small).size());
+      ++detectors;
+    }
+  };
+  std::thread first(make_detectors), second(make_detectors);
+  first.join();
+  second.join();
+  EXPECT_EQ(detectors.load(), 2000);
+  EXPECT_EQ(tags.load(), 4 * 2000);
 }
 
 // libapriltag fits each side once, from nearest-pixel samples about its
