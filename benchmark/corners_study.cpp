@@ -21,9 +21,15 @@
 // noise is a few hundredths; this is how libapriltag's shift and ChArUco's were
 // found (README, "Where it falls short"). --distances lo,hi narrows the views.
 //
+// With --why, the sessions whose robot noise the fit took as stated and those
+// where it estimated it from the corners are summarised apart: NEES of X, the
+// predicted covariance against the bound, the target term's factor and the
+// robot sigma found (what makes the corners' covariance larger than the bound).
+//
 //   handeye_corners_study --sessions 300 [--kinds apriltag,charuco,chessboard,apriltag_single] [--focal-error 0.01]
-//                         [--corner-bias] [--distances 0.4,1.0]
+//                         [--corner-bias] [--why] [--distances 0.4,1.0]
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -111,6 +117,9 @@ struct SessionResult {
   Matrix6d poses_covariance, corners_covariance, bound;
   double focal = 0.0, focal_sigma = 0.0, true_focal = 0.0;
   bool per_image = false;  // the fit weighed each image by its own sigma
+  bool robot_estimated = false;        // the robot noise came from the corners
+  Eigen::Vector2d robot_sigma = Eigen::Vector2d::Zero();
+  Eigen::Vector2d target_inflation = Eigen::Vector2d::Ones();
   CornerBias bias;
 };
 
@@ -170,6 +179,9 @@ SessionResult run_session(const std::string& kind, int index, int n, double foca
     out.poses_covariance = poses.pose_covariance;
     out.corners_covariance = corners.calibration.pose_covariance;
     out.per_image = corners.fit.per_image_sigma;
+    out.robot_estimated = corners.fit.robot_noise_estimated;
+    out.robot_sigma = corners.fit.robot_sigma;
+    out.target_inflation = corners.fit.target_inflation;
     // The corner model's bound: its information at the truth, with the detected
     // corners' structure and noise model of the images the fit kept, each at the
     // sigma the fit weighed it with.
@@ -208,6 +220,16 @@ struct Summary {
   Vector6d bias_poses = Vector6d::Zero(), bias_corners = Vector6d::Zero();
   CornerBias corner_bias;
   std::string first_failure;
+  /// For --why, per group of sessions (0: robot noise as stated, 1: estimated from
+  /// the corners): sessions, NEES of X with corners, the predicted covariance's
+  /// trace over the bound's (translation, rotation), the target term's factor on
+  /// X's sigma, the robot sigma found (m, rad).
+  struct Group {
+    int sessions = 0;
+    double nees = 0.0;
+    Eigen::Vector2d over_bound = Eigen::Vector2d::Zero(), target = Eigen::Vector2d::Zero(), robot = Eigen::Vector2d::Zero();
+  };
+  std::array<Group, 2> groups;
 };
 
 // Mean squared translation (m^2) and rotation (rad^2) error, summed over the axes.
@@ -242,6 +264,12 @@ Summary study(const std::string& kind, int M, int n, double focal_error, const E
     s.bias_poses += r.poses_error.cwiseQuotient(r.poses_covariance.diagonal().cwiseSqrt());
     s.bias_corners += r.corners_error.cwiseQuotient(r.corners_covariance.diagonal().cwiseSqrt());
     s.per_image += r.per_image ? 1.0 : 0.0;
+    Summary::Group& g = s.groups[r.robot_estimated ? 1 : 0];
+    ++g.sessions;
+    g.nees += r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
+    g.over_bound += traces(r.corners_covariance).cwiseQuotient(traces(r.bound));
+    g.target += r.target_inflation;
+    g.robot += r.robot_sigma;
     if (r.focal_sigma > 0.0) s.focal_within_2_sigma += std::abs(r.focal - r.true_focal) < 2.0 * r.focal_sigma;
   }
   const double m = std::max(1, s.sessions);
@@ -255,6 +283,13 @@ Summary study(const std::string& kind, int M, int n, double focal_error, const E
   s.bias_corners /= m;
   s.focal_within_2_sigma /= m;
   s.per_image /= m;
+  for (Summary::Group& g : s.groups) {
+    const double k = std::max(1, g.sessions);
+    g.nees /= k;
+    g.over_bound /= k;
+    g.target /= k;
+    g.robot /= k;
+  }
   return s;
 }
 
@@ -266,17 +301,17 @@ int main(int argc, char** argv) {
   int M = 300, n = 30, threads = 2;
   double focal_error = 0.0;
   std::string kinds = "apriltag,charuco,chessboard";
-  bool print_corner_bias = false;
+  bool print_corner_bias = false, print_why = false;
   Eigen::Vector2d distances(0.4, 1.0);  // m, camera to the pattern
   const auto usage = [&] {
     std::fprintf(stderr, "usage: %s [--sessions M] [--images n] [--kinds apriltag,charuco,chessboard] "
-                         "[--focal-error e] [--threads t] [--corner-bias] [--distances lo,hi (m)]\n", argv[0]);
+                         "[--focal-error e] [--threads t] [--corner-bias] [--why] [--distances lo,hi (m)]\n", argv[0]);
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
     const std::string key = argv[i];
-    if (key == "--corner-bias") {
-      print_corner_bias = true;
+    if (key == "--corner-bias" || key == "--why") {
+      (key == "--why" ? print_why : print_corner_bias) = true;
       continue;
     }
     if (i + 1 >= argc) return usage();
@@ -320,6 +355,17 @@ int main(int argc, char** argv) {
       std::printf("| %s | %d | %.0f%% | %.2f | %.2f | %.2f | %.2f |\n", kind.c_str(), s.sessions,
                   100.0 * s.focal_within_2_sigma, s.bias_corners.cwiseAbs().maxCoeff(), s.bias_poses.cwiseAbs().maxCoeff(),
                   s.nees_corners, s.nees_poses);
+    }
+    if (print_why) {
+      for (int robot = 0; robot < 2; ++robot) {
+        const Summary::Group& g = s.groups[static_cast<std::size_t>(robot)];
+        if (g.sessions == 0) continue;
+        std::printf("\n%s, robot noise %s: %d sessions, NEES of X %.2f, covariance / bound (trace) %.2f / %.2f, target "
+                    "term's factor on sigma %.3f / %.3f, robot sigma %.4f mm / %.5f deg\n",
+                    kind.c_str(), robot ? "estimated from the corners" : "as stated", g.sessions, g.nees, g.over_bound[0],
+                    g.over_bound[1], g.target[0], g.target[1], g.robot[0] * 1e3, g.robot[1] * deg);
+      }
+      std::printf("\n");
     }
     if (print_corner_bias && s.corner_bias.corners > 0) {
       const CornerBias& b = s.corner_bias;

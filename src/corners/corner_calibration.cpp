@@ -30,6 +30,14 @@ using Eigen::Isometry3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
+// The least robot variance per axis, (0.1 um)^2 and (0.1 urad)^2, where the
+// residuals support none (or a stated noise has a zero axis): the prior needs a
+// finite weight, and what it keeps must not show in X's covariance. At (1 um)^2 it
+// did: one image's pose is known to about a micrometre from corners at 0.01 px,
+// and an exact robot held there made X's covariance cautious (NEES 4.2-4.8 instead
+// of 6; test_corner_calibration, BENCHMARKS.md's AprilTag board).
+constexpr double kRobotVarianceFloor = 1e-14;
+
 // A pose as Ceres holds it: (tx, ty, tz, qw, qx, qy, qz), Ceres's quaternion order.
 using PoseBlock = std::array<double, 7>;
 
@@ -711,7 +719,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     bool settled = true;
     if (options.estimate_robot_noise) {
       const double rows = 3.0 * static_cast<double>(views.size());
-      const double floor = 1e-12;  // (1 um)^2, (1 urad)^2: the residuals do not support it
+      const double floor = kRobotVarianceFloor;
       Eigen::Vector2d estimate = robot_variance;
       for (int c = 0; c < 2; ++c) {
         if (robot_at_bound[c]) continue;
@@ -914,7 +922,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     for (const Calibration::ResidualCheck& check : pose_level.residual_checks) trusted = trusted && check.passed;
     Matrix6d R = pose_level.noise.robot.as_pose_covariance();
     if (!R.isZero(0.0)) {
-      for (int k = 0; k < 6; ++k) R(k, k) = std::max(R(k, k), 1e-12);  // (1 um)^2, (1 urad)^2
+      for (int k = 0; k < 6; ++k) R(k, k) = std::max(R(k, k), kRobotVarianceFloor);
       options.robot_covariance = R;
     }
     options.estimate_robot_noise = !trusted && views.size() >= 6;
