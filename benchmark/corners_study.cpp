@@ -260,13 +260,14 @@ Summary study(const std::string& kind, int M, int n, double focal_error, const E
     s.corners_ms += squares(r.corners_error);
     s.bound_ms += traces(r.bound);
     s.nees_poses += r.poses_error.dot(r.poses_covariance.ldlt().solve(r.poses_error));
-    s.nees_corners += r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
+    const double nees_corners = r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
+    s.nees_corners += nees_corners;
     s.bias_poses += r.poses_error.cwiseQuotient(r.poses_covariance.diagonal().cwiseSqrt());
     s.bias_corners += r.corners_error.cwiseQuotient(r.corners_covariance.diagonal().cwiseSqrt());
     s.per_image += r.per_image ? 1.0 : 0.0;
     Summary::Group& g = s.groups[r.robot_estimated ? 1 : 0];
     ++g.sessions;
-    g.nees += r.corners_error.dot(r.corners_covariance.ldlt().solve(r.corners_error));
+    g.nees += nees_corners;
     g.over_bound += traces(r.corners_covariance).cwiseQuotient(traces(r.bound));
     g.target += r.target_inflation;
     g.robot += r.robot_sigma;

@@ -73,8 +73,6 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
 /// regression-opencv-xml-cut-attribute.xml), so an XML file is checked by a real
 /// XML parser first; OpenCV only ever sees well-formed XML.
 void require_well_formed_xml(const std::string& text, const std::string& source, const std::string& hint) {
-  const std::size_t first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos || text[first] != '<') return;  // YAML or JSON: yaml-cpp (parse_opencv_yaml)
   tinyxml2::XMLDocument document;
   if (document.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
     throw HandEyeError(ErrorCode::MalformedFile,
@@ -171,13 +169,14 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
     throw HandEyeError(ErrorCode::MalformedFile, "a NUL byte at offset " + std::to_string(nul) + ": not a text file",
                        source, hint);
   }
-  require_well_formed_xml(text, source, hint);
   // YAML and JSON are read by yaml-cpp: OpenCV 4.6's YAML parser loops forever on
   // some malformed files (parse_opencv_yaml), and OpenCV's only XML is left to it.
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool xml = first != std::string::npos && text[first] == '<';
   YAML::Node yaml;
-  if (!xml) {
+  if (xml) {
+    require_well_formed_xml(text, source, hint);
+  } else {
     yaml = parse_opencv_yaml(text, source, hint);
     if (!yaml.IsMap()) throw HandEyeError(ErrorCode::MalformedFile, "not a mapping of camera_matrix, ...", source, hint);
   }
