@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <sstream>
 
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -313,6 +315,77 @@ TEST(YamlIo, AtomicWriteLeavesNoTemporaryAndCreatesDirectories) {
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.is_regular_file() ? 1 : 0;
   EXPECT_EQ(files, 1);
+}
+
+
+// What publish.launch and the calibration node read back at start-up.
+TEST(YamlIo, AStoredCalibrationIsOursOrEasyHandeyesInBothItsFormats) {
+  PoseWithCovariance X;
+  X.pose = se3::exp((Vector6d() << 0.03, -0.06, 0.1, 0.4, -0.2, 1.3).finished());
+  X.covariance = 1e-6 * Matrix6d::Identity();
+  X.covariance(0, 4) = X.covariance(4, 0) = 2e-7;
+  io::ResultContext context;
+  context.setup = Setup::EyeToHand;
+  context.parent = "base_link";
+  context.child = "camera_link";
+  // Ours carries easy_handeye's `transformation` block too; its covariance decides.
+  const io::StoredCalibration ours = io::parse_stored_calibration(io::format_pose_file(X, context), "ours.yaml");
+  EXPECT_EQ(ours.format, "handeye_covariance");
+  EXPECT_TRUE(ours.has_covariance);
+  EXPECT_EQ(ours.setup, Setup::EyeToHand);
+  EXPECT_EQ(ours.parent, "base_link");
+  EXPECT_EQ(ours.child, "camera_link");
+  EXPECT_LE((ours.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-15);
+  EXPECT_EQ(ours.T_parent_camera.covariance, X.covariance);
+
+  const Eigen::Quaterniond q(X.pose.linear());
+  std::ostringstream transformation;
+  transformation.precision(17);
+  transformation << "transformation: {x: " << X.pose.translation().x() << ", y: " << X.pose.translation().y()
+                 << ", z: " << X.pose.translation().z() << ", qx: " << q.x() << ", qy: " << q.y() << ", qz: " << q.z()
+                 << ", qw: " << q.w() << "}\n";
+  const std::string nested = "parameters: {eye_on_hand: true, robot_base_frame: base_link, robot_effector_frame: tool0,\n"
+                             "  tracking_base_frame: camera_color_optical_frame, tracking_marker_frame: marker}\n" +
+                             transformation.str();
+  const std::string flat = "eye_on_hand: false\nrobot_base_frame: world\nrobot_effector_frame: tool0\n"
+                           "tracking_base_frame: camera_link\n" + transformation.str();
+  const io::StoredCalibration a = io::parse_stored_calibration(nested, "easy.yaml");
+  EXPECT_EQ(a.format, "easy_handeye");
+  EXPECT_FALSE(a.has_covariance);
+  EXPECT_EQ(a.setup, Setup::EyeInHand);
+  EXPECT_EQ(a.parent, "tool0");
+  EXPECT_EQ(a.child, "camera_color_optical_frame");
+  EXPECT_LE((a.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-15);
+  EXPECT_TRUE(a.T_parent_camera.covariance.isZero());
+  const io::StoredCalibration b = io::parse_stored_calibration(flat, "easy_old.yaml");
+  EXPECT_EQ(b.setup, Setup::EyeToHand);
+  EXPECT_EQ(b.parent, "world");
+  EXPECT_EQ(b.child, "camera_link");
+
+  const auto expect_error = [](const std::string& text, ErrorCode code, const std::string& mentions) {
+    try {
+      io::parse_stored_calibration(text, "stored.yaml");
+      ADD_FAILURE() << "expected " << to_string(code) << " for\n" << text;
+    } catch (const HandEyeError& e) {
+      EXPECT_EQ(e.code(), code) << e.what();
+      EXPECT_NE(std::string(e.what()).find(mentions), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("Fix:"), std::string::npos) << e.what();
+    }
+  };
+  expect_error(transformation.str(), ErrorCode::MissingKey, "eye_on_hand");
+  expect_error("eye_on_hand: maybe\n" + transformation.str(), ErrorCode::MalformedFile, "eye_on_hand");
+  expect_error("eye_on_hand: true\ntransformation: {x: 0, y: 0, z: 0, qx: 0, qy: 0, qz: 0, qw: 2}\n",
+               ErrorCode::QuaternionNotUnit, "transformation");
+  expect_error("eye_on_hand: true\ntransformation: {x: 0, y: 0, qx: 0, qy: 0, qz: 0, qw: 1}\n", ErrorCode::MissingKey,
+               "`z`");
+  expect_error("parent: tool0\n", ErrorCode::MissingKey, "neither a handeye_covariance result");
+}
+
+TEST(YamlIo, AHomeRelativePathIsExpanded) {
+  const std::string home = std::getenv("HOME") ? std::getenv("HOME") : ".";
+  EXPECT_EQ(io::expand_home("~/.ros/x.yaml"), home + "/.ros/x.yaml");
+  EXPECT_EQ(io::expand_home("/tmp/~/x.yaml"), "/tmp/~/x.yaml");
+  EXPECT_EQ(io::expand_home("~user/x.yaml"), "~user/x.yaml");
 }
 
 }  // namespace

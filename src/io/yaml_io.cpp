@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -893,6 +894,64 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
 
+StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  StoredCalibration stored;
+  if (!root["covariance"] && !root["transformation"]) {
+    throw HandEyeError(ErrorCode::MissingKey,
+                       "not a calibration: neither a handeye_covariance result (`covariance`) nor easy_handeye's "
+                       "(`transformation`)",
+                       top.str(), "give the file /calibrate or `handeye solve --output` wrote, or easy_handeye's YAML");
+  }
+  // Ours has `covariance` (and easy_handeye's `transformation` block too); easy_handeye's has only the latter.
+  if (root["covariance"]) {
+    const CalibrationFile file = parse_result(text, source);
+    stored.setup = file.context.setup;
+    stored.parent = file.context.parent;
+    stored.child = file.context.child;
+    stored.T_parent_camera = file.T_parent_camera;
+    stored.has_covariance = true;
+    stored.format = "handeye_covariance";
+    return stored;
+  }
+  stored.format = "easy_handeye";
+  const std::string hint = "easy_handeye's `transformation` is {x, y, z, qx, qy, qz, qw} in m";
+  const YAML::Node transformation = root["transformation"];
+  const Location at = top / "transformation";
+  const auto number = [&](const char* key) { return as_double(require(transformation, key, at, hint), at / key); };
+  const Eigen::Quaterniond q(number("qw"), number("qx"), number("qy"), number("qz"));
+  const Vector3d t(number("x"), number("y"), number("z"));
+  stored.T_parent_camera.pose =
+      se3::make_pose(checked_unit_quaternion(q, (at / "qx..qw").str()).toRotationMatrix(), t);
+  // The frames: under `parameters`, or at the top level in easy_handeye's older files.
+  const bool nested = root["parameters"] && root["parameters"].IsMap();
+  const YAML::Node parameters = nested ? root["parameters"] : root;
+  const Location where = nested ? top / "parameters" : top;
+  const auto text_of = [&](const char* key) {
+    const YAML::Node node = parameters[key];
+    return node && !node.IsNull() ? as_text(node, where / key) : std::string();
+  };
+  const YAML::Node eye_on_hand = parameters["eye_on_hand"];
+  if (!eye_on_hand || !eye_on_hand.IsScalar()) {
+    throw HandEyeError(ErrorCode::MissingKey, "an easy_handeye calibration without `eye_on_hand: true|false`",
+                       where.str(), "add `eye_on_hand: true` (camera on the robot) or `false` under `parameters`");
+  }
+  bool on_hand = false;
+  if (!YAML::convert<bool>::decode(eye_on_hand, on_hand)) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`eye_on_hand` must be true or false, not `" + eye_on_hand.Scalar() + "`",
+                       (where / "eye_on_hand").str(), "write `eye_on_hand: true` or `eye_on_hand: false`");
+  }
+  stored.setup = setup_from_eye_on_hand(on_hand);
+  stored.parent = text_of(on_hand ? "robot_effector_frame" : "robot_base_frame");
+  stored.child = text_of("tracking_base_frame");
+  return stored;
+}
+
+StoredCalibration read_stored_calibration(const std::string& path) {
+  return parse_stored_calibration(read_file(path), path);
+}
+
 // ---------------------------------------------------------------- tag layouts
 
 TagLayout parse_tag_layout(const std::string& text, const std::string& source) {
@@ -1070,6 +1129,12 @@ void read_session_config(const std::string& path, SessionConfig& config) {
 }
 
 // ---------------------------------------------------------------- files
+
+std::string expand_home(const std::string& path) {
+  if (path.rfind("~/", 0) != 0) return path;
+  const char* home = std::getenv("HOME");
+  return std::string(home ? home : ".") + path.substr(1);
+}
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

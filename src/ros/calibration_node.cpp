@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -36,6 +37,7 @@ SessionConfig read_config(const ros::NodeHandle& private_node) {
   const std::string dir = "~/.ros/handeye_covariance/";
   if (config.calibration_file.empty()) config.calibration_file = dir + config.name() + ".yaml";
   if (config.session_file.empty()) config.session_file = dir + config.name() + "_samples.yaml";
+  config.calibration_file = io::expand_home(config.calibration_file);
   return config;
 }
 
@@ -107,6 +109,12 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   status_timer_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     publish_status();
+  });
+  republish_saved_calibration();
+  // The TF listener needs a moment to learn the camera's tree before X is hung from its root.
+  tf_refresh_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    std::lock_guard<std::mutex> outputs(output_mutex_);
+    refresh_tf();
   });
   worker_ = std::thread(&CalibrationNode::work, this);  // last: nothing below may throw
   detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
@@ -300,26 +308,51 @@ void CalibrationNode::publish_estimate(const Calibration& c) {
 
 // ------------------------------------------------------------------ TF
 
-std::string CalibrationNode::publish_tf(const Eigen::Isometry3d& X) {
-  const CameraTfEdge edge = camera_tf_edge(tf_buffer_, config_.rig, X, published_root_);
-  if (!edge.refusal.empty()) return edge.refusal;
-  geometry_msgs::TransformStamped tf;
-  tf.header.stamp = ros::Time::now();
-  tf.header.frame_id = edge.parent;
-  tf.child_frame_id = edge.child;
-  tf.transform = conversions::to_transform_msg(edge.transform);
-  if (edge.child != published_root_) static_edges_.erase(published_root_);  // the old edge goes
-  static_edges_[edge.child] = tf;
-  send_static_edges();
-  published_root_ = edge.child;
-  return edge.parent + " -> " + edge.child;
+std::string CalibrationNode::refresh_tf() {
+  if (!config_.publish_tf || !tf_X_) return "";
+  const std::string edge = tf_edges_.publish_camera(tf_buffer_, config_.rig, *tf_X_);
+  const bool refused = edge.rfind("no TF", 0) == 0;
+  if (refused && edge != tf_refusal_) ROS_WARN("%s", edge.c_str());
+  tf_refusal_ = refused ? edge : "";
+  return edge;
 }
 
-void CalibrationNode::send_static_edges() {
-  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-  std::vector<geometry_msgs::TransformStamped> edges;
-  for (const auto& entry : static_edges_) edges.push_back(entry.second);
-  static_broadcaster_->sendTransform(edges);
+void CalibrationNode::republish_saved_calibration() {
+  const std::string& path = config_.calibration_file;
+  if (!std::ifstream(path)) {
+    ROS_INFO("no saved calibration at %s yet", path.c_str());
+    return;
+  }
+  io::StoredCalibration stored;
+  try {
+    stored = io::read_stored_calibration(path);
+  } catch (const HandEyeError& e) {
+    ROS_WARN("the saved calibration is not published: %s", e.what());
+    return;
+  }
+  const Rig& rig = config_.rig;
+  if ((stored.setup && *stored.setup != rig.setup) || (!stored.parent.empty() && stored.parent != rig.camera_parent_frame()) ||
+      (!stored.child.empty() && stored.child != rig.frames.camera)) {
+    ROS_WARN("the saved calibration %s is T_%s_%s (%s), this node calibrates T_%s_%s (%s): not published; "
+             "/calibrate replaces it", path.c_str(), stored.parent.c_str(), stored.child.c_str(),
+             stored.setup ? to_string(*stored.setup) : "setup not given", rig.camera_parent_frame().c_str(),
+             rig.frames.camera.c_str(), to_string(rig.setup));
+    return;
+  }
+  if (stored.has_covariance) {
+    geometry_msgs::PoseWithCovarianceStamped msg;
+    msg.header.stamp = ros::Time::now();
+    msg.header.frame_id = rig.camera_parent_frame();
+    msg.pose = conversions::to_msg(stored.T_parent_camera);
+    calibration_pub_.publish(msg);
+  }
+  {
+    std::lock_guard<std::mutex> outputs(output_mutex_);
+    tf_X_ = stored.T_parent_camera.pose;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  last_event_ = "published the saved calibration " + path + (stored.has_covariance ? "" : " (TF only: it has no covariance)");
+  ROS_INFO("%s", last_event_.c_str());
 }
 
 // ------------------------------------------------------------------ services
@@ -380,17 +413,14 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   calibration_pub_.publish(res.calibration);
   if (c.pattern) pattern_pub_.publish(res.pattern);
   publish_estimate(c);
-  if (config_.publish_tf) {
-    res.published_tf = publish_tf(c.T_parent_camera);
-    if (res.published_tf.rfind("no TF", 0) == 0) ROS_WARN("calibrate: %s", res.published_tf.c_str());
-  }
+  tf_X_ = c.T_parent_camera;
+  res.published_tf = refresh_tf();
   if (config_.publish_pattern_tf && c.pattern) {
     geometry_msgs::TransformStamped tf;
     tf.header = res.pattern.header;
     tf.child_frame_id = config_.rig.frames.pattern;
     tf.transform = conversions::to_transform_msg(c.pattern->pose);
-    static_edges_[tf.child_frame_id] = tf;
-    send_static_edges();
+    tf_edges_.publish(tf);
   }
   try {
     io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));

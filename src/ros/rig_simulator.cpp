@@ -216,8 +216,10 @@ class RigSimulator {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "rig_simulator");
+  // Held past the catch: when the last handle goes, ROS shuts down its logging, and ROS_FATAL would print nothing.
+  ros::NodeHandle node_handle, private_node_handle("~");
   try {
-    handeye::RigSimulator rig(ros::NodeHandle(), ros::NodeHandle("~"));
+    handeye::RigSimulator rig(node_handle, private_node_handle);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL("rig_simulator: %s", e.what());

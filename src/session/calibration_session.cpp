@@ -8,15 +8,7 @@
 
 namespace handeye {
 
-namespace {
-
-std::string expand_home(const std::string& path) {
-  if (path.rfind("~/", 0) != 0) return path;
-  const char* home = std::getenv("HOME");
-  return std::string(home ? home : ".") + path.substr(1);
-}
-
-}  // namespace
+using io::expand_home;
 
 JointOptions::Robust robust_from_string(const std::string& name) {
   if (name == "auto") return JointOptions::Robust::Auto;

@@ -111,6 +111,23 @@ struct CalibrationFile {
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
 
+/// A saved calibration to publish at start-up (publish.launch, the calibration
+/// node): ours (a result file) or easy_handeye's, whose users switch to us:
+///   {parameters: {eye_on_hand, robot_base_frame, robot_effector_frame, tracking_base_frame},
+///    transformation: {x, y, z, qx, qy, qz, qw}}
+/// (easy_handeye's older files have the parameters at the top level). An
+/// easy_handeye file has no covariance: `has_covariance` is false and the
+/// covariance is zero.
+struct StoredCalibration {
+  std::optional<Setup> setup;
+  std::string parent, child;  // X = T_parent_child; empty when the file does not say
+  PoseWithCovariance T_parent_camera;
+  bool has_covariance = false;
+  std::string format;  // "handeye_covariance" or "easy_handeye"
+};
+StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source);
+StoredCalibration read_stored_calibration(const std::string& path);
+
 /// A pose with an optional covariance (a detection, a robot pose):
 ///   translation: [x, y, z], rotation: [qx, qy, qz, qw], parent?, child?,
 ///   covariance?: {pose: [36 numbers, ROS order]} or {rotation: [9], translation: [9]}
@@ -154,6 +171,9 @@ void write_file_atomically(const std::string& path, const std::string& content);
 
 /// Whole file as text; HandEyeError(IoError) when it cannot be read.
 std::string read_file(const std::string& path);
+
+/// `~/rest` as $HOME/rest (a path from a launch file or a parameter); any other path as it is.
+std::string expand_home(const std::string& path);
 
 }  // namespace io
 }  // namespace handeye

@@ -13,7 +13,6 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <condition_variable>
@@ -28,6 +27,7 @@
 #include "handeye_covariance/session/session_config.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/observations.h"
+#include "handeye_covariance/ros/static_edges.h"
 #include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
@@ -67,9 +67,13 @@ class CalibrationNode {
   void publish_status();  // lock held
   /// The running estimate (~estimate) and its markers (~markers).
   void publish_estimate(const Calibration& c);
-  /// Publishes X as TF at the root of the camera's own tree (camera_tf_edge);
-  /// returns the edge ("tool0 -> camera_link") or why none was published.
-  std::string publish_tf(const Eigen::Isometry3d& X);
+  /// The saved calibration (~calibration_file) published again at start-up, as
+  /// easy_handeye's publish.launch does: ~calibration, and X in TF.
+  void republish_saved_calibration();
+  /// Keeps X in TF (output_mutex_ held): at the root of the camera's own tree,
+  /// which moves when a camera driver starts after us. Returns the edge
+  /// ("tool0 -> camera_link") or why none was published.
+  std::string refresh_tf();
 
   SessionConfig config_;
   ros::NodeHandle node_, private_node_, detection_node_;
@@ -77,21 +81,17 @@ class CalibrationNode {
   std::unique_ptr<ros::AsyncSpinner> detection_spinner_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  /// The node's static edges (X, and Y with publish_pattern_tf) by child frame. One broadcaster
-  /// sends them all (two in one node would share the latched topic, and only the last would be
-  /// latched); it is remade when an edge's child changes, so an old edge is no longer latched.
-  void send_static_edges();
-  std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // output_mutex_
-  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
+  StaticEdges tf_edges_;  // X, and Y with publish_pattern_tf (output_mutex_)
   ros::Subscriber detections_;
-  ros::Timer tf_poll_, status_timer_;
+  ros::Timer tf_poll_, status_timer_, tf_refresh_;
   ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Time last_tf_stamp_;     // detection thread only
   // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:
   // the spinner has two threads.
   std::mutex output_mutex_;
-  std::string published_root_;  // the camera-tree frame X was published to (output_mutex_)
+  std::optional<Eigen::Isometry3d> tf_X_;  // the X kept in TF (output_mutex_)
+  std::string tf_refusal_;                 // the last refusal logged by refresh_tf (output_mutex_)
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable work_;

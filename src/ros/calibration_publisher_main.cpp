@@ -1,0 +1,15 @@
+#include "handeye_covariance/ros/calibration_publisher.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "handeye_publisher");
+  // Held past the catch: when the last handle goes, ROS shuts down its logging, and ROS_FATAL would print nothing.
+  ros::NodeHandle node_handle, private_node_handle("~");
+  try {
+    handeye::CalibrationPublisher node(node_handle, private_node_handle);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("handeye_publisher: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,280 @@
+// Client of publish.test: publish.launch with our result file, easy_handeye's two
+// formats, `inverse`, a corrupt, a missing and a contradicted file, and the
+// calibration node publishing its saved calibration at start-up. Each case runs
+// roslaunch as a user types it, with its own frame names.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <tf2_msgs/TFMessage.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+#include "node_test_helpers.h"
+
+extern char** environ;
+
+namespace handeye {
+namespace {
+
+const std::string kDir = "/tmp/handeye_covariance_rostest/publish";
+
+/// A roslaunch (or any command) running in the background, its output in a file;
+/// interrupted (as Ctrl-C) when it goes out of scope.
+class Launch {
+ public:
+  explicit Launch(std::vector<std::string> args, const std::string& name) : log_(kDir + "/" + name + ".log") {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    EXPECT_EQ(posix_spawnp(&pid_, argv[0], &actions, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~Launch() {
+    if (!finished()) {
+      kill(pid_, SIGINT);
+      test::wait_for([this] { return finished(); }, 15.0);
+      if (!finished()) kill(pid_, SIGKILL), waitpid(pid_, &status_, 0);
+    }
+  }
+  bool finished() {
+    if (done_) return true;
+    done_ = waitpid(pid_, &status_, WNOHANG) == pid_;
+    return done_;
+  }
+  std::string output() const { return std::filesystem::exists(log_) ? io::read_file(log_) : ""; }
+
+ private:
+  std::string log_;
+  pid_t pid_ = 0;
+  int status_ = 0;
+  bool done_ = false;
+};
+
+Launch publish(const std::string& name, const std::string& file, std::vector<std::string> extra = {}) {
+  std::vector<std::string> args = {"roslaunch", "handeye_covariance", "publish.launch", "namespace_prefix:=" + name,
+                                   "calibration_file:=" + file};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return Launch(args, name);
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// A seeded X with a full (correlated) covariance.
+PoseWithCovariance random_calibration(std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  PoseWithCovariance X;
+  X.pose = se3::exp((Vector6d() << 0.05 * n(rng), 0.05 * n(rng), 0.1 * n(rng), n(rng), n(rng), n(rng)).finished());
+  Matrix6d A;
+  for (int i = 0; i < 36; ++i) A(i / 6, i % 6) = n(rng);
+  X.covariance = 1e-7 * (A * A.transpose() + Matrix6d::Identity());
+  return X;
+}
+
+std::string write(const std::string& name, const std::string& text) {
+  std::filesystem::create_directories(kDir);
+  const std::string path = kDir + "/" + name;
+  io::write_file_atomically(path, text);
+  return path;
+}
+
+/// The easy_handeye file of X (nested: its current format; else the older one).
+std::string easy_handeye_text(const Eigen::Isometry3d& X, bool eye_on_hand, const std::string& parent,
+                              const std::string& camera, bool nested) {
+  const Eigen::Quaterniond q(X.linear());
+  std::ostringstream out;
+  out.precision(17);
+  const std::string indent = nested ? "  " : "";
+  if (nested) out << "parameters:\n";
+  out << indent << "eye_on_hand: " << (eye_on_hand ? "true" : "false") << "\n"
+      << indent << "robot_base_frame: " << (eye_on_hand ? "base_link" : parent) << "\n"
+      << indent << "robot_effector_frame: " << (eye_on_hand ? parent : "tool0") << "\n"
+      << indent << "tracking_base_frame: " << camera << "\n"
+      << indent << "tracking_marker_frame: marker\n"
+      << "transformation:\n  x: " << X.translation().x() << "\n  y: " << X.translation().y()
+      << "\n  z: " << X.translation().z() << "\n  qx: " << q.x() << "\n  qy: " << q.y() << "\n  qz: " << q.z()
+      << "\n  qw: " << q.w() << "\n";
+  return out.str();
+}
+
+struct Fixture : ::testing::Test {
+  tf2_ros::Buffer tf;
+  tf2_ros::TransformListener listener{tf};
+  std::vector<geometry_msgs::TransformStamped> static_edges;  // every /tf_static edge seen
+  ros::Subscriber static_sub;
+
+  Fixture() {
+    ros::NodeHandle nh;
+    static_sub = nh.subscribe<tf2_msgs::TFMessage>("/tf_static", 20, [this](const tf2_msgs::TFMessage::ConstPtr& m) {
+      static_edges.insert(static_edges.end(), m->transforms.begin(), m->transforms.end());
+    });
+  }
+
+  /// T_parent_child from TF, once it can be looked up (20 s).
+  std::optional<Eigen::Isometry3d> lookup(const std::string& parent, const std::string& child) {
+    if (!test::wait_for([&] { return tf.canTransform(parent, child, ros::Time(0)); }, 20.0)) return std::nullopt;
+    return conversions::to_eigen(tf.lookupTransform(parent, child, ros::Time(0)).transform);
+  }
+  bool has_edge(const std::string& parent, const std::string& child) {
+    return std::any_of(static_edges.begin(), static_edges.end(),
+                       [&](const auto& e) { return e.header.frame_id == parent && e.child_frame_id == child; });
+  }
+};
+
+/// The latched message on `topic` (20 s), or nothing.
+std::optional<geometry_msgs::PoseWithCovarianceStamped> latched(const std::string& topic, double seconds = 20.0) {
+  std::optional<geometry_msgs::PoseWithCovarianceStamped> msg;
+  ros::NodeHandle nh;
+  const ros::Subscriber sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+      topic, 1, [&](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) { msg = *m; });
+  test::wait_for([&] { return msg.has_value(); }, seconds);
+  return msg;
+}
+
+void expect_pose_near(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double tolerance) {
+  EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), tolerance) << a.matrix() << "\n" << b.matrix();
+}
+
+TEST_F(Fixture, OurResultFileGoesToTfAtTheCameraTreeRootAndToTheLatchedTopicTo1e9) {
+  const PoseWithCovariance X = random_calibration(1);
+  io::ResultContext context;
+  context.setup = Setup::EyeInHand;
+  context.parent = "pub_tool0";
+  context.child = "pub_camera_optical_frame";
+  const std::string file = write("ours.yaml", io::format_pose_file(X, context));
+  Launch launch = publish("ours", file);
+
+  const auto msg = latched("/ours_eye_on_hand/handeye_calibration/calibration");
+  ASSERT_TRUE(msg) << launch.output();
+  EXPECT_EQ(msg->header.frame_id, "pub_tool0");
+  const PoseWithCovariance published = conversions::to_core(msg->pose);
+  expect_pose_near(published.pose, X.pose, 1e-9);
+  EXPECT_LT((published.covariance - X.covariance).cwiseAbs().maxCoeff(), 1e-9 * X.covariance.cwiseAbs().maxCoeff());
+
+  const auto tf_X = lookup("pub_tool0", "pub_camera_optical_frame");
+  ASSERT_TRUE(tf_X) << launch.output();
+  expect_pose_near(*tf_X, X.pose, 1e-9);
+  // Hung from the driver tree's root: the optical frame keeps its one parent.
+  EXPECT_TRUE(test::wait_for([&] { return has_edge("pub_tool0", "pub_camera_link"); }, 5.0));
+  EXPECT_FALSE(has_edge("pub_tool0", "pub_camera_optical_frame"));
+  EXPECT_FALSE(launch.finished()) << launch.output();
+}
+
+TEST_F(Fixture, EasyHandeyeFilesBothFormatsAndInverse) {
+  const Eigen::Isometry3d X = random_calibration(2).pose;
+  {  // today's format, eye-on-base: TF only (no covariance), and the log says why
+    const std::string file = write("easy.yaml", easy_handeye_text(X, false, "easy_base", "easy_camera", true));
+    Launch launch = publish("easy", file, {"eye_on_hand:=false"});
+    const auto tf_X = lookup("easy_base", "easy_camera");
+    ASSERT_TRUE(tf_X) << launch.output();
+    expect_pose_near(*tf_X, X, 1e-9);
+    EXPECT_FALSE(latched("/easy_eye_on_base/handeye_calibration/calibration", 2.0).has_value());
+    EXPECT_TRUE(contains(launch.output(), "no covariance, so only TF is published")) << launch.output();
+  }
+  {  // the older format (parameters at the top), a frame renamed, inverse: camera -> effector
+    const std::string file = write("easy_old.yaml", easy_handeye_text(X, true, "old_tool", "old_camera", false));
+    Launch launch = publish("easy_old", file, {"robot_effector_frame:=renamed_tool", "inverse:=true"});
+    const auto tf_inverse = lookup("old_camera", "renamed_tool");
+    ASSERT_TRUE(tf_inverse) << launch.output();
+    expect_pose_near(*tf_inverse, X.inverse(), 1e-9);
+    EXPECT_TRUE(test::wait_for([&] { return has_edge("old_camera", "renamed_tool"); }, 5.0));
+  }
+}
+
+TEST_F(Fixture, ABadFileStopsTheLaunchWithItsPathAndTheFix) {
+  const PoseWithCovariance X = random_calibration(3);
+  io::ResultContext context;
+  context.setup = Setup::EyeToHand;
+  context.parent = "bad_base";
+  context.child = "bad_camera";
+  const std::string good = io::format_pose_file(X, context);
+  struct Case {
+    std::string name, path;
+    std::vector<std::string> extra;
+    std::vector<std::string> said;  // what the output must say
+  };
+  const std::vector<Case> cases = {
+      {"corrupt", write("corrupt.yaml", good.substr(0, good.size() / 2) + "\n  - ]: {\n"), {}, {"YAML syntax error", "corrupt.yaml:"}},
+      {"missing", kDir + "/no_such_file.yaml", {}, {"cannot open", "no_such_file.yaml", "check the path"}},
+      {"nan", write("nan.yaml", std::regex_replace(good, std::regex("translation: \\[[^\\]]*\\]"),
+                                                   "translation: [.nan, 0, 0]", std::regex_constants::format_first_only)),
+       {}, {"nan.yaml"}},
+      {"contradicted", write("contradicted.yaml", good), {"eye_on_hand:=true"},
+       {"the calibration is eye_to_hand but eye_on_hand is true", "contradicted.yaml"}},
+  };
+  for (const Case& c : cases) {
+    Launch launch = publish(c.name, c.path, c.extra);
+    // required="true": the node's exit ends the launch.
+    ASSERT_TRUE(test::wait_for([&] { return launch.finished(); }, 30.0)) << c.name << ":\n" << launch.output();
+    const std::string out = launch.output();
+    EXPECT_TRUE(contains(out, "handeye_publisher: ")) << c.name << ":\n" << out;
+    for (const std::string& s : c.said) EXPECT_TRUE(contains(out, s)) << c.name << " should say `" << s << "`:\n" << out;
+    EXPECT_FALSE(has_edge("bad_base", "bad_camera")) << c.name;
+  }
+}
+
+TEST_F(Fixture, TheCalibrationNodePublishesItsSavedCalibrationAtStartUp) {
+  const PoseWithCovariance X = random_calibration(4);
+  io::ResultContext context;
+  context.setup = Setup::EyeInHand;
+  context.parent = "start_tool0";
+  context.child = "start_camera";
+  const std::string file = write("saved.yaml", io::format_pose_file(X, context));
+  Launch launch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=start",
+                 "robot_effector_frame:=start_tool0", "tracking_base_frame:=start_camera", "calibration_file:=" + file,
+                 "session_file:=" + kDir + "/start_session.yaml"},
+                "start");
+  const auto msg = latched("/start_eye_on_hand/handeye_calibration/calibration");
+  ASSERT_TRUE(msg) << launch.output();
+  EXPECT_EQ(msg->header.frame_id, "start_tool0");
+  const PoseWithCovariance published = conversions::to_core(msg->pose);
+  expect_pose_near(published.pose, X.pose, 1e-9);
+  EXPECT_LT((published.covariance - X.covariance).cwiseAbs().maxCoeff(), 1e-9 * X.covariance.cwiseAbs().maxCoeff());
+  const auto tf_X = lookup("start_tool0", "start_camera");
+  ASSERT_TRUE(tf_X) << launch.output();
+  expect_pose_near(*tf_X, X.pose, 1e-9);
+  // A saved calibration of other frames is not published.
+  const std::string other = write("other.yaml", io::format_pose_file(X, context));
+  Launch mismatch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=other",
+                   "robot_effector_frame:=other_tool0", "tracking_base_frame:=other_camera",
+                   "calibration_file:=" + other, "session_file:=" + kDir + "/other_session.yaml"},
+                  "other");
+  EXPECT_FALSE(latched("/other_eye_on_hand/handeye_calibration/calibration", 5.0).has_value());
+  EXPECT_TRUE(contains(mismatch.output(), "not published")) << mismatch.output();
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "publish_test");
+  ros::NodeHandle nh;
+  // A camera driver's own tree (Debian ships no static_transform_publisher): X must be hung from its root.
+  tf2_ros::StaticTransformBroadcaster camera_driver;
+  geometry_msgs::TransformStamped optical;
+  optical.header.stamp = ros::Time::now();
+  optical.header.frame_id = "pub_camera_link";
+  optical.child_frame_id = "pub_camera_optical_frame";
+  optical.transform = handeye::conversions::to_transform_msg(
+      handeye::se3::make_pose(Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix(), Eigen::Vector3d(0.01, 0.02, 0.03)));
+  camera_driver.sendTransform(optical);
+  return RUN_ALL_TESTS();
+}
