@@ -74,6 +74,14 @@ Launch publish(const std::string& name, const std::string& file, std::vector<std
   return Launch(args, name);
 }
 
+io::ResultContext frames(Setup setup, const std::string& parent, const std::string& child) {
+  io::ResultContext context;
+  context.setup = setup;
+  context.parent = parent;
+  context.child = child;
+  return context;
+}
+
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// A seeded X with a full (correlated) covariance.
@@ -132,6 +140,9 @@ struct Fixture : ::testing::Test {
     if (!test::wait_for([&] { return tf.canTransform(parent, child, ros::Time(0)); }, 20.0)) return std::nullopt;
     return conversions::to_eigen(tf.lookupTransform(parent, child, ros::Time(0)).transform);
   }
+  /// The latched message on `topic` and TF both say X (pose and covariance to 1e-9).
+  void expect_published(Launch& launch, const std::string& topic, const io::ResultContext& frames,
+                        const PoseWithCovariance& X);
   bool has_edge(const std::string& parent, const std::string& child) {
     return std::any_of(static_edges.begin(), static_edges.end(),
                        [&](const auto& e) { return e.header.frame_id == parent && e.child_frame_id == child; });
@@ -152,25 +163,26 @@ void expect_pose_near(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, do
   EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), tolerance) << a.matrix() << "\n" << b.matrix();
 }
 
-TEST_F(Fixture, OurResultFileGoesToTfAtTheCameraTreeRootAndToTheLatchedTopicTo1e9) {
-  const PoseWithCovariance X = random_calibration(1);
-  io::ResultContext context;
-  context.setup = Setup::EyeInHand;
-  context.parent = "pub_tool0";
-  context.child = "pub_camera_optical_frame";
-  const std::string file = write("ours.yaml", io::format_pose_file(X, context));
-  Launch launch = publish("ours", file);
-
-  const auto msg = latched("/ours_eye_on_hand/handeye_calibration/calibration");
+void Fixture::expect_published(Launch& launch, const std::string& topic, const io::ResultContext& frames,
+                               const PoseWithCovariance& X) {
+  const auto msg = latched(topic);
   ASSERT_TRUE(msg) << launch.output();
-  EXPECT_EQ(msg->header.frame_id, "pub_tool0");
+  EXPECT_EQ(msg->header.frame_id, frames.parent);
   const PoseWithCovariance published = conversions::to_core(msg->pose);
   expect_pose_near(published.pose, X.pose, 1e-9);
   EXPECT_LT((published.covariance - X.covariance).cwiseAbs().maxCoeff(), 1e-9 * X.covariance.cwiseAbs().maxCoeff());
-
-  const auto tf_X = lookup("pub_tool0", "pub_camera_optical_frame");
+  const auto tf_X = lookup(frames.parent, frames.child);
   ASSERT_TRUE(tf_X) << launch.output();
   expect_pose_near(*tf_X, X.pose, 1e-9);
+}
+
+TEST_F(Fixture, OurResultFileGoesToTfAtTheCameraTreeRootAndToTheLatchedTopicTo1e9) {
+  const PoseWithCovariance X = random_calibration(1);
+  const io::ResultContext context = frames(Setup::EyeInHand, "pub_tool0", "pub_camera_optical_frame");
+  const std::string file = write("ours.yaml", io::format_pose_file(X, context));
+  Launch launch = publish("ours", file);
+
+  expect_published(launch, "/ours_eye_on_hand/handeye_calibration/calibration", context, X);
   // Hung from the driver tree's root: the optical frame keeps its one parent.
   EXPECT_TRUE(test::wait_for([&] { return has_edge("pub_tool0", "pub_camera_link"); }, 5.0));
   EXPECT_FALSE(has_edge("pub_tool0", "pub_camera_optical_frame"));
@@ -200,10 +212,7 @@ TEST_F(Fixture, EasyHandeyeFilesBothFormatsAndInverse) {
 
 TEST_F(Fixture, ABadFileStopsTheLaunchWithItsPathAndTheFix) {
   const PoseWithCovariance X = random_calibration(3);
-  io::ResultContext context;
-  context.setup = Setup::EyeToHand;
-  context.parent = "bad_base";
-  context.child = "bad_camera";
+  const io::ResultContext context = frames(Setup::EyeToHand, "bad_base", "bad_camera");
   const std::string good = io::format_pose_file(X, context);
   struct Case {
     std::string name, path;
@@ -232,24 +241,13 @@ TEST_F(Fixture, ABadFileStopsTheLaunchWithItsPathAndTheFix) {
 
 TEST_F(Fixture, TheCalibrationNodePublishesItsSavedCalibrationAtStartUp) {
   const PoseWithCovariance X = random_calibration(4);
-  io::ResultContext context;
-  context.setup = Setup::EyeInHand;
-  context.parent = "start_tool0";
-  context.child = "start_camera";
+  const io::ResultContext context = frames(Setup::EyeInHand, "start_tool0", "start_camera");
   const std::string file = write("saved.yaml", io::format_pose_file(X, context));
   Launch launch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=start",
                  "robot_effector_frame:=start_tool0", "tracking_base_frame:=start_camera", "calibration_file:=" + file,
                  "session_file:=" + kDir + "/start_session.yaml"},
                 "start");
-  const auto msg = latched("/start_eye_on_hand/handeye_calibration/calibration");
-  ASSERT_TRUE(msg) << launch.output();
-  EXPECT_EQ(msg->header.frame_id, "start_tool0");
-  const PoseWithCovariance published = conversions::to_core(msg->pose);
-  expect_pose_near(published.pose, X.pose, 1e-9);
-  EXPECT_LT((published.covariance - X.covariance).cwiseAbs().maxCoeff(), 1e-9 * X.covariance.cwiseAbs().maxCoeff());
-  const auto tf_X = lookup("start_tool0", "start_camera");
-  ASSERT_TRUE(tf_X) << launch.output();
-  expect_pose_near(*tf_X, X.pose, 1e-9);
+  expect_published(launch, "/start_eye_on_hand/handeye_calibration/calibration", context, X);
   // A saved calibration of other frames is not published.
   const std::string other = write("other.yaml", io::format_pose_file(X, context));
   Launch mismatch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=other",
