@@ -379,6 +379,8 @@ TEST(YamlIo, AStoredCalibrationIsOursOrEasyHandeyesInBothItsFormats) {
   expect_error("eye_on_hand: true\ntransformation: {x: 0, y: 0, qx: 0, qy: 0, qz: 0, qw: 1}\n", ErrorCode::MissingKey,
                "`z`");
   expect_error("parent: tool0\n", ErrorCode::MissingKey, "neither a handeye_covariance result");
+  expect_error("eye_on_hand: true\ntransformation: {x: .inf, y: 0, z: 0, qx: 0, qy: 0, qz: 0, qw: 1}\n",
+               ErrorCode::NonFinite, "transformation.x");
 }
 
 TEST(YamlIo, AHomeRelativePathIsExpanded) {

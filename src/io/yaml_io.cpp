@@ -886,7 +886,8 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
   file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
   if (root["samples_used"]) file.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
   // The noise model the calibration used (samples results only).
-  if (const YAML::Node noise = root["noise"]; noise && noise.IsMap() && noise["model"] && noise["model"]["effector"]) {
+  if (const YAML::Node noise = root["noise"];
+      noise && noise.IsMap() && noise["model"] && noise["model"].IsMap() && noise["model"]["effector"]) {
     file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
   }
   return file;
@@ -919,7 +920,13 @@ StoredCalibration parse_stored_calibration(const std::string& text, const std::s
   const std::string hint = "easy_handeye's `transformation` is {x, y, z, qx, qy, qz, qw} in m";
   const YAML::Node transformation = root["transformation"];
   const Location at = top / "transformation";
-  const auto number = [&](const char* key) { return as_double(require(transformation, key, at, hint), at / key); };
+  const auto number = [&](const char* key) {
+    const double v = as_double(require(transformation, key, at, hint), at / key);
+    if (!std::isfinite(v)) {
+      throw HandEyeError(ErrorCode::NonFinite, std::string("NaN or Inf in `") + key + "`", (at / key).str(), hint);
+    }
+    return v;
+  };
   const Eigen::Quaterniond q(number("qw"), number("qx"), number("qy"), number("qz"));
   const Vector3d t(number("x"), number("y"), number("z"));
   stored.T_parent_camera.pose =
@@ -949,7 +956,13 @@ StoredCalibration parse_stored_calibration(const std::string& text, const std::s
 }
 
 StoredCalibration read_stored_calibration(const std::string& path) {
-  return parse_stored_calibration(read_file(path), path);
+  const std::string text = read_file(path);
+  try {
+    return parse_stored_calibration(text, path);
+  } catch (const YAML::Exception& e) {  // a shape the readers did not foresee: still a named error, never a crash
+    throw HandEyeError(ErrorCode::MalformedFile, std::string("unexpected YAML structure: ") + e.what(), path,
+                       "compare the file with one /calibrate wrote (README, \"Files\")");
+  }
 }
 
 // ---------------------------------------------------------------- tag layouts

@@ -33,6 +33,16 @@ CalibrationPublisher::CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle
                        "add eye_on_hand:=true (camera on the effector) or eye_on_hand:=false");
   }
   rig_.setup = stored.setup ? *stored.setup : setup_from_eye_on_hand(eye_on_hand);
+  // publish.launch names the namespace from eye_on_hand:= (empty: eye-on-hand), and object_localizer
+  // looks there: a file of the other setup would put the calibration where nobody looks.
+  const std::string ns = ros::this_node::getNamespace();
+  const std::string other = rig_.eye_in_hand() ? "_eye_on_base" : "_eye_on_hand";
+  if (ns.size() >= other.size() && ns.compare(ns.size() - other.size(), other.size(), other) == 0) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       std::string("the calibration is ") + to_string(rig_.setup) + " but it would be published in " +
+                           ns + ", where the other setup's consumers look",
+                       path, std::string("give eye_on_hand:=") + (rig_.eye_in_hand() ? "true" : "false"));
+  }
 
   // X's frames: the file's, each replaced by its parameter when that is set (easy_handeye's overrides).
   const std::string parent_key = rig_.eye_in_hand() ? "robot_effector_frame" : "robot_base_frame";

@@ -22,7 +22,11 @@ bool same_edge(const geometry_msgs::TransformStamped& a, const geometry_msgs::Tr
 
 std::string StaticEdges::publish_camera(const tf2::BufferCore& tf, const Rig& rig, const Eigen::Isometry3d& X) {
   const CameraTfEdge edge = camera_tf_edge(tf, rig, X, camera_root_);
-  if (!edge.refusal.empty()) return edge.refusal;
+  if (!edge.refusal.empty()) {  // an earlier X must not stay in TF while the topic and the file say another
+    if (!camera_root_.empty() && edges_.erase(camera_root_) > 0) send();
+    camera_root_.clear();
+    return edge.refusal;
+  }
   geometry_msgs::TransformStamped stamped;
   stamped.header.stamp = ros::Time::now();
   stamped.header.frame_id = edge.parent;

@@ -25,7 +25,7 @@ class StaticEdges {
   /// X's edge at the current root of the camera's tree (a camera driver that
   /// starts late moves it up to its own root). Sends only when the edge changed.
   /// Returns the edge ("tool0 -> camera_link"), or why nothing was published
-  /// (camera_tf_edge's refusal, starting "no TF").
+  /// (camera_tf_edge's refusal, starting "no TF"; an earlier X's edge is then withdrawn).
   std::string publish_camera(const tf2::BufferCore& tf, const Rig& rig, const Eigen::Isometry3d& X);
   /// Any other edge, keyed by its child frame; sends when it changed.
   void publish(const geometry_msgs::TransformStamped& edge);
