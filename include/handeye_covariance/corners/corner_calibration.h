@@ -64,9 +64,9 @@
 // Where few images tell translation from rotation, the fixed point creeps along a
 // ridge: every third round jumps to its geometric limit (Aitken), and a component
 // left with under one row of redundancy is put at its bound (0.1 um, 0.1 urad). When
-// the robot is exact, the estimate still frees each pose a little: 1.07-1.08x the pose
+// the robot is exact, the estimate still frees each pose a little: 1.03x / 1.00x the pose
 // level's RMS error on one rendered 48 mm AprilTag (handeye_corners_study
-// --kinds apriltag_single, 300 sessions, measured with a (1 um)^2 bound).
+// --kinds apriltag_single, 300 sessions; 1.05x with a (1 um)^2 bound).
 #pragma once
 
 #include <Eigen/Core>
