@@ -66,6 +66,13 @@ double as_double(const YAML::Node& node, const Location& at) {
   }
 }
 
+/// A number that must be finite: `message` and `fix` name NaN or Inf where it was found.
+double as_finite(const YAML::Node& node, const Location& at, const std::string& message, const std::string& fix) {
+  const double v = as_double(node, at);
+  if (!std::isfinite(v)) throw HandEyeError(ErrorCode::NonFinite, message, at.str(), fix);
+  return v;
+}
+
 /// A whole number in [lowest, highest], checked before it is converted (a double
 /// beyond int's range, converted, is undefined behaviour: `id: 1e90`).
 int as_integer(const YAML::Node& node, const Location& at, double lowest, double highest, const std::string& what) {
@@ -100,11 +107,7 @@ std::array<double, N> as_numbers(const YAML::Node& node, const Location& at, con
   }
   std::array<double, N> values;
   for (std::size_t i = 0; i < N; ++i) {
-    values[i] = as_double(node[i], at[i]);
-    if (!std::isfinite(values[i])) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf (" + what + ")", at[i].str(),
-                         "drop this entry or fix the source that produced it");
-    }
+    values[i] = as_finite(node[i], at[i], "NaN or Inf (" + what + ")", "drop this entry or fix the source that produced it");
   }
   return values;
 }
@@ -117,10 +120,7 @@ std::vector<double> as_number_list(const YAML::Node& node, const Location& at, c
   }
   std::vector<double> values;
   for (std::size_t i = 0; i < node.size(); ++i) {
-    values.push_back(as_double(node[i], at[i]));
-    if (!std::isfinite(values.back())) {
-      throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf (" + what + ")", at[i].str(), "fix the source that produced it");
-    }
+    values.push_back(as_finite(node[i], at[i], "NaN or Inf (" + what + ")", "fix the source that produced it"));
   }
   return values;
 }
@@ -830,10 +830,8 @@ Eigen::Isometry3d parse_robot_pose(const std::string& text, const std::string& s
     Vector6d v;
     for (std::size_t i = 0; i < 6; ++i) {
       const YAML::Node row = data[i];
-      v[static_cast<Eigen::Index>(i)] = (row.IsSequence() ? as_numbers<1>(row, where[i], "one number")[0] : as_double(row, where[i]));
-      if (!std::isfinite(v[static_cast<Eigen::Index>(i)])) {
-        throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf in the pose vector", where[i].str(), hint);
-      }
+      v[static_cast<Eigen::Index>(i)] = row.IsSequence() ? as_numbers<1>(row, where[i], "one number")[0]
+                                                          : as_finite(row, where[i], "NaN or Inf in the pose vector", hint);
     }
     return se3::make_pose(so3::exp(v.tail<3>()), v.head<3>());
   }
@@ -874,9 +872,8 @@ std::vector<PoseTableRow> parse_pose_table(const std::string& text, const std::s
   return rows;
 }
 
-CalibrationFile parse_result(const std::string& text, const std::string& source) {
-  const YAML::Node root = load(text, source);
-  const Location top{source, ""};
+namespace {
+CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   CalibrationFile file;
   if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
   if (root["parent"] && root["parent"].IsScalar()) file.context.parent = root["parent"].Scalar();
@@ -891,6 +888,11 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
     file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
   }
   return file;
+}
+}  // namespace
+
+CalibrationFile parse_result(const std::string& text, const std::string& source) {
+  return read_result_node(load(text, source), Location{source, ""});
 }
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
@@ -907,7 +909,7 @@ StoredCalibration parse_stored_calibration(const std::string& text, const std::s
   }
   // Ours has `covariance` (and easy_handeye's `transformation` block too); easy_handeye's has only the latter.
   if (root["covariance"]) {
-    const CalibrationFile file = parse_result(text, source);
+    const CalibrationFile file = read_result_node(root, top);
     stored.setup = file.context.setup;
     stored.parent = file.context.parent;
     stored.child = file.context.child;
@@ -921,11 +923,7 @@ StoredCalibration parse_stored_calibration(const std::string& text, const std::s
   const YAML::Node transformation = root["transformation"];
   const Location at = top / "transformation";
   const auto number = [&](const char* key) {
-    const double v = as_double(require(transformation, key, at, hint), at / key);
-    if (!std::isfinite(v)) {
-      throw HandEyeError(ErrorCode::NonFinite, std::string("NaN or Inf in `") + key + "`", (at / key).str(), hint);
-    }
-    return v;
+    return as_finite(require(transformation, key, at, hint), at / key, std::string("NaN or Inf in `") + key + "`", hint);
   };
   const Eigen::Quaterniond q(number("qw"), number("qx"), number("qy"), number("qz"));
   const Vector3d t(number("x"), number("y"), number("z"));
@@ -1085,8 +1083,7 @@ CameraModel parse_camera_info(const std::string& text, const std::string& source
     if (!data.IsSequence()) throw HandEyeError(ErrorCode::MalformedFile, "expected a list of numbers", at.str(), hint);
     std::vector<double> values;
     for (std::size_t i = 0; i < data.size(); ++i) {
-      values.push_back(as_double(data[i], at[i]));
-      if (!std::isfinite(values.back())) throw HandEyeError(ErrorCode::NonFinite, "NaN or Inf", at[i].str(), hint);
+      values.push_back(as_finite(data[i], at[i], "NaN or Inf", hint));
     }
     return values;
   };
