@@ -310,11 +310,7 @@ void CalibrationNode::publish_estimate(const Calibration& c) {
 
 std::string CalibrationNode::refresh_tf() {
   if (!config_.publish_tf || !tf_X_) return "";
-  const std::string edge = tf_edges_.publish_camera(tf_buffer_, config_.rig, *tf_X_);
-  const bool refused = edge.rfind("no TF", 0) == 0;
-  if (refused && edge != tf_refusal_) ROS_WARN("%s", edge.c_str());
-  tf_refusal_ = refused ? edge : "";
-  return edge;
+  return tf_edges_.publish_camera(tf_buffer_, config_.rig, *tf_X_);
 }
 
 void CalibrationNode::republish_saved_calibration() {

@@ -83,15 +83,10 @@ CalibrationPublisher::CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle
   }
   // First after a second: the TF listener needs that to learn a running driver's camera tree
   // (else X would go to the camera frame first and move up a moment later).
-  refresh_timer_ = node.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { refresh(); });
-}
-
-void CalibrationPublisher::refresh() {
-  const std::string edge = edges_.publish_camera(tf_buffer_, rig_, X_.pose);
-  const bool refused = edge.rfind("no TF", 0) == 0;
-  if (refused && edge != refusal_) ROS_WARN("%s", edge.c_str());
-  if (!refused && !refusal_.empty()) ROS_INFO("published %s", edge.c_str());
-  refusal_ = refused ? edge : "";
+  // Each second: X's edge at the camera tree's current root (a driver may start later).
+  refresh_timer_ = node.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
+    edges_.publish_camera(tf_buffer_, rig_, X_.pose);
+  });
 }
 
 }  // namespace handeye

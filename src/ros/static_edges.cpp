@@ -1,5 +1,6 @@
 #include "handeye_covariance/ros/static_edges.h"
 
+#include <ros/console.h>
 #include <ros/time.h>
 
 #include <vector>
@@ -25,6 +26,8 @@ std::string StaticEdges::publish_camera(const tf2::BufferCore& tf, const Rig& ri
   if (!edge.refusal.empty()) {  // an earlier X must not stay in TF while the topic and the file say another
     if (!camera_root_.empty() && edges_.erase(camera_root_) > 0) send();
     camera_root_.clear();
+    if (edge.refusal != refusal_) ROS_WARN("%s", edge.refusal.c_str());  // once, not on every refresh
+    refusal_ = edge.refusal;
     return edge.refusal;
   }
   geometry_msgs::TransformStamped stamped;
@@ -37,7 +40,10 @@ std::string StaticEdges::publish_camera(const tf2::BufferCore& tf, const Rig& ri
   changed = store(stamped) || changed;
   camera_root_ = edge.child;
   if (changed) send();
-  return edge.parent + " -> " + edge.child;
+  const std::string published = edge.parent + " -> " + edge.child;
+  if (!refusal_.empty()) ROS_INFO("published %s", published.c_str());
+  refusal_.clear();
+  return published;
 }
 
 void StaticEdges::publish(const geometry_msgs::TransformStamped& edge) {

@@ -91,7 +91,6 @@ class CalibrationNode {
   // the spinner has two threads.
   std::mutex output_mutex_;
   std::optional<Eigen::Isometry3d> tf_X_;  // the X kept in TF (output_mutex_)
-  std::string tf_refusal_;                 // the last refusal logged by refresh_tf (output_mutex_)
 
   mutable std::mutex mutex_;  // guards everything below
   std::condition_variable work_;

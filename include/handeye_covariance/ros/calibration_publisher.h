@@ -25,16 +25,12 @@ class CalibrationPublisher {
   CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle private_node);
 
  private:
-  /// X's edge at the camera tree's current root (a timer: the tree may come later).
-  void refresh();
-
   Rig rig_;  // the setup and X's two frames
   PoseWithCovariance X_;
   bool inverse_ = false;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   StaticEdges edges_;
-  std::string refusal_;  // the last one logged
   ros::Publisher calibration_pub_;
   ros::Timer refresh_timer_;
 };

@@ -26,6 +26,7 @@ class StaticEdges {
   /// starts late moves it up to its own root). Sends only when the edge changed.
   /// Returns the edge ("tool0 -> camera_link"), or why nothing was published
   /// (camera_tf_edge's refusal, starting "no TF"; an earlier X's edge is then withdrawn).
+  /// A refusal is logged when it is new, and the edge when it follows one.
   std::string publish_camera(const tf2::BufferCore& tf, const Rig& rig, const Eigen::Isometry3d& X);
   /// Any other edge, keyed by its child frame; sends when it changed.
   void publish(const geometry_msgs::TransformStamped& edge);
@@ -37,6 +38,7 @@ class StaticEdges {
   std::map<std::string, geometry_msgs::TransformStamped> edges_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> broadcaster_;
   std::string camera_root_;  // the child of X's edge, once published
+  std::string refusal_;      // the last refusal, while it lasts
 };
 
 }  // namespace handeye
