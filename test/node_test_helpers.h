@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <functional>
+#include <string>
 
 #include <geometry_msgs/PoseStamped.h>
 
@@ -21,6 +24,22 @@ inline bool wait_for(const std::function<bool()>& done, double seconds) {
     ros::WallDuration(0.02).sleep();
   }
   return done();
+}
+
+/// A directory of this test process's own under /tmp/handeye_covariance_rostest, made on
+/// first use. catkin_make runs two rostests at once (-j of the core count): a fixed file
+/// name shared by two clients is overwritten under the other's feet.
+inline const std::string& scratch_directory() {
+  static const std::string directory = [] {
+    std::filesystem::create_directories("/tmp/handeye_covariance_rostest");
+    std::string pattern = "/tmp/handeye_covariance_rostest/client-XXXXXX";
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      ADD_FAILURE() << "mkdtemp(" << pattern << ") failed: free space in /tmp";
+      std::abort();
+    }
+    return pattern;
+  }();
+  return directory;
 }
 
 /// Keeps the latest ~status message.

@@ -98,7 +98,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
     const std::string result = io::read_file(calibrate.response.calibration_file);
     EXPECT_NE(result.find("rms_px"), std::string::npos) << result;
     SaveSamples save;
-    save.request.path = "/tmp/handeye_covariance_rostest/corners_samples.yaml";
+    save.request.path = test::scratch_directory() + "/corners_samples.yaml";
     ASSERT_TRUE(test::call(kNs + "save_samples", save));
     ASSERT_TRUE(save.response.success) << save.response.message;
     const SampleSet saved = io::read_samples(save.request.path);
@@ -178,7 +178,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_EQ(remove.response.samples, n);
 
   SaveSamples save;
-  save.request.path = "/tmp/handeye_covariance_rostest/saved_samples.yaml";
+  save.request.path = test::scratch_directory() + "/saved_samples.yaml";
   ASSERT_TRUE(test::call(kNs + "save_samples", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
 
@@ -219,9 +219,9 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   // and named in the response and in ~status.
   SampleSet corrupted = io::read_samples(save.request.path);
   corrupted.samples[3].T_camera_pattern = corrupted.samples[0].T_camera_pattern;
-  io::write_file_atomically("/tmp/handeye_covariance_rostest/corrupted_samples.yaml", io::format_samples(corrupted));
   LoadSamples load_corrupted;
-  load_corrupted.request.path = "/tmp/handeye_covariance_rostest/corrupted_samples.yaml";
+  load_corrupted.request.path = test::scratch_directory() + "/corrupted_samples.yaml";
+  io::write_file_atomically(load_corrupted.request.path, io::format_samples(corrupted));
   ASSERT_TRUE(test::call(kNs + "load_samples", load_corrupted));
   ASSERT_TRUE(load_corrupted.response.success) << load_corrupted.response.message;
   Calibrate with_outlier;
@@ -265,7 +265,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_NE(again_same_pose.response.message.find("too close"), std::string::npos) << again_same_pose.response.message;
 
   SaveCalibration save_calibration;
-  save_calibration.request.path = "/tmp/handeye_covariance_rostest/explicit.yaml";
+  save_calibration.request.path = test::scratch_directory() + "/explicit.yaml";
   ASSERT_TRUE(test::call(kNs + "save_calibration", save_calibration));
   EXPECT_TRUE(save_calibration.response.success) << save_calibration.response.message;
   EXPECT_TRUE(std::filesystem::exists(save_calibration.request.path));
@@ -282,5 +282,8 @@ int main(int argc, char** argv) {
   handeye::kParent = pn.param<std::string>("parent_frame", "tool0");
   handeye::kNoiseOrigin = pn.param<std::string>("noise_origin", "estimated_from_residuals");
   handeye::kMethod = pn.param<std::string>("method", "joint");
-  return RUN_ALL_TESTS();
+  const int status = RUN_ALL_TESTS();
+  // Kept for a look when something failed.
+  if (status == 0) std::filesystem::remove_all(handeye::test::scratch_directory());
+  return status;
 }
