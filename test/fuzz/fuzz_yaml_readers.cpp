@@ -50,6 +50,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     named_errors_only([&] { object_in_base(in); });
 #endif
   });
+  named_errors_only([&] {
+    // What publish.launch reads: ours or easy_handeye's; what it accepts goes to TF as it is.
+    const io::StoredCalibration stored = io::parse_stored_calibration(text, "fuzz");
+    if (!stored.T_parent_camera.pose.matrix().allFinite()) std::abort();
+  });
   named_errors_only([&] { io::parse_pose_file(text, "fuzz"); });
   named_errors_only([&] { io::parse_candidate_poses(text, "fuzz"); });
   named_errors_only([&] { io::parse_tag_layout(text, "fuzz"); });
