@@ -1,5 +1,5 @@
 // Publishes a calibration with a strongly anisotropic covariance to a real rviz
-// running the package's config, takes a screenshot, and checks that our display
+// (test/rviz_display_closeup.rviz), takes a screenshot, and checks that our display
 // drew the position ellipsoid: a magenta region of plausible size whose
 // long/short axis ratio matches the sigma ratio. Fails if the plugin did not
 // load or drew nothing. The screenshot is kept as a test artifact.

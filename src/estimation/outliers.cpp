@@ -81,6 +81,48 @@ SampleSet without(const SampleSet& samples, const std::vector<int>& dropped) {
   return kept;
 }
 
+/// Each sample of `evaluated` against X and the mean pattern pose of `fitted`, the
+/// samples `c` was solved from. The squared Mahalanobis distance of each residual
+/// (eq. 64-65) is taken under its predicted covariance: its camera noise, its robot
+/// noise mapped through the chain, and the estimation error of X and of the pattern's
+/// mean pose, which every residual shares (P_bar = X^-1 V Y_bar, Y_bar = mean_j
+/// V_j^-1 X P_j). A sample outside `fitted` is judged by the same covariance.
+std::vector<SampleFit> fits_against(const SampleSet& fitted, const Calibration& c, const SampleSet& evaluated) {
+  const Rig& rig = fitted.rig;
+  const Isometry3d& X = c.T_parent_camera;
+  const Isometry3d pattern = pattern_pose(fitted, X);
+  const double m = static_cast<double>(fitted.samples.size());
+  Matrix6d dY_dX = Matrix6d::Zero(), Y_noise = Matrix6d::Zero();
+  for (const PoseSample& s : fitted.samples) {
+    const Isometry3d V_inverse = rig.robot_link(s.T_base_effector).inverse();
+    const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
+    dY_dX += compose_jacobian_right(V_inverse) * compose_jacobian_left(X, s.T_camera_pattern) / m;
+    const Matrix6d G = compose_jacobian_right(V_inverse * X) / m;
+    Y_noise += G * noise.camera.as_pose_covariance() * G.transpose();
+  }
+  std::vector<SampleFit> fits;
+  fits.reserve(evaluated.samples.size());
+  for (const PoseSample& s : evaluated.samples) {
+    const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
+    const SampleResidual r = sample_residual(rig, s, X, pattern);
+    SampleFit& fit = fits.emplace_back();
+    fit.error = r.error;
+    fit.translation = r.error.head<3>().norm();
+    fit.rotation = r.error.tail<3>().norm();
+    if (r.error.norm() < 1e-9) continue;  // noise-free input: nothing to judge
+    const Isometry3d V = rig.robot_link(s.T_base_effector);
+    const Matrix6d dP_dY = compose_jacobian_right(X.inverse() * V);
+    const Matrix6d dP_dX = compose_jacobian_left(X.inverse(), V * pattern) * inverse_jacobian(X) + dP_dY * dY_dX;
+    const Matrix6d S = noise.camera.as_pose_covariance() +
+                       r.d_effector * noise.robot.as_pose_covariance() * r.d_effector.transpose() +
+                       dP_dX * c.pose_covariance * dP_dX.transpose() + dP_dY * Y_noise * dP_dY.transpose();
+    const Eigen::LDLT<Matrix6d> ldlt(S);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) continue;  // a zero-noise axis
+    fit.sigmas = std::sqrt(std::max(0.0, r.error.dot(ldlt.solve(r.error))));
+  }
+  return fits;
+}
+
 }  // namespace
 
 Calibration solve_samples(const SampleSet& samples, bool reject, Method method, const JointOptions& joint) {
@@ -91,6 +133,10 @@ SampleSet without_rejected(const SampleSet& samples, const Calibration& calibrat
   std::vector<int> dropped;
   for (const auto& r : calibration.rejected) dropped.push_back(r.index);
   return without(samples, dropped);
+}
+
+std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration) {
+  return fits_against(without_rejected(samples, calibration), calibration, samples);
 }
 
 Calibration solve_robust(const SampleSet& samples, Method method, const OutlierOptions& o, const JointOptions& joint) {
@@ -117,38 +163,8 @@ Calibration solve_robust(const SampleSet& samples, Method method, const OutlierO
     }
     const SampleSet kept = without(samples, dropped);
     Calibration c = estimate(kept, method, joint);
-    const Isometry3d pattern = pattern_pose(kept, c.T_parent_camera);
-    // Squared Mahalanobis distance of each sample's residual (eq. 64-65) under its
-    // predicted covariance: its camera noise, its robot noise mapped through the
-    // chain, and the estimation error of X and of the pattern's mean pose, which
-    // every residual shares (P_bar = X^-1 V Y_bar, Y_bar = mean_j V_j^-1 X P_j).
-    const Rig& rig = kept.rig;
-    const Isometry3d& X = c.T_parent_camera;
-    const std::size_t m = kept.samples.size();
-    Matrix6d dY_dX = Matrix6d::Zero(), Y_noise = Matrix6d::Zero();
-    for (const PoseSample& s : kept.samples) {
-      const Isometry3d V_inverse = rig.robot_link(s.T_base_effector).inverse();
-      const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
-      dY_dX += compose_jacobian_right(V_inverse) * compose_jacobian_left(X, s.T_camera_pattern) / static_cast<double>(m);
-      const Matrix6d G = compose_jacobian_right(V_inverse * X) / static_cast<double>(m);
-      Y_noise += G * noise.camera.as_pose_covariance() * G.transpose();
-    }
-    std::vector<double> distance(m, 0.0);
-    for (std::size_t k = 0; k < m; ++k) {
-      const PoseSample& s = kept.samples[k];
-      const MeasurementNoise& noise = s.noise ? *s.noise : c.noise;
-      const SampleResidual r = sample_residual(rig, s, X, pattern);
-      if (r.error.norm() < 1e-9) continue;  // noise-free input: nothing to gate
-      const Isometry3d V = rig.robot_link(s.T_base_effector);
-      const Matrix6d dP_dY = compose_jacobian_right(X.inverse() * V);
-      const Matrix6d dP_dX = compose_jacobian_left(X.inverse(), V * pattern) * inverse_jacobian(X) + dP_dY * dY_dX;
-      const Matrix6d S = noise.camera.as_pose_covariance() +
-                         r.d_effector * noise.robot.as_pose_covariance() * r.d_effector.transpose() +
-                         dP_dX * c.pose_covariance * dP_dX.transpose() + dP_dY * Y_noise * dP_dY.transpose();
-      const Eigen::LDLT<Matrix6d> ldlt(S);
-      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) continue;  // a zero-noise axis
-      distance[k] = r.error.dot(ldlt.solve(r.error));
-    }
+    std::vector<double> distance;
+    for (const SampleFit& fit : fits_against(kept, c, kept)) distance.push_back(fit.sigmas * fit.sigmas);
     // A detector's decoupled covariance may still understate a correlated truth:
     // when the typical distance exceeds chi2(6)'s median (5.35), the gate scales
     // with it, so samples are judged against each other.

@@ -75,6 +75,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   pattern_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pattern", 1, true);
   status_pub_ = private_node_.advertise<CalibrationStatus>("status", 10, true);
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
+  next_pose_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("next_pose_markers", 1, true);
   estimate_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("estimate", 1, true);
   services_ = {
       node_.advertiseService("calibrate", &CalibrationNode::calibrate, this),
@@ -241,8 +242,25 @@ void CalibrationNode::work() {
     if (analysis.generation < last_removal_) continue;
     analysis_ = std::move(analysis);
     if (analysis_->estimate) publish_estimate(*analysis_->estimate);
+    publish_next_pose();
     publish_status();
   }
+}
+
+void CalibrationNode::publish_next_pose() {  // lock held
+  std::optional<Eigen::Isometry3d> pose;
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  std::string label;
+  if (analysis_ && analysis_->estimate && analysis_->next_pose) {
+    pose = analysis_->next_pose->T_base_effector;
+    X = analysis_->estimate->T_parent_camera;
+    // ASCII: rviz's text markers draw no Greek letters or arrows.
+    label = "next pose: object " +
+            number_text(object_sigma({X, analysis_->estimate->pose_covariance}, config_.working_distance) * 1e3, 3) +
+            " -> " + number_text(analysis_->next_pose->object_sigma * 1e3, 3) + " mm (1 sigma)";
+  }
+  next_pose_pub_.publish(next_pose_markers(config_.rig, pose, X, config_.working_distance, label,
+                                           config_.rig.frames.base, ros::Time::now()));
 }
 
 void CalibrationNode::publish_status() {  // lock held
@@ -281,6 +299,13 @@ void CalibrationNode::publish_status() {  // lock held
     for (const auto& r : c.rejected) {
       status.rejected_samples.push_back(r.index);
       status.rejected_reasons.push_back(r.reason);
+    }
+  }
+  if (current) {
+    for (const SampleFit& fit : analysis_->fits) {
+      status.sample_residual_mm.push_back(fit.translation * 1e3);
+      status.sample_residual_deg.push_back(fit.rotation / kDeg);
+      status.sample_residual_sigma.push_back(fit.sigmas);
     }
   }
   if (current && analysis_->next_pose) {

@@ -236,6 +236,7 @@ Analysis CalibrationSession::analyse(const SessionSnapshot& snapshot) const {
     return a;
   }
   try {
+    a.fits = sample_fits(snapshot.samples, *a.estimate);
     const SampleSet kept = without_rejected(snapshot.samples, *a.estimate);
     const SuggestOptions options = suggest_options("", a.samples);
     const std::vector<Eigen::Isometry3d> candidates =

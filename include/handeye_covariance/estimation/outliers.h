@@ -46,6 +46,20 @@ Calibration solve_robust(const SampleSet& samples, Method method = Method::Joint
 Calibration solve_samples(const SampleSet& samples, bool reject, Method method = Method::Joint,
                           const JointOptions& joint = {});
 
+/// How one sample fits a calibration: its pattern pose against what X, its robot
+/// pose and the pattern's mean pose predict (eq. 64-65), and how many sigmas that
+/// is under the residual's predicted covariance (stage 2 above judges by it).
+struct SampleFit {
+  Vector6d error = Vector6d::Zero();  // camera frame, ROS order (m, rad)
+  double translation = 0.0;           // m, |error.head<3>()|
+  double rotation = 0.0;              // rad, |error.tail<3>()|
+  double sigmas = 0.0;                // Mahalanobis length (6 dof); 0 for a noise-free residual or a zero-noise axis
+};
+
+/// Every sample of `samples` against `calibration`, solved from `samples` without
+/// the ones `calibration.rejected` names: the rejected are judged against the rest.
+std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration);
+
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);
 

@@ -67,6 +67,9 @@ class CalibrationNode {
   void publish_status();  // lock held
   /// The running estimate (~estimate) and its markers (~markers).
   void publish_estimate(const Calibration& c);
+  /// The best next pose in 3D (~next_pose_markers): a ghost effector frame and the
+  /// camera's frustum there; cleared when there is none. Lock held.
+  void publish_next_pose();
   /// The saved calibration (~calibration_file) published again at start-up, as
   /// easy_handeye's publish.launch does: ~calibration, and X in TF.
   void republish_saved_calibration();
@@ -84,7 +87,7 @@ class CalibrationNode {
   StaticEdges tf_edges_;  // X, and Y with publish_pattern_tf (output_mutex_)
   ros::Subscriber detections_;
   ros::Timer tf_poll_, status_timer_, tf_refresh_;
-  ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_;
+  ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_, next_pose_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Time last_tf_stamp_;     // detection thread only
   // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:

@@ -19,6 +19,7 @@
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/session/sampler.h"
 #include "handeye_covariance/session/session_config.h"
@@ -79,6 +80,7 @@ struct Analysis {
   std::uint64_t generation = 0;
   std::size_t samples = 0;
   std::optional<Calibration> estimate;  // X with its covariance; `rejected` indexes the samples
+  std::vector<SampleFit> fits;          // with an estimate: every sample's residual (outliers.h), rejected ones too
   std::optional<ScoredPose> next_pose;  // the best next pose by the configured criterion
   std::string problem;                  // why there is no estimate or no next pose; empty otherwise
 };

@@ -1,0 +1,349 @@
+#include "calibration_panel.h"
+
+#include <QApplication>
+#include <QComboBox>
+#include <QGridLayout>
+#include <QHBoxLayout>
+#include <QHeaderView>
+#include <QLabel>
+#include <QLineEdit>
+#include <QMessageBox>
+#include <QPointer>
+#include <QPushButton>
+#include <QTableWidget>
+#include <QTimer>
+#include <QVBoxLayout>
+
+#include <ros/master.h>
+
+#include <pluginlib/class_list_macros.hpp>
+
+#include <algorithm>
+#include <thread>
+
+namespace handeye {
+namespace rviz_plugin {
+
+namespace {
+
+const char kStatusSuffix[] = "handeye_calibration/status";
+const char kDefaultNamespace[] = "/handeye_eye_on_hand/";
+
+QString mm(double value) { return QString::number(value, 'f', 2); }
+QString deg(double value) { return QString::number(value, 'f', 3); }
+
+/// "/a/b/" from "a/b", "/a/b" or "/a/b/".
+std::string normalised(std::string ns) {
+  if (ns.empty() || ns.front() != '/') ns.insert(ns.begin(), '/');
+  if (ns.back() != '/') ns.push_back('/');
+  return ns;
+}
+
+QPushButton* button(const QString& text, const char* name, const QString& tip) {
+  auto* b = new QPushButton(text);
+  b->setObjectName(name);
+  b->setToolTip(tip);
+  return b;
+}
+
+QLabel* label(const char* name) {
+  auto* l = new QLabel;
+  l->setObjectName(name);
+  l->setWordWrap(true);
+  l->setTextFormat(Qt::RichText);  // node text goes in escaped
+  l->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  return l;
+}
+
+}  // namespace
+
+CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
+  namespace_box_ = new QComboBox;
+  namespace_box_->setObjectName("namespace");
+  namespace_box_->setEditable(true);
+  namespace_box_->setToolTip("The calibration node's namespace: its services are <namespace>calibrate, ..., its "
+                             "status <namespace>handeye_calibration/status. Nodes that are running are listed.");
+  auto* top = new QHBoxLayout;
+  top->addWidget(new QLabel("Node"));
+  top->addWidget(namespace_box_, 1);
+
+  samples_label_ = label("samples_label");
+  sigma_label_ = label("sigma_label");
+  object_label_ = label("object_label");
+  target_label_ = label("target_label");
+  event_label_ = label("event_label");
+  reply_label_ = label("reply_label");
+
+  take_button_ = button("Take sample", "take_sample", "Sample the current robot pose and detection (the robot must stand still)");
+  remove_button_ = button("Remove selected", "remove_sample", "Remove the sample selected in the table");
+  calibrate_button_ = button("Calibrate", "calibrate", "Solve for X with its covariance; publish it and write the result file");
+  save_button_ = button("Save", "save_calibration", "Write the calibration to the node's calibration_file");
+  reset_button_ = button("Reset", "reset", "Drop every sample (asks first)");
+  suggest_button_ = button("Suggest pose", "suggest_pose",
+                           "Rank next poses by the predicted object error; the best is drawn in 3D (ghost frame, frustum)");
+  auto* buttons = new QGridLayout;
+  buttons->addWidget(take_button_, 0, 0);
+  buttons->addWidget(remove_button_, 0, 1);
+  buttons->addWidget(suggest_button_, 0, 2);
+  buttons->addWidget(calibrate_button_, 1, 0);
+  buttons->addWidget(save_button_, 1, 1);
+  buttons->addWidget(reset_button_, 1, 2);
+
+  table_ = new QTableWidget(0, 5);
+  table_->setObjectName("samples");
+  table_->setHorizontalHeaderLabels({"#", "mm", "deg", "sigma", "state"});
+  table_->horizontalHeaderItem(1)->setToolTip("translation residual: the pattern's pose against what X predicts");
+  table_->horizontalHeaderItem(2)->setToolTip("rotation residual");
+  table_->horizontalHeaderItem(3)->setToolTip("the residual in sigmas of its predicted covariance (6 dof); above ~5 is suspect");
+  table_->verticalHeader()->setVisible(false);
+  table_->horizontalHeader()->setStretchLastSection(true);
+  table_->setSelectionBehavior(QAbstractItemView::SelectRows);
+  table_->setSelectionMode(QAbstractItemView::SingleSelection);
+  table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+
+  auto* layout = new QVBoxLayout;
+  layout->addLayout(top);
+  layout->addWidget(samples_label_);
+  layout->addWidget(sigma_label_);
+  layout->addWidget(object_label_);
+  layout->addWidget(target_label_);
+  layout->addLayout(buttons);
+  layout->addWidget(reply_label_);
+  layout->addWidget(table_, 1);
+  layout->addWidget(event_label_);
+  setLayout(layout);
+
+  connect(namespace_box_->lineEdit(), &QLineEdit::editingFinished, this, &CalibrationPanel::on_namespace_chosen);
+  connect(namespace_box_, QOverload<int>::of(&QComboBox::activated), this, &CalibrationPanel::on_namespace_chosen);
+  connect(take_button_, &QPushButton::clicked, this, &CalibrationPanel::take_sample);
+  connect(remove_button_, &QPushButton::clicked, this, &CalibrationPanel::remove_selected);
+  connect(calibrate_button_, &QPushButton::clicked, this, &CalibrationPanel::calibrate);
+  connect(save_button_, &QPushButton::clicked, this, &CalibrationPanel::save_calibration);
+  connect(reset_button_, &QPushButton::clicked, this, &CalibrationPanel::reset);
+  connect(suggest_button_, &QPushButton::clicked, this, &CalibrationPanel::suggest);
+  timer_ = new QTimer(this);
+  connect(timer_, &QTimer::timeout, this, &CalibrationPanel::check_connection);
+}
+
+CalibrationPanel::~CalibrationPanel() = default;
+
+void CalibrationPanel::onInitialize() {
+  if (namespace_.empty()) set_namespace(kDefaultNamespace);
+  timer_->start(1000);
+}
+
+void CalibrationPanel::load(const rviz::Config& config) {
+  rviz::Panel::load(config);
+  QString ns;
+  set_namespace(config.mapGetString("Namespace", &ns) ? ns : QString(kDefaultNamespace));
+}
+
+void CalibrationPanel::save(rviz::Config config) const {
+  rviz::Panel::save(config);
+  config.mapSetValue("Namespace", QString::fromStdString(namespace_));
+}
+
+void CalibrationPanel::on_namespace_chosen() {
+  const std::string ns = normalised(namespace_box_->currentText().trimmed().toStdString());
+  if (ns != namespace_) {
+    set_namespace(QString::fromStdString(ns));
+    Q_EMIT configChanged();
+  }
+}
+
+void CalibrationPanel::set_namespace(const QString& ns) {
+  namespace_ = normalised(ns.trimmed().toStdString());
+  namespace_box_->setEditText(QString::fromStdString(namespace_));
+  have_status_ = false;
+  status_ = CalibrationStatus();
+  table_->setRowCount(0);
+  samples_label_->setText("Waiting for " + QString::fromStdString(namespace_ + kStatusSuffix) + " ...");
+  for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_}) l->clear();
+  status_sub_ = node_.subscribe<CalibrationStatus>(namespace_ + kStatusSuffix, 1,
+                                                   [this](const CalibrationStatus::ConstPtr& s) { on_status(s); });
+  last_status_ = ros::WallTime::now();
+}
+
+void CalibrationPanel::check_connection() {
+  const double silent = (ros::WallTime::now() - last_status_).toSec();
+  if (have_status_ && silent > 5.0) {
+    event_label_->setText(QString("<b>No status from %1 for %2 s</b>: has the calibration node stopped?")
+                              .arg(QString::fromStdString(namespace_))
+                              .arg(static_cast<int>(silent)));
+  }
+  // The namespaces on offer: every CalibrationStatus topic (only while waiting, and
+  // only with a master, whose call would otherwise block rviz until it returns).
+  if (have_status_ || !ros::master::check()) return;
+  ros::master::V_TopicInfo topics;
+  if (!ros::master::getTopics(topics)) return;
+  const std::string suffix = kStatusSuffix;
+  for (const ros::master::TopicInfo& t : topics) {
+    if (t.datatype != "handeye_covariance/CalibrationStatus" || t.name.size() <= suffix.size()) continue;
+    const QString ns = QString::fromStdString(t.name.substr(0, t.name.size() - suffix.size()));
+    if (namespace_box_->findText(ns) < 0) namespace_box_->addItem(ns);
+  }
+  if (!have_status_ && silent > 5.0) {
+    samples_label_->setText(QString("No calibration node in %1 (no %2). Start calibrate.launch, or pick a node above.")
+                                .arg(QString::fromStdString(namespace_))
+                                .arg(QString::fromStdString(namespace_ + kStatusSuffix)));
+  }
+}
+
+void CalibrationPanel::on_status(const CalibrationStatus::ConstPtr& s) {
+  status_ = *s;
+  have_status_ = true;
+  last_status_ = ros::WallTime::now();
+  samples_label_->setText(QString("<b>%1 samples</b> (%2 for an estimate) — %3")
+                              .arg(s->samples)
+                              .arg(s->samples_needed)
+                              .arg(QString::fromStdString(s->state).replace('_', ' ').toHtmlEscaped()));
+  if (s->has_estimate) {
+    sigma_label_->setText(QString("X 1σ (%1 samples): x %2, y %3, z %4 mm; rx %5, ry %6, rz %7°")
+                              .arg(s->estimate_samples)
+                              .arg(mm(s->sigma_translation_mm[0]), mm(s->sigma_translation_mm[1]),
+                                   mm(s->sigma_translation_mm[2]), deg(s->sigma_rotation_deg[0]),
+                                   deg(s->sigma_rotation_deg[1]), deg(s->sigma_rotation_deg[2])));
+    object_label_->setText(QString("Object at %1 m: %2 mm 1σ (target %3 mm)")
+                               .arg(QString::number(s->working_distance, 'f', 2), mm(s->object_error_mm),
+                                    mm(s->target_tolerance_mm)));
+    target_label_->setText(s->target_reached
+                               ? "<span style='color:#2e9e44'><b>Target reached</b></span>"
+                               : QString("<span style='color:#d9822b'><b>Target not reached</b></span>%1")
+                                     .arg(s->has_suggestion ? QString(": next pose brings %1 mm (drawn in 3D)")
+                                                                  .arg(mm(s->next_pose_object_error_mm))
+                                                            : QString()));
+  } else {
+    sigma_label_->setText("X: no estimate yet");
+    object_label_->clear();
+    target_label_->clear();
+  }
+  event_label_->setText(QString::fromStdString(s->last_event).toHtmlEscaped());
+
+  const int selected = table_->currentRow();
+  table_->setRowCount(s->samples);
+  for (int i = 0; i < s->samples; ++i) {
+    const auto rejected = std::find(s->rejected_samples.begin(), s->rejected_samples.end(), i);
+    const bool is_rejected = rejected != s->rejected_samples.end();
+    const QString reason =
+        is_rejected ? QString::fromStdString(s->rejected_reasons[rejected - s->rejected_samples.begin()]) : QString();
+    const bool fitted = static_cast<std::size_t>(i) < s->sample_residual_mm.size();
+    const QStringList cells = {QString::number(i),
+                               fitted ? mm(s->sample_residual_mm[i]) : QString("-"),
+                               fitted ? deg(s->sample_residual_deg[i]) : QString("-"),
+                               fitted ? QString::number(s->sample_residual_sigma[i], 'f', 1) : QString("-"),
+                               is_rejected ? "rejected: " + reason : QString(fitted ? "kept" : "")};
+    for (int column = 0; column < cells.size(); ++column) {
+      auto* item = new QTableWidgetItem(cells[column]);
+      if (column < 4) item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
+      if (is_rejected) {
+        item->setBackground(QColor(120, 40, 40));
+        item->setToolTip(reason);
+      }
+      table_->setItem(i, column, item);
+    }
+  }
+  table_->resizeColumnsToContents();
+  if (selected >= 0 && selected < s->samples) table_->selectRow(selected);
+}
+
+template <class Service>
+void CalibrationPanel::call(const std::string& service, Service srv, std::function<QString(const Service&)> describe) {
+  const std::string name = namespace_ + service;
+  set_busy(true);
+  reply_label_->setText(QString("%1 ...").arg(QString::fromStdString(name)));
+  QPointer<CalibrationPanel> panel(this);
+  std::thread([panel, name, srv, describe]() mutable {
+    QString text;
+    bool success = false;
+    if (!ros::service::waitForService(name, ros::Duration(2.0))) {
+      text = QString("No service %1: is the calibration node running in this namespace?").arg(QString::fromStdString(name));
+    } else if (!ros::service::call(name, srv)) {
+      text = QString("%1 failed in transport (did the node stop?)").arg(QString::fromStdString(name));
+    } else {
+      success = srv.response.success;
+      text = success ? describe(srv) : QString::fromStdString(srv.response.message);
+    }
+    // Back to the GUI thread; the panel may have been closed meanwhile.
+    QMetaObject::invokeMethod(
+        qApp, [panel, text, success] {
+          if (panel) panel->show_reply(text, success);
+        },
+        Qt::QueuedConnection);
+  }).detach();
+}
+
+void CalibrationPanel::show_reply(const QString& text, bool success) {
+  set_busy(false);
+  reply_label_->setText(success ? text : "<span style='color:#e05050'>" + text.toHtmlEscaped() + "</span>");
+}
+
+void CalibrationPanel::set_busy(bool busy) {
+  calls_in_flight_ = std::max(0, calls_in_flight_ + (busy ? 1 : -1));
+  for (QPushButton* b : {take_button_, remove_button_, calibrate_button_, save_button_, reset_button_, suggest_button_}) {
+    b->setEnabled(calls_in_flight_ == 0);
+  }
+}
+
+void CalibrationPanel::take_sample() {
+  call<TakeSample>("take_sample", {}, [](const TakeSample& s) {
+    return QString("Sample taken: %1 samples").arg(s.response.samples);
+  });
+}
+
+void CalibrationPanel::remove_selected() {
+  const int row = table_->currentRow();
+  if (row < 0 || table_->selectionModel()->selectedRows().isEmpty()) {
+    reply_label_->setText("Select a sample in the table first.");
+    return;
+  }
+  RemoveSample srv;
+  srv.request.index = row;
+  call<RemoveSample>("remove_sample", srv, [row](const RemoveSample& s) {
+    return QString("Removed sample %1: %2 samples").arg(row).arg(s.response.samples);
+  });
+}
+
+void CalibrationPanel::calibrate() {
+  call<Calibrate>("calibrate", {}, [](const Calibrate& s) {
+    const auto& r = s.response;
+    QString text = QString("Calibrated (%1) from %2 samples, noise %3; written to %4")
+                       .arg(QString::fromStdString(r.method))
+                       .arg(r.samples_used)
+                       .arg(QString::fromStdString(r.noise_origin).replace('_', ' '),
+                            QString::fromStdString(r.calibration_file).toHtmlEscaped());
+    if (!r.rejected_samples.empty()) text += QString("; %1 sample(s) rejected").arg(r.rejected_samples.size());
+    for (const std::string& w : r.warnings) text += "<br>warning: " + QString::fromStdString(w).toHtmlEscaped();
+    return text;
+  });
+}
+
+void CalibrationPanel::save_calibration() {
+  call<SaveCalibration>("save_calibration", {}, [](const SaveCalibration& s) {
+    return QString("Saved to %1").arg(QString::fromStdString(s.response.path).toHtmlEscaped());
+  });
+}
+
+void CalibrationPanel::reset() {
+  const auto answer = QMessageBox::question(
+      this, "Reset the session",
+      QString("Drop all %1 samples? The session file is emptied too.").arg(have_status_ ? status_.samples : 0));
+  if (answer != QMessageBox::Yes) return;
+  call<Reset>("reset", {}, [](const Reset&) { return QString("Reset: no samples"); });
+}
+
+void CalibrationPanel::suggest() {
+  call<SuggestPose>("suggest_pose", {}, [](const SuggestPose& s) {
+    const auto& r = s.response;
+    QString text = QString("Best next pose: object 1σ %1 → %2 mm (drawn in 3D); ")
+                       .arg(mm(r.current_object_error_mm),
+                            r.predicted_object_error_mm.empty() ? QString("-") : mm(r.predicted_object_error_mm[0]));
+    text += r.poses_to_target >= 0 ? QString("%1 more pose(s) reach the target").arg(r.poses_to_target)
+                                   : QString("the target is not within 30 more poses");
+    return text;
+  });
+}
+
+}  // namespace rviz_plugin
+}  // namespace handeye
+
+PLUGINLIB_EXPORT_CLASS(handeye::rviz_plugin::CalibrationPanel, rviz::Panel)

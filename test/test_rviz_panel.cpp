@@ -1,0 +1,217 @@
+// The calibration panel in a real rviz (rviz::VisualizationFrame, the class the
+// rviz program runs, with the package's config: the panel is loaded by pluginlib
+// from plugin_description.xml) against the simulated rig, with auto-sampling off.
+// The test drives the panel as an operator would, through Qt's test tools: it
+// presses "Take sample" until the node holds 5 samples, then "Calibrate",
+// "Suggest pose", "Remove selected" and "Reset" (answering its question), and
+// checks what the panel shows against the node's ~status. Screenshots of the
+// screen (Xvfb) after start-up, after 5 samples and after /calibrate are kept as
+// test artifacts (docs/ holds a copy).
+#include <QAbstractButton>
+#include <QApplication>
+#include <QLabel>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QTableWidget>
+#include <QTest>
+#include <QTimer>
+
+#include <rviz/visualization_frame.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "node_test_helpers.h"
+
+namespace handeye {
+namespace {
+
+std::string artifact_dir, config_path;
+const std::string kNs = "/handeye_eye_on_hand/";
+QApplication* app = nullptr;
+
+/// Runs rviz (its Qt events; rviz spins ROS in its update) until `done()` or `seconds` pass.
+bool pump_until(const std::function<bool()>& done, double seconds) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && !done() && ros::WallTime::now() < deadline) {
+    app->processEvents(QEventLoop::AllEvents, 20);
+    ros::spinOnce();
+    ros::WallDuration(0.01).sleep();
+  }
+  return done();
+}
+
+void screenshot(const std::string& name) {
+  std::filesystem::create_directories(artifact_dir);
+  pump_until([] { return false; }, 1.0);  // let rviz draw the latest state
+  const std::string png = artifact_dir + "/" + name;
+  const std::string capture = "import -window root " + png + " 2>/dev/null";
+  EXPECT_EQ(std::system(capture.c_str()), 0) << capture;
+  std::printf("[rviz panel] screenshot %s\n", png.c_str());
+}
+
+/// The same formatting as the panel: mm to 2 decimals, degrees to 3.
+QString mm(double value) { return QString::number(value, 'f', 2); }
+QString deg(double value) { return QString::number(value, 'f', 3); }
+
+TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
+  test::StatusWatcher status(kNs + "handeye_calibration/status");
+  visualization_msgs::MarkerArray next_pose;
+  ros::NodeHandle nh;
+  auto next_pose_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      kNs + "handeye_calibration/next_pose_markers", 1, [&](const auto& msg) { next_pose = *msg; });
+
+  auto frame = std::make_unique<rviz::VisualizationFrame>();
+  frame->setApp(app);
+  frame->setSplashPath("");
+  frame->initialize(QString::fromStdString(config_path));
+  frame->show();
+
+  QWidget* panel = nullptr;
+  ASSERT_TRUE(pump_until(
+      [&] {
+        for (QWidget* w : frame->findChildren<QWidget*>()) {
+          if (std::string(w->metaObject()->className()) == "handeye::rviz_plugin::CalibrationPanel") panel = w;
+        }
+        return panel != nullptr;
+      },
+      30.0))
+      << "the panel did not load from " << config_path << " (pluginlib: plugin_description.xml?)";
+  const auto find = [&](const char* name) {
+    QWidget* w = panel->findChild<QWidget*>(name);
+    EXPECT_NE(w, nullptr) << "no widget `" << name << "` in the panel";
+    return w;
+  };
+  auto* take = qobject_cast<QPushButton*>(find("take_sample"));
+  auto* calibrate = qobject_cast<QPushButton*>(find("calibrate"));
+  auto* suggest = qobject_cast<QPushButton*>(find("suggest_pose"));
+  auto* remove = qobject_cast<QPushButton*>(find("remove_sample"));
+  auto* reset = qobject_cast<QPushButton*>(find("reset"));
+  auto* table = qobject_cast<QTableWidget*>(find("samples"));
+  auto* samples_label = qobject_cast<QLabel*>(find("samples_label"));
+  auto* sigma_label = qobject_cast<QLabel*>(find("sigma_label"));
+  auto* object_label = qobject_cast<QLabel*>(find("object_label"));
+  auto* target_label = qobject_cast<QLabel*>(find("target_label"));
+  auto* reply_label = qobject_cast<QLabel*>(find("reply_label"));
+  ASSERT_TRUE(take && calibrate && suggest && remove && reset && table && samples_label && sigma_label &&
+              object_label && target_label && reply_label);
+
+  // Start-up: the panel follows the node of the config's namespace, which has no samples.
+  ASSERT_TRUE(pump_until([&] { return status.received && samples_label->text().contains("0 samples"); }, 60.0))
+      << "panel: " << samples_label->text().toStdString();
+  EXPECT_EQ(status.latest.samples, 0);
+  EXPECT_EQ(table->rowCount(), 0);
+  screenshot("rviz_panel_startup.png");
+
+  // "Take sample", pressed through Qt: the node samples only then (auto_sample is off),
+  // and only while the rig stands still at a pose, so the operator presses again.
+  int presses = 0;
+  ASSERT_TRUE(pump_until(
+      [&] {
+        if (status.latest.samples >= 5) return true;
+        if (take->isEnabled()) {
+          QTest::mouseClick(take, Qt::LeftButton);
+          ++presses;
+        }
+        pump_until([] { return false; }, 0.5);
+        return false;
+      },
+      90.0))
+      << status.latest.samples << " samples after " << presses << " presses; panel: " << reply_label->text().toStdString();
+  std::printf("[rviz panel] 5 samples after %d presses of Take sample\n", presses);
+  EXPECT_EQ(status.latest.samples, 5) << "more samples than presses could take";
+  // The table: a row per sample, each with its residual once the estimate is of these 5.
+  ASSERT_TRUE(pump_until(
+      [&] {
+        return table->rowCount() == 5 && status.latest.sample_residual_mm.size() == 5 && table->item(4, 1) &&
+               table->item(4, 1)->text() == mm(status.latest.sample_residual_mm[4]);
+      },
+      20.0))
+      << table->rowCount() << " rows, " << status.latest.sample_residual_mm.size() << " residuals on ~status";
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(table->item(i, 1)->text(), mm(status.latest.sample_residual_mm[i]));
+    EXPECT_EQ(table->item(i, 2)->text(), deg(status.latest.sample_residual_deg[i]));
+    EXPECT_GT(status.latest.sample_residual_sigma[i], 0.0);
+    EXPECT_LT(status.latest.sample_residual_sigma[i], 6.0) << "sample " << i << " of a clean simulated session";
+    EXPECT_TRUE(table->item(i, 4)->text().startsWith("kept")) << table->item(i, 4)->text().toStdString();
+  }
+  EXPECT_TRUE(samples_label->text().contains("5 samples")) << samples_label->text().toStdString();
+  screenshot("rviz_panel_5_samples.png");
+
+  // "Calibrate": the reply, then the figures against ~status.
+  QTest::mouseClick(calibrate, Qt::LeftButton);
+  ASSERT_TRUE(pump_until([&] { return reply_label->text().startsWith("Calibrated"); }, 30.0))
+      << reply_label->text().toStdString();
+  EXPECT_TRUE(reply_label->text().contains("from 5 samples")) << reply_label->text().toStdString();
+  ASSERT_TRUE(status.latest.has_estimate);
+  const CalibrationStatus& s = status.latest;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(sigma_label->text().contains(mm(s.sigma_translation_mm[i]))) << sigma_label->text().toStdString();
+    EXPECT_TRUE(sigma_label->text().contains(deg(s.sigma_rotation_deg[i]))) << sigma_label->text().toStdString();
+  }
+  EXPECT_TRUE(object_label->text().contains(mm(s.object_error_mm) + " mm")) << object_label->text().toStdString();
+  EXPECT_TRUE(object_label->text().contains("target " + mm(s.target_tolerance_mm))) << object_label->text().toStdString();
+  EXPECT_EQ(target_label->text().contains("Target reached"), static_cast<bool>(s.target_reached))
+      << target_label->text().toStdString() << " while ~status says target_reached " << int(s.target_reached);
+  std::printf("[rviz panel] after Calibrate: %s | %s | %s\n", sigma_label->text().toStdString().c_str(),
+              object_label->text().toStdString().c_str(), target_label->text().toStdString().c_str());
+  // The suggested next pose in 3D: a ghost effector frame, the frustum and a label.
+  ASSERT_TRUE(pump_until([&] { return next_pose.markers.size() == 4; }, 10.0)) << next_pose.markers.size() << " markers";
+  EXPECT_EQ(next_pose.markers[0].action, visualization_msgs::Marker::DELETEALL);
+  EXPECT_EQ(next_pose.markers[1].header.frame_id, "base_link");
+  EXPECT_EQ(next_pose.markers[2].points.size(), 16u) << "the frustum: 4 edges from the camera and the 4 sides";
+  screenshot("rviz_panel_calibrated.png");
+
+  QTest::mouseClick(suggest, Qt::LeftButton);
+  ASSERT_TRUE(pump_until([&] { return reply_label->text().startsWith("Best next pose"); }, 30.0))
+      << reply_label->text().toStdString();
+
+  // "Remove selected": the row chosen in the table.
+  QTest::mouseClick(remove, Qt::LeftButton);
+  EXPECT_TRUE(reply_label->text().contains("Select a sample")) << "nothing selected: " << reply_label->text().toStdString();
+  table->selectRow(2);
+  QTest::mouseClick(remove, Qt::LeftButton);
+  ASSERT_TRUE(pump_until(
+      [&] {
+        return status.latest.samples == 4 && table->rowCount() == 4 && reply_label->text().contains("Removed sample 2");
+      },
+      20.0))
+      << status.latest.samples << " samples, " << table->rowCount() << " rows; " << reply_label->text().toStdString();
+
+  // "Reset" asks first: "No" keeps the samples, "Yes" drops them.
+  const auto answer = [](QMessageBox::StandardButton which) {
+    QTimer::singleShot(300, [which] {
+      auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+      if (box) QTest::mouseClick(box->button(which), Qt::LeftButton);
+    });
+  };
+  answer(QMessageBox::No);
+  QTest::mouseClick(reset, Qt::LeftButton);
+  pump_until([] { return false; }, 1.5);
+  EXPECT_EQ(status.latest.samples, 4);
+  answer(QMessageBox::Yes);
+  QTest::mouseClick(reset, Qt::LeftButton);
+  ASSERT_TRUE(pump_until([&] { return status.latest.samples == 0 && table->rowCount() == 0; }, 20.0))
+      << status.latest.samples << " samples";
+  EXPECT_TRUE(sigma_label->text().contains("no estimate")) << sigma_label->text().toStdString();
+  ASSERT_TRUE(pump_until([&] { return next_pose.markers.size() == 1; }, 10.0)) << "the ghost stayed after Reset";
+
+  frame.reset();  // before QApplication and ROS go
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_rviz_panel");
+  QApplication app(argc, argv);
+  handeye::app = &app;
+  ros::NodeHandle nh, pn("~");
+  handeye::artifact_dir = pn.param<std::string>("artifact_dir", "/tmp");
+  handeye::config_path = pn.param<std::string>("config", "");
+  return RUN_ALL_TESTS();
+}
