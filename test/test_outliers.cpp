@@ -107,6 +107,37 @@ TEST(Outliers, CleanSessionsKeepTheirSamplesAndTheirCovariance) {
   EXPECT_LE(false_rejections, 1) << "the gates are at chi2 0.9999 and 6 robust sigmas";
 }
 
+TEST(Outliers, EachSampleFitsItsCalibrationAsItsPredictedCovarianceSays) {
+  // Every sample's fit (~status, the panel's table, the report): the residual of a good
+  // sample is chi2(6) in sigmas^2 (a little less in-sample: the fit absorbs part of it),
+  // a planted outlier stands far out, judged against the rest.
+  double sum = 0.0;
+  int good = 0;
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    Rng rng(300 + seed);
+    const Injected in = with_outliers(rng, Setup::EyeInHand, 30, false);
+    const Calibration c = solve_robust(in.samples);
+    const std::vector<SampleFit> fits = sample_fits(in.samples, c);
+    ASSERT_EQ(fits.size(), in.samples.samples.size());
+    for (std::size_t i = 0; i < fits.size(); ++i) {
+      const bool outlier = std::count(in.outliers.begin(), in.outliers.end(), static_cast<int>(i)) > 0;
+      EXPECT_NEAR(fits[i].translation, fits[i].error.head<3>().norm(), 1e-15);
+      EXPECT_NEAR(fits[i].rotation, fits[i].error.tail<3>().norm(), 1e-15);
+      if (outlier) {
+        EXPECT_GT(fits[i].sigmas, 20.0) << "seed " << seed << ", planted outlier " << i;
+      } else {
+        EXPECT_GT(fits[i].sigmas, 0.0);
+        sum += fits[i].sigmas * fits[i].sigmas;
+        ++good;
+      }
+    }
+  }
+  const double mean = sum / good;
+  std::printf("sample fits: mean squared sigmas %.2f over %d good samples (chi2(6): 6)\n", mean, good);
+  EXPECT_GT(mean, 4.5);
+  EXPECT_LT(mean, 6.5);
+}
+
 TEST(Outliers, TooManyDisagreeingSamplesAreRefused) {
   Rng rng(7);
   SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 12, test::sim_noise());
