@@ -3,7 +3,8 @@
 // from plugin_description.xml) against the simulated rig, with auto-sampling off.
 // The test drives the panel as an operator would, through Qt's test tools: it
 // presses "Take sample" until the node holds 5 samples, then "Calibrate",
-// "Suggest pose", "Remove selected" and "Reset" (answering its question), and
+// "Suggest pose", "Remove selected", "Reset" (answering its question) and, with a
+// session holding a wrong detection, "Calibrate" again (the row marked rejected), and
 // checks what the panel shows against the node's ~status. Screenshots of the
 // screen (Xvfb) after start-up, after 5 samples and after /calibrate are kept as
 // test artifacts (docs/ holds a copy).
@@ -23,12 +24,13 @@
 #include <filesystem>
 #include <memory>
 
+#include "handeye_covariance/io/yaml_io.h"
 #include "node_test_helpers.h"
 
 namespace handeye {
 namespace {
 
-std::string artifact_dir, config_path;
+std::string artifact_dir, config_path, samples_path;
 const std::string kNs = "/handeye_eye_on_hand/";
 QApplication* app = nullptr;
 
@@ -199,6 +201,31 @@ TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
   EXPECT_TRUE(sigma_label->text().contains("no estimate")) << sigma_label->text().toStdString();
   ASSERT_TRUE(pump_until([&] { return next_pose.markers.size() == 1; }, 10.0)) << "the ghost stayed after Reset";
 
+  // A rejected sample in the table: the example session with sample 3 paired with sample 0's
+  // pattern pose (a detection with the wrong stamp), loaded into the node, then "Calibrate".
+  SampleSet corrupted = io::read_samples(samples_path);
+  corrupted.samples[3].T_camera_pattern = corrupted.samples[0].T_camera_pattern;
+  LoadSamples load;
+  load.request.path = test::scratch_directory() + "/corrupted_samples.yaml";
+  io::write_file_atomically(load.request.path, io::format_samples(corrupted));
+  ASSERT_TRUE(test::call(kNs + "load_samples", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  QTest::mouseClick(calibrate, Qt::LeftButton);
+  ASSERT_TRUE(pump_until(
+      [&] {
+        return reply_label->text().contains("1 sample(s) rejected") && table->rowCount() == load.response.samples &&
+               table->item(3, 4) && table->item(3, 4)->text().startsWith("rejected:");
+      },
+      30.0))
+      << reply_label->text().toStdString() << "; row 3: " << (table->item(3, 4) ? table->item(3, 4)->text().toStdString() : "none");
+  EXPECT_EQ(status.latest.rejected_samples, std::vector<int>{3});
+  ASSERT_EQ(status.latest.rejected_reasons.size(), 1u);
+  EXPECT_EQ(table->item(3, 4)->text(), "rejected: " + QString::fromStdString(status.latest.rejected_reasons[0]))
+      << "the reason, as the node gives it";
+  EXPECT_GT(status.latest.sample_residual_sigma[3], 5.0) << "the rejected sample, judged against the rest";
+  EXPECT_TRUE(table->item(2, 4)->text().startsWith("kept"));
+  screenshot("rviz_panel_rejected.png");
+
   frame.reset();  // before QApplication and ROS go
 }
 
@@ -213,5 +240,8 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh, pn("~");
   handeye::artifact_dir = pn.param<std::string>("artifact_dir", "/tmp");
   handeye::config_path = pn.param<std::string>("config", "");
-  return RUN_ALL_TESTS();
+  handeye::samples_path = pn.param<std::string>("samples", "");
+  const int status = RUN_ALL_TESTS();
+  if (status == 0) std::filesystem::remove_all(handeye::test::scratch_directory());  // kept when something failed
+  return status;
 }
