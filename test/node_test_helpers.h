@@ -11,7 +11,9 @@
 
 #include <geometry_msgs/PoseStamped.h>
 
+#include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/messages.h"
+#include "scratch_directory.h"
 
 namespace handeye {
 namespace test {
@@ -24,22 +26,6 @@ inline bool wait_for(const std::function<bool()>& done, double seconds) {
     ros::WallDuration(0.02).sleep();
   }
   return done();
-}
-
-/// A directory of this test process's own under /tmp/handeye_covariance_rostest, made on
-/// first use. catkin_make runs two rostests at once (-j of the core count): a fixed file
-/// name shared by two clients is overwritten under the other's feet.
-inline const std::string& scratch_directory() {
-  static const std::string directory = [] {
-    std::filesystem::create_directories("/tmp/handeye_covariance_rostest");
-    std::string pattern = "/tmp/handeye_covariance_rostest/client-XXXXXX";
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      ADD_FAILURE() << "mkdtemp(" << pattern << ") failed: free space in /tmp";
-      std::abort();
-    }
-    return pattern;
-  }();
-  return directory;
 }
 
 /// Keeps the latest ~status message.
@@ -83,6 +69,22 @@ bool call(const std::string& name, Service& srv) {
   const bool ok = ros::service::call(name, srv);
   EXPECT_TRUE(ok) << "call to " << name << " failed";
   return ok;
+}
+
+/// Loads the samples file `samples_path` into the node of `ns` with sample 3 paired with
+/// sample 0's pattern pose (a detection with the wrong stamp); returns the node's sample
+/// count, or -1 after a test failure naming what went wrong.
+inline int load_with_wrong_detection(const std::string& ns, const std::string& samples_path) {
+  SampleSet corrupted = io::read_samples(samples_path);
+  corrupted.samples[3].T_camera_pattern = corrupted.samples[0].T_camera_pattern;
+  LoadSamples load;
+  load.request.path = scratch_directory() + "/corrupted_samples.yaml";
+  io::write_file_atomically(load.request.path, io::format_samples(corrupted));
+  if (!call(ns + "load_samples", load) || !load.response.success) {
+    ADD_FAILURE() << ns << "load_samples " << load.request.path << ": " << load.response.message;
+    return -1;
+  }
+  return load.response.samples;
 }
 
 }  // namespace test

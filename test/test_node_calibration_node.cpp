@@ -217,13 +217,7 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
 
   // A wrong detection (sample 3 paired with sample 0's pattern pose) is left out
   // and named in the response and in ~status.
-  SampleSet corrupted = io::read_samples(save.request.path);
-  corrupted.samples[3].T_camera_pattern = corrupted.samples[0].T_camera_pattern;
-  LoadSamples load_corrupted;
-  load_corrupted.request.path = test::scratch_directory() + "/corrupted_samples.yaml";
-  io::write_file_atomically(load_corrupted.request.path, io::format_samples(corrupted));
-  ASSERT_TRUE(test::call(kNs + "load_samples", load_corrupted));
-  ASSERT_TRUE(load_corrupted.response.success) << load_corrupted.response.message;
+  ASSERT_EQ(test::load_with_wrong_detection(kNs, save.request.path), n);
   Calibrate with_outlier;
   ASSERT_TRUE(test::call(kNs + "calibrate", with_outlier));
   ASSERT_TRUE(with_outlier.response.success) << with_outlier.response.message;
@@ -282,8 +276,5 @@ int main(int argc, char** argv) {
   handeye::kParent = pn.param<std::string>("parent_frame", "tool0");
   handeye::kNoiseOrigin = pn.param<std::string>("noise_origin", "estimated_from_residuals");
   handeye::kMethod = pn.param<std::string>("method", "joint");
-  const int status = RUN_ALL_TESTS();
-  // Kept for a look when something failed.
-  if (status == 0) std::filesystem::remove_all(handeye::test::scratch_directory());
-  return status;
+  return RUN_ALL_TESTS();
 }

@@ -20,6 +20,7 @@
 #include <functional>
 
 #include "handeye_covariance/corners/corner_calibration.h"
+#include "scratch_directory.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
@@ -211,7 +212,7 @@ TEST(RealData, CornersOnTheEyeInHandChessboardSessionLandWithin3SigmaOfThePublis
 TEST(RealData, HandeyeImagesWithCornersOnTheRealChessboardFolder) {
   const fs::path dir = realdata() / "visp-franka" / "data-eye-in-hand";
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
-  const std::string tmp = ::testing::TempDir();
+  const std::string tmp = test::scratch_directory();
   const std::string target = tmp + "/real_chessboard.yaml", result = tmp + "/real_corners_result.yaml";
   {
     std::ofstream(target) << "{type: chessboard, inner_corners: [9, 6], square: 0.0236}\n";

@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "scratch_directory.h"
 #include "test_helpers.h"
 
 namespace handeye {
@@ -290,7 +291,7 @@ TEST(YamlIo, ARobotPoseFileIsReadInEveryFormatUsersKeep) {
 }
 
 TEST(YamlIo, ReadInputTellsSamplesFromMotions) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = test::scratch_directory();
   io::write_file_atomically(dir + "/s.yaml", kValid);
   EXPECT_TRUE(std::holds_alternative<SampleSet>(io::read_input(dir + "/s.yaml")));
   Rng rng(4);
