@@ -6,6 +6,10 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <functional>
 #include <string>
 
@@ -27,6 +31,24 @@ inline bool wait_for(const std::function<bool()>& done, double seconds) {
   }
   return done();
 }
+
+/// The X display for one rviz test at a time, held for the test's life: catkin_make
+/// runs two rostests at once and scripts/test gives them one Xvfb, where the windows of
+/// two rvizes overlap and the screenshot test looks for its colour anywhere on screen.
+class DisplayLock {
+ public:
+  DisplayLock() : fd_(::open("/tmp/handeye_covariance_rviz_display.lock", O_CREAT | O_RDWR, 0666)) {
+    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0) ADD_FAILURE() << "cannot lock /tmp/handeye_covariance_rviz_display.lock";
+  }
+  ~DisplayLock() {
+    if (fd_ >= 0) ::close(fd_);  // releases the lock
+  }
+  DisplayLock(const DisplayLock&) = delete;
+  DisplayLock& operator=(const DisplayLock&) = delete;
+
+ private:
+  int fd_;
+};
 
 /// Keeps the latest ~status message.
 struct StatusWatcher {

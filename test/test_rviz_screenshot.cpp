@@ -125,5 +125,8 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "test_rviz_screenshot");
   ros::NodeHandle nh, pn("~");
   handeye::artifact_dir = pn.param<std::string>("artifact_dir", "/tmp");
+  // rviz is up already (the launch file starts it), under any window the panel test opens
+  // while this waits; that window is gone when the lock comes.
+  handeye::test::DisplayLock display;
   return RUN_ALL_TESTS();
 }

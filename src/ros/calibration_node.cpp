@@ -208,6 +208,7 @@ void CalibrationNode::record(const SessionEvent& event, bool appended) {  // loc
   if (event.changed) {
     ROS_INFO("%s (%zu samples)", event.message.c_str(), session_.samples().size());
     work_.notify_one();
+    publish_next_pose();  // cleared until the worker has analysed the new samples
   }
   if (!event.persist_error.empty()) {
     ROS_ERROR("could not save the session: %s", event.persist_error.c_str());
@@ -251,7 +252,8 @@ void CalibrationNode::publish_next_pose() {  // lock held
   std::optional<Eigen::Isometry3d> pose;
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   std::string label;
-  if (analysis_ && analysis_->estimate && analysis_->next_pose) {
+  // Drawn only while it is of the current samples, as ~status's has_suggestion.
+  if (analysis_ && analysis_->generation == session_.generation() && analysis_->estimate && analysis_->next_pose) {
     pose = analysis_->next_pose->T_base_effector;
     X = analysis_->estimate->T_parent_camera;
     // ASCII: rviz's text markers draw no Greek letters or arrows.

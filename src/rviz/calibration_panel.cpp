@@ -8,13 +8,14 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QMessageBox>
-#include <QPointer>
 #include <QPushButton>
 #include <QTableWidget>
+#include <QTextDocument>
 #include <QTimer>
 #include <QVBoxLayout>
 
 #include <ros/master.h>
+#include <ros/names.h>
 
 #include <pluginlib/class_list_macros.hpp>
 
@@ -123,6 +124,8 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   connect(suggest_button_, &QPushButton::clicked, this, &CalibrationPanel::suggest);
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, &CalibrationPanel::check_connection);
+  reply_timer_ = new QTimer(this);
+  connect(reply_timer_, &QTimer::timeout, this, &CalibrationPanel::collect_replies);
 }
 
 CalibrationPanel::~CalibrationPanel() = default;
@@ -135,7 +138,7 @@ void CalibrationPanel::onInitialize() {
 void CalibrationPanel::load(const rviz::Config& config) {
   rviz::Panel::load(config);
   QString ns;
-  set_namespace(config.mapGetString("Namespace", &ns) ? ns : QString(kDefaultNamespace));
+  if (!config.mapGetString("Namespace", &ns) || !set_namespace(ns)) set_namespace(kDefaultNamespace);
 }
 
 void CalibrationPanel::save(rviz::Config config) const {
@@ -145,30 +148,47 @@ void CalibrationPanel::save(rviz::Config config) const {
 
 void CalibrationPanel::on_namespace_chosen() {
   const std::string ns = normalised(namespace_box_->currentText().trimmed().toStdString());
-  if (ns != namespace_) {
-    set_namespace(QString::fromStdString(ns));
-    Q_EMIT configChanged();
-  }
+  if (ns != namespace_ && set_namespace(QString::fromStdString(ns))) Q_EMIT configChanged();
 }
 
-void CalibrationPanel::set_namespace(const QString& ns) {
-  namespace_ = normalised(ns.trimmed().toStdString());
+bool CalibrationPanel::set_namespace(const QString& text) {
+  const std::string ns = normalised(text.trimmed().toStdString());
+  std::string why;
+  ros::Subscriber subscriber;
+  if (ns != "/" && !ros::names::validate(ns.substr(0, ns.size() - 1), why)) {
+    why = "not a ROS name: " + why;
+  } else {
+    try {
+      subscriber = node_.subscribe<CalibrationStatus>(ns + kStatusSuffix, 1,
+                                                      [this](const CalibrationStatus::ConstPtr& s) { on_status(s); });
+    } catch (const ros::Exception& e) {
+      why = e.what();
+    }
+  }
+  if (!subscriber) {
+    reply_label_->setText(QString("<span style='color:#e05050'>Namespace %1 refused (%2); still following %3</span>")
+                              .arg(QString::fromStdString(ns).toHtmlEscaped(), QString::fromStdString(why).toHtmlEscaped(),
+                                   QString::fromStdString(namespace_).toHtmlEscaped()));
+    namespace_box_->setEditText(QString::fromStdString(namespace_));
+    return false;
+  }
+  namespace_ = ns;
+  status_sub_ = subscriber;
   namespace_box_->setEditText(QString::fromStdString(namespace_));
   have_status_ = false;
   status_ = CalibrationStatus();
   table_->setRowCount(0);
-  samples_label_->setText("Waiting for " + QString::fromStdString(namespace_ + kStatusSuffix) + " ...");
   for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_}) l->clear();
-  status_sub_ = node_.subscribe<CalibrationStatus>(namespace_ + kStatusSuffix, 1,
-                                                   [this](const CalibrationStatus::ConstPtr& s) { on_status(s); });
+  samples_label_->setText("Waiting for " + QString::fromStdString(namespace_ + kStatusSuffix).toHtmlEscaped() + " ...");
   last_status_ = ros::WallTime::now();
+  return true;
 }
 
 void CalibrationPanel::check_connection() {
   const double silent = (ros::WallTime::now() - last_status_).toSec();
   if (have_status_ && silent > 5.0) {
     event_label_->setText(QString("<b>No status from %1 for %2 s</b>: has the calibration node stopped?")
-                              .arg(QString::fromStdString(namespace_))
+                              .arg(QString::fromStdString(namespace_).toHtmlEscaped())
                               .arg(static_cast<int>(silent)));
   }
   // The namespaces on offer: every CalibrationStatus topic (only while waiting, and
@@ -182,10 +202,12 @@ void CalibrationPanel::check_connection() {
     const QString ns = QString::fromStdString(t.name.substr(0, t.name.size() - suffix.size()));
     if (namespace_box_->findText(ns) < 0) namespace_box_->addItem(ns);
   }
+  // The first item added becomes the current one: the box keeps saying what is followed.
+  if (!namespace_box_->lineEdit()->hasFocus()) namespace_box_->setEditText(QString::fromStdString(namespace_));
   if (!have_status_ && silent > 5.0) {
     samples_label_->setText(QString("No calibration node in %1 (no %2). Start calibrate.launch, or pick a node above.")
-                                .arg(QString::fromStdString(namespace_))
-                                .arg(QString::fromStdString(namespace_ + kStatusSuffix)));
+                                .arg(QString::fromStdString(namespace_).toHtmlEscaped(),
+                                     QString::fromStdString(namespace_ + kStatusSuffix).toHtmlEscaped()));
   }
 }
 
@@ -219,14 +241,19 @@ void CalibrationPanel::on_status(const CalibrationStatus::ConstPtr& s) {
   }
   event_label_->setText(QString::fromStdString(s->last_event).toHtmlEscaped());
 
+  // Any publisher may speak on ~status: lengths are checked, not assumed.
+  const int samples = std::max(0, s->samples);
+  const bool fitted = s->sample_residual_mm.size() == static_cast<std::size_t>(samples) &&
+                      s->sample_residual_deg.size() == s->sample_residual_mm.size() &&
+                      s->sample_residual_sigma.size() == s->sample_residual_mm.size();
   const int selected = table_->currentRow();
-  table_->setRowCount(s->samples);
-  for (int i = 0; i < s->samples; ++i) {
+  table_->setRowCount(samples);
+  for (int i = 0; i < samples; ++i) {
     const auto rejected = std::find(s->rejected_samples.begin(), s->rejected_samples.end(), i);
     const bool is_rejected = rejected != s->rejected_samples.end();
+    const std::size_t k = static_cast<std::size_t>(rejected - s->rejected_samples.begin());
     const QString reason =
-        is_rejected ? QString::fromStdString(s->rejected_reasons[rejected - s->rejected_samples.begin()]) : QString();
-    const bool fitted = static_cast<std::size_t>(i) < s->sample_residual_mm.size();
+        is_rejected && k < s->rejected_reasons.size() ? QString::fromStdString(s->rejected_reasons[k]) : QString();
     const QStringList cells = {QString::number(i),
                                fitted ? mm(s->sample_residual_mm[i]) : QString("-"),
                                fitted ? deg(s->sample_residual_deg[i]) : QString("-"),
@@ -237,44 +264,56 @@ void CalibrationPanel::on_status(const CalibrationStatus::ConstPtr& s) {
       if (column < 4) item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
       if (is_rejected) {
         item->setBackground(QColor(120, 40, 40));
-        item->setToolTip(reason);
+        item->setToolTip(Qt::convertFromPlainText(reason));
       }
       table_->setItem(i, column, item);
     }
   }
   table_->resizeColumnsToContents();
-  if (selected >= 0 && selected < s->samples) table_->selectRow(selected);
+  if (selected >= 0 && selected < samples) table_->selectRow(selected);
 }
 
 template <class Service>
 void CalibrationPanel::call(const std::string& service, Service srv, std::function<QString(const Service&)> describe) {
   const std::string name = namespace_ + service;
   set_busy(true);
-  reply_label_->setText(QString("%1 ...").arg(QString::fromStdString(name)));
-  QPointer<CalibrationPanel> panel(this);
-  std::thread([panel, name, srv, describe]() mutable {
-    QString text;
-    bool success = false;
-    if (!ros::service::waitForService(name, ros::Duration(2.0))) {
-      text = QString("No service %1: is the calibration node running in this namespace?").arg(QString::fromStdString(name));
-    } else if (!ros::service::call(name, srv)) {
-      text = QString("%1 failed in transport (did the node stop?)").arg(QString::fromStdString(name));
-    } else {
-      success = srv.response.success;
-      text = success ? describe(srv) : QString::fromStdString(srv.response.message);
+  reply_label_->setText(QString("%1 ...").arg(QString::fromStdString(name).toHtmlEscaped()));
+  auto reply = std::make_shared<Reply>();
+  pending_.push_back(reply);
+  if (!reply_timer_->isActive()) reply_timer_->start(50);
+  std::thread([reply, name, srv, describe]() mutable {
+    const QString quoted = QString::fromStdString(name).toHtmlEscaped();
+    try {
+      if (!ros::service::waitForService(name, ros::Duration(2.0))) {
+        reply->text = QString("No service %1: is the calibration node running in this namespace?").arg(quoted);
+      } else if (!ros::service::call(name, srv)) {
+        reply->text = QString("%1 failed in transport (did the node stop?)").arg(quoted);
+      } else {
+        reply->success = srv.response.success;
+        reply->text = reply->success ? describe(srv) : QString::fromStdString(srv.response.message).toHtmlEscaped();
+      }
+    } catch (const ros::Exception& e) {
+      reply->text = QString("%1: %2").arg(quoted, QString(e.what()).toHtmlEscaped());
     }
-    // Back to the GUI thread; the panel may have been closed meanwhile.
-    QMetaObject::invokeMethod(
-        qApp, [panel, text, success] {
-          if (panel) panel->show_reply(text, success);
-        },
-        Qt::QueuedConnection);
+    reply->done = true;
   }).detach();
+}
+
+void CalibrationPanel::collect_replies() {
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if ((*it)->done) {
+      show_reply((*it)->text, (*it)->success);
+      it = pending_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  if (pending_.empty()) reply_timer_->stop();
 }
 
 void CalibrationPanel::show_reply(const QString& text, bool success) {
   set_busy(false);
-  reply_label_->setText(success ? text : "<span style='color:#e05050'>" + text.toHtmlEscaped() + "</span>");
+  reply_label_->setText(success ? text : "<span style='color:#e05050'>" + text + "</span>");  // escaped already
 }
 
 void CalibrationPanel::set_busy(bool busy) {
@@ -301,15 +340,16 @@ void CalibrationPanel::remove_selected() {
   call<RemoveSample>("remove_sample", srv, [row](const RemoveSample& s) {
     return QString("Removed sample %1: %2 samples").arg(row).arg(s.response.samples);
   });
+  table_->clearSelection();  // the row now holds the next sample: a second press must choose again
 }
 
 void CalibrationPanel::calibrate() {
   call<Calibrate>("calibrate", {}, [](const Calibrate& s) {
     const auto& r = s.response;
     QString text = QString("Calibrated (%1) from %2 samples, noise %3; written to %4")
-                       .arg(QString::fromStdString(r.method))
+                       .arg(QString::fromStdString(r.method).toHtmlEscaped())
                        .arg(r.samples_used)
-                       .arg(QString::fromStdString(r.noise_origin).replace('_', ' '),
+                       .arg(QString::fromStdString(r.noise_origin).replace('_', ' ').toHtmlEscaped(),
                             QString::fromStdString(r.calibration_file).toHtmlEscaped());
     if (!r.rejected_samples.empty()) text += QString("; %1 sample(s) rejected").arg(r.rejected_samples.size());
     for (const std::string& w : r.warnings) text += "<br>warning: " + QString::fromStdString(w).toHtmlEscaped();

@@ -6,16 +6,20 @@
 //
 // Threads: ~status arrives on rviz's thread (rviz spins the global callback queue
 // in its update), so it updates the widgets directly. A service call runs on a
-// thread of its own and hands its reply back through a queued call, so a slow
-// /calibrate never freezes rviz.
+// thread of its own, so a slow /calibrate never freezes rviz; the thread touches no
+// Qt object (rviz may be closing): it fills a Reply that a timer on rviz's thread
+// collects.
 #pragma once
 
 #ifndef Q_MOC_RUN
 #include <ros/ros.h>
 #include <rviz/panel.h>
 
+#include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "handeye_covariance/ros/messages.h"
 #endif
@@ -49,10 +53,13 @@ class CalibrationPanel : public rviz::Panel {
   void suggest();
   /// Once a second: a status that stopped coming, and the namespaces on offer.
   void check_connection();
+  /// The replies of finished service calls, shown on rviz's thread.
+  void collect_replies();
 
  private:
-  /// Follows the calibration node in `ns` ("/handeye_eye_on_hand/").
-  void set_namespace(const QString& ns);
+  /// Follows the calibration node in `ns` ("/handeye_eye_on_hand/"). A name ROS
+  /// refuses is not taken: false, with the reason under the buttons.
+  bool set_namespace(const QString& ns);
   void on_status(const CalibrationStatus::ConstPtr& status);
   /// Calls `<ns><service>` off rviz's thread; `describe` turns the reply into the
   /// line shown under the buttons.
@@ -60,6 +67,13 @@ class CalibrationPanel : public rviz::Panel {
   void call(const std::string& service, Service srv, std::function<QString(const Service&)> describe);
   void show_reply(const QString& text, bool success);
   void set_busy(bool busy);
+
+  struct Reply {
+    std::atomic<bool> done{false};
+    QString text;  // written by the call's thread before `done`
+    bool success = false;
+  };
+  std::vector<std::shared_ptr<Reply>> pending_;
 
   ros::NodeHandle node_;
   ros::Subscriber status_sub_;
@@ -73,7 +87,7 @@ class CalibrationPanel : public rviz::Panel {
   QLabel *samples_label_, *sigma_label_, *object_label_, *target_label_, *event_label_, *reply_label_;
   QPushButton *take_button_, *remove_button_, *calibrate_button_, *save_button_, *reset_button_, *suggest_button_;
   QTableWidget* table_;
-  QTimer* timer_;
+  QTimer *timer_, *reply_timer_;
 };
 
 }  // namespace rviz_plugin
