@@ -28,20 +28,6 @@
 
 namespace handeye {
 
-namespace {
-
-geometry_msgs::TransformStamped transform(const ros::Time& stamp, const std::string& parent, const std::string& child,
-                                          const Eigen::Isometry3d& T) {
-  geometry_msgs::TransformStamped tf;
-  tf.header.stamp = stamp;
-  tf.header.frame_id = parent;
-  tf.child_frame_id = child;
-  tf.transform = conversions::to_transform_msg(T);
-  return tf;
-}
-
-}  // namespace
-
 SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOptions& o) {
   Rng rng(o.seed);
   SimulatedBag result;
@@ -79,7 +65,7 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   const Eigen::Isometry3d flange_T_tool = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
   if (o.robot_tf) {
     tf2_msgs::TFMessage statics;
-    statics.transforms.push_back(transform(start, "flange", f.effector, flange_T_tool));
+    statics.transforms.push_back(conversions::to_transform_stamped(flange_T_tool, "flange", f.effector, start));
     bag.write("/tf_static", start, statics);
   }
   const double span = result.duration + 1.0;
@@ -91,8 +77,8 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
     const Eigen::Isometry3d base_T_shoulder =
         se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, yaw)), Eigen::Vector3d(0, 0, 0.35));
     tf2_msgs::TFMessage msg;
-    msg.transforms.push_back(transform(stamp, f.base, "shoulder", base_T_shoulder));
-    msg.transforms.push_back(transform(stamp, "shoulder", "flange", base_T_shoulder.inverse() * base_T_flange));
+    msg.transforms.push_back(conversions::to_transform_stamped(base_T_shoulder, f.base, "shoulder", stamp));
+    msg.transforms.push_back(conversions::to_transform_stamped(base_T_shoulder.inverse() * base_T_flange, "shoulder", "flange", stamp));
     bag.write("/tf", stamp, msg);
     ++result.tf_messages;
   }
@@ -154,7 +140,7 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
       bag.write(o.detections_topic, received, plain);
     } else {  // tf: camera -> pattern on /tf, as a TF-publishing detector does
       tf2_msgs::TFMessage msg;
-      msg.transforms.push_back(transform(capture, f.camera, f.pattern, P));
+      msg.transforms.push_back(conversions::to_transform_stamped(P, f.camera, f.pattern, capture));
       bag.write("/tf", received, msg);
     }
     ++result.detections;

@@ -320,10 +320,8 @@ void CalibrationNode::publish_status() {  // lock held
 }
 
 void CalibrationNode::publish_estimate(const Calibration& c) {
-  geometry_msgs::PoseWithCovarianceStamped estimate;
-  estimate.header.stamp = ros::Time::now();
-  estimate.header.frame_id = config_.rig.camera_parent_frame();
-  estimate.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
+  const geometry_msgs::PoseWithCovarianceStamped estimate = conversions::to_stamped_msg(
+      {c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(), ros::Time::now());
   estimate_pub_.publish(estimate);
   try {
     markers_pub_.publish(covariance_markers({c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(),
@@ -363,11 +361,7 @@ void CalibrationNode::republish_saved_calibration() {
     return;
   }
   if (stored.has_covariance) {
-    geometry_msgs::PoseWithCovarianceStamped msg;
-    msg.header.stamp = ros::Time::now();
-    msg.header.frame_id = rig.camera_parent_frame();
-    msg.pose = conversions::to_msg(stored.T_parent_camera);
-    calibration_pub_.publish(msg);
+    calibration_pub_.publish(conversions::to_stamped_msg(stored.T_parent_camera, rig.camera_parent_frame(), ros::Time::now()));
   }
   {
     std::lock_guard<std::mutex> outputs(output_mutex_);
@@ -397,9 +391,8 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     return true;
   }
   res.success = true;
-  res.calibration.header.stamp = ros::Time::now();
-  res.calibration.header.frame_id = config_.rig.camera_parent_frame();
-  res.calibration.pose = conversions::to_msg(PoseWithCovariance{c.T_parent_camera, c.pose_covariance});
+  res.calibration =
+      conversions::to_stamped_msg({c.T_parent_camera, c.pose_covariance}, config_.rig.camera_parent_frame(), ros::Time::now());
   res.rotation_covariance = conversions::to_msg_array(c.rotation_covariance);
   res.translation_covariance = conversions::to_msg_array(c.translation_covariance);
   res.samples_used = c.samples_used;
@@ -417,9 +410,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.corners_used = c.corner_fit->corners;
   }
   if (c.pattern) {
-    res.pattern.header.stamp = res.calibration.header.stamp;
-    res.pattern.header.frame_id = config_.rig.pattern_parent_frame();
-    res.pattern.pose = conversions::to_msg(*c.pattern);
+    res.pattern = conversions::to_stamped_msg(*c.pattern, config_.rig.pattern_parent_frame(), res.calibration.header.stamp);
     const std::array<double, 36> cross = to_row_major_6x6(c.cross_covariance);
     std::copy(cross.begin(), cross.end(), res.cross_covariance.begin());
   }
@@ -439,11 +430,8 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   tf_X_ = c.T_parent_camera;
   res.published_tf = refresh_tf();
   if (config_.publish_pattern_tf && c.pattern) {
-    geometry_msgs::TransformStamped tf;
-    tf.header = res.pattern.header;
-    tf.child_frame_id = config_.rig.frames.pattern;
-    tf.transform = conversions::to_transform_msg(c.pattern->pose);
-    tf_edges_.publish(tf);
+    tf_edges_.publish(conversions::to_transform_stamped(c.pattern->pose, res.pattern.header.frame_id,
+                                                        config_.rig.frames.pattern, res.pattern.header.stamp));
   }
   try {
     io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));

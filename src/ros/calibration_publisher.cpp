@@ -60,12 +60,10 @@ CalibrationPublisher::CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle
   const std::string edge = inverse_ ? rig_.frames.camera + " -> " + rig_.camera_parent_frame()
                                     : rig_.camera_parent_frame() + " -> " + rig_.frames.camera;
   if (stored.has_covariance) {
-    geometry_msgs::PoseWithCovarianceStamped msg;
-    msg.header.stamp = ros::Time::now();
-    msg.header.frame_id = inverse_ ? rig_.frames.camera : rig_.camera_parent_frame();
-    msg.pose = conversions::to_msg(inverse_ ? inverse(X_) : X_);  // the covariance follows the frame change
     calibration_pub_ = node.advertise<geometry_msgs::PoseWithCovarianceStamped>("calibration", 1, true);
-    calibration_pub_.publish(msg);
+    calibration_pub_.publish(conversions::to_stamped_msg(inverse_ ? inverse(X_) : X_,  // the covariance follows the frame change
+                                                         inverse_ ? rig_.frames.camera : rig_.camera_parent_frame(),
+                                                         ros::Time::now()));
   } else {
     ROS_WARN("%s is %s's: it has no covariance, so only TF is published (calibrate with handeye_covariance for one)",
              path.c_str(), stored.format.c_str());
@@ -73,12 +71,8 @@ CalibrationPublisher::CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle
   ROS_INFO("publishing X = T_%s_%s (%s, %s) from %s", rig_.camera_parent_frame().c_str(), rig_.frames.camera.c_str(),
            to_string(rig_.setup), edge.c_str(), path.c_str());
   if (inverse_) {  // easy_handeye's inverse: the camera is the parent, as the user asked
-    geometry_msgs::TransformStamped tf;
-    tf.header.stamp = ros::Time::now();
-    tf.header.frame_id = rig_.frames.camera;
-    tf.child_frame_id = rig_.camera_parent_frame();
-    tf.transform = conversions::to_transform_msg(X_.pose.inverse());
-    edges_.publish(tf);
+    edges_.publish(conversions::to_transform_stamped(X_.pose.inverse(), rig_.frames.camera, rig_.camera_parent_frame(),
+                                                     ros::Time::now()));
     return;
   }
   // First after a second: the TF listener needs that to learn a running driver's camera tree

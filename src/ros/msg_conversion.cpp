@@ -63,6 +63,25 @@ geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose) {
   return msg;
 }
 
+geometry_msgs::PoseWithCovarianceStamped to_stamped_msg(const PoseWithCovariance& pose, const std::string& frame,
+                                                        const ros::Time& stamp) {
+  geometry_msgs::PoseWithCovarianceStamped msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = frame;
+  msg.pose = to_msg(pose);
+  return msg;
+}
+
+geometry_msgs::TransformStamped to_transform_stamped(const Eigen::Isometry3d& T_parent_child, const std::string& parent,
+                                                     const std::string& child, const ros::Time& stamp) {
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = stamp;
+  tf.header.frame_id = parent;
+  tf.child_frame_id = child;
+  tf.transform = to_transform_msg(T_parent_child);
+  return tf;
+}
+
 std::optional<Matrix6d> covariance_if_nonzero(const boost::array<double, 36>& covariance) {
   if (std::all_of(covariance.begin(), covariance.end(), [](double v) { return v == 0.0; })) return std::nullopt;
   std::array<double, 36> values;

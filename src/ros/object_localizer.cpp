@@ -147,18 +147,11 @@ void ObjectLocalizer::locate(const Detection& detection) {
     refuse({"invalid_input", e.what()});
     return;
   }
-  geometry_msgs::PoseWithCovarianceStamped out;
-  out.header.stamp = detection.stamp;
-  out.header.frame_id = rig_.frames.base;
-  out.pose = conversions::to_msg(object.T_base_object);
-  object_pub_.publish(out);
+  object_pub_.publish(conversions::to_stamped_msg(object.T_base_object, rig_.frames.base, detection.stamp));
   markers_pub_.publish(covariance_markers(object.T_base_object, rig_.frames.base, detection.stamp, {3.0, 0.05, object_frame_}));
   if (publish_tf_) {
-    geometry_msgs::TransformStamped tf;
-    tf.header = out.header;
-    tf.child_frame_id = object_frame_;
-    tf.transform = conversions::to_transform_msg(object.T_base_object.pose);
-    tf_broadcaster_.sendTransform(tf);
+    tf_broadcaster_.sendTransform(
+        conversions::to_transform_stamped(object.T_base_object.pose, rig_.frames.base, object_frame_, detection.stamp));
   }
 }
 

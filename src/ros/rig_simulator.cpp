@@ -100,20 +100,11 @@ class RigSimulator {
       info_pub_ = node.advertise<sensor_msgs::CameraInfo>(param<std::string>(pn, "camera_info_topic", "camera/camera_info"), 2);
     }
 
-    geometry_msgs::TransformStamped offset;
-    offset.header.stamp = ros::Time::now();
-    offset.header.frame_id = "flange";
-    offset.child_frame_id = effector_;
-    offset.transform = conversions::to_transform_msg(flange_T_tool_);
+    const ros::Time started = ros::Time::now();
     std::vector<geometry_msgs::TransformStamped> statics;
-    if (publish_robot_tf_) statics.push_back(offset);
+    if (publish_robot_tf_) statics.push_back(conversions::to_transform_stamped(flange_T_tool_, "flange", effector_, started));
     if (!camera_link_.empty()) {  // the camera driver's tree
-      geometry_msgs::TransformStamped optical;
-      optical.header.stamp = offset.header.stamp;
-      optical.header.frame_id = camera_link_;
-      optical.child_frame_id = camera_;
-      optical.transform = conversions::to_transform_msg(T_link_optical_);
-      statics.push_back(optical);
+      statics.push_back(conversions::to_transform_stamped(T_link_optical_, camera_link_, camera_, started));
     }
     if (!statics.empty()) static_broadcaster_.sendTransform(statics);
 
@@ -131,12 +122,8 @@ class RigSimulator {
   void publish_tf(const ros::TimerEvent&) {
     if (!publish_robot_tf_) return;
     const ros::Time now = ros::Time::now();
-    geometry_msgs::TransformStamped tf;
-    tf.header.stamp = now;
-    tf.header.frame_id = base_;
-    tf.child_frame_id = "flange";
-    tf.transform = conversions::to_transform_msg(trajectory_.effector_at(elapsed(now)) * flange_T_tool_.inverse());
-    broadcaster_.sendTransform(tf);
+    broadcaster_.sendTransform(conversions::to_transform_stamped(
+        trajectory_.effector_at(elapsed(now)) * flange_T_tool_.inverse(), base_, "flange", now));
   }
 
   /// The camera's view at the capture time, rendered, with its CameraInfo.
@@ -161,10 +148,7 @@ class RigSimulator {
     // Noise in the optical frame; the detection (pose and covariance) in detection_frame.
     PoseWithCovariance P{perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_), noise_.as_pose_covariance()};
     if (detection_frame_ != camera_) P = compose({T_link_optical_, Matrix6d::Zero()}, P);
-    geometry_msgs::PoseWithCovarianceStamped pose;
-    pose.header.stamp = capture;
-    pose.header.frame_id = detection_frame_;
-    pose.pose = conversions::to_msg(P);
+    geometry_msgs::PoseWithCovarianceStamped pose = conversions::to_stamped_msg(P, detection_frame_, capture);
     if (!detection_covariance_) pose.pose.covariance.fill(0.0);
     if (output_ == "tags") {
       TagDetectionArray array;
@@ -183,11 +167,7 @@ class RigSimulator {
       plain.pose = pose.pose.pose;
       detections_.publish(plain);
     } else {  // tf
-      geometry_msgs::TransformStamped tf;
-      tf.header = pose.header;
-      tf.child_frame_id = pattern_frame_;
-      tf.transform = conversions::to_transform_msg(P.pose);
-      broadcaster_.sendTransform(tf);
+      broadcaster_.sendTransform(conversions::to_transform_stamped(P.pose, detection_frame_, pattern_frame_, capture));
     }
   }
 

@@ -30,11 +30,8 @@ std::string StaticEdges::publish_camera(const tf2::BufferCore& tf, const Rig& ri
     refusal_ = edge.refusal;
     return edge.refusal;
   }
-  geometry_msgs::TransformStamped stamped;
-  stamped.header.stamp = ros::Time::now();
-  stamped.header.frame_id = edge.parent;
-  stamped.child_frame_id = edge.child;
-  stamped.transform = conversions::to_transform_msg(edge.transform);
+  const geometry_msgs::TransformStamped stamped =
+      conversions::to_transform_stamped(edge.transform, edge.parent, edge.child, ros::Time::now());
   bool changed = false;
   if (!camera_root_.empty() && edge.child != camera_root_) changed = edges_.erase(camera_root_) > 0;  // the old edge goes
   changed = store(stamped) || changed;

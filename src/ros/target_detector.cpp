@@ -100,11 +100,8 @@ void TargetDetectorNode::on_image(const sensor_msgs::Image::ConstPtr& image) {
       conversions::set_corners(TargetCorners{camera_, raw_pixels(*seen.points, camera_), ""}, detection);
       array.detections.push_back(detection);
       if (publish_tf_) {
-        geometry_msgs::TransformStamped tf;
-        tf.header = image->header;
-        tf.child_frame_id = pattern_frame_;
-        tf.transform = conversions::to_transform_msg(result.pose->T_camera_pattern);
-        broadcaster_.sendTransform(tf);
+        broadcaster_.sendTransform(conversions::to_transform_stamped(result.pose->T_camera_pattern, image->header.frame_id,
+                                                                     pattern_frame_, image->header.stamp));
       }
     } else {
       ROS_WARN_THROTTLE(5.0, "target_detector: %s seen but no pose: %s", detector_->target().kind_name().c_str(),

@@ -5,7 +5,10 @@
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/PoseWithCovariance.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Transform.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 
 #include <boost/array.hpp>
@@ -26,6 +29,12 @@ geometry_msgs::Transform to_transform_msg(const Eigen::Isometry3d& pose);
 
 PoseWithCovariance to_core(const geometry_msgs::PoseWithCovariance& msg);
 geometry_msgs::PoseWithCovariance to_msg(const PoseWithCovariance& pose);
+/// `pose` with its covariance, in `frame` (the pose's parent) at `stamp`.
+geometry_msgs::PoseWithCovarianceStamped to_stamped_msg(const PoseWithCovariance& pose, const std::string& frame,
+                                                        const ros::Time& stamp);
+/// The TF edge parent -> child, T_parent_child, at `stamp`.
+geometry_msgs::TransformStamped to_transform_stamped(const Eigen::Isometry3d& T_parent_child, const std::string& parent,
+                                                     const std::string& child, const ros::Time& stamp);
 
 /// The full ROS 6x6 covariance (cross block included), or nothing when it is all
 /// zeros (apriltag_ros and most detectors send zeros).
