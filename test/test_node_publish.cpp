@@ -22,6 +22,7 @@
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/msg_conversion.h"
+#include "easy_handeye_file.h"
 #include "node_test_helpers.h"
 
 extern char** environ;
@@ -29,13 +30,13 @@ extern char** environ;
 namespace handeye {
 namespace {
 
-const std::string kDir = "/tmp/handeye_covariance_rostest/publish";
 
 /// A roslaunch (or any command) running in the background, its output in a file;
 /// interrupted (as Ctrl-C) when it goes out of scope.
 class Launch {
  public:
-  explicit Launch(std::vector<std::string> args, const std::string& name) : log_(kDir + "/" + name + ".log") {
+  explicit Launch(std::vector<std::string> args, const std::string& name)
+      : log_(test::scratch_directory() + "/" + name + ".log") {
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -99,29 +100,9 @@ PoseWithCovariance random_calibration(std::uint32_t seed) {
 }
 
 std::string write(const std::string& name, const std::string& text) {
-  std::filesystem::create_directories(kDir);
-  const std::string path = kDir + "/" + name;
+  const std::string path = test::scratch_directory() + "/" + name;
   io::write_file_atomically(path, text);
   return path;
-}
-
-/// The easy_handeye file of X (nested: its current format; else the older one).
-std::string easy_handeye_text(const Eigen::Isometry3d& X, bool eye_on_hand, const std::string& parent,
-                              const std::string& camera, bool nested) {
-  const Eigen::Quaterniond q(X.linear());
-  std::ostringstream out;
-  out.precision(17);
-  const std::string indent = nested ? "  " : "";
-  if (nested) out << "parameters:\n";
-  out << indent << "eye_on_hand: " << (eye_on_hand ? "true" : "false") << "\n"
-      << indent << "robot_base_frame: " << (eye_on_hand ? "base_link" : parent) << "\n"
-      << indent << "robot_effector_frame: " << (eye_on_hand ? parent : "tool0") << "\n"
-      << indent << "tracking_base_frame: " << camera << "\n"
-      << indent << "tracking_marker_frame: marker\n"
-      << "transformation:\n  x: " << X.translation().x() << "\n  y: " << X.translation().y()
-      << "\n  z: " << X.translation().z() << "\n  qx: " << q.x() << "\n  qy: " << q.y() << "\n  qz: " << q.z()
-      << "\n  qw: " << q.w() << "\n";
-  return out.str();
 }
 
 struct Fixture : ::testing::Test {
@@ -200,7 +181,7 @@ TEST_F(Fixture, OurResultFileGoesToTfAtTheCameraTreeRootAndToTheLatchedTopicTo1e
 TEST_F(Fixture, EasyHandeyeFilesBothFormatsAndInverse) {
   const Eigen::Isometry3d X = random_calibration(2).pose;
   {  // today's format, eye-on-base: TF only (no covariance), and the log says why
-    const std::string file = write("easy.yaml", easy_handeye_text(X, false, "easy_base", "easy_camera", true));
+    const std::string file = write("easy.yaml", test::easy_handeye_text(X, false, "easy_base", "easy_camera", true));
     Launch launch = publish("easy", file, {"eye_on_hand:=false"});
     const auto tf_X = lookup("easy_base", "easy_camera");
     ASSERT_TRUE(tf_X) << launch.output();
@@ -209,7 +190,7 @@ TEST_F(Fixture, EasyHandeyeFilesBothFormatsAndInverse) {
     EXPECT_TRUE(contains(launch.output(), "no covariance, so only TF is published")) << launch.output();
   }
   {  // the older format (parameters at the top), a frame renamed, inverse: camera -> effector
-    const std::string file = write("easy_old.yaml", easy_handeye_text(X, true, "old_tool", "old_camera", false));
+    const std::string file = write("easy_old.yaml", test::easy_handeye_text(X, true, "old_tool", "old_camera", false));
     Launch launch = publish("easy_old", file, {"robot_effector_frame:=renamed_tool", "inverse:=true"});
     const auto tf_inverse = lookup("old_camera", "renamed_tool");
     ASSERT_TRUE(tf_inverse) << launch.output();
@@ -229,7 +210,7 @@ TEST_F(Fixture, ABadFileStopsTheLaunchWithItsPathAndTheFix) {
   };
   const std::vector<Case> cases = {
       {"corrupt", write("corrupt.yaml", good.substr(0, good.size() / 2) + "\n  - ]: {\n"), {}, {"YAML syntax error", "corrupt.yaml:"}},
-      {"missing", kDir + "/no_such_file.yaml", {}, {"cannot open", "no_such_file.yaml", "check the path"}},
+      {"missing", test::scratch_directory() + "/no_such_file.yaml", {}, {"cannot open", "no_such_file.yaml", "check the path"}},
       {"nan", write("nan.yaml", std::regex_replace(good, std::regex("translation: \\[[^\\]]*\\]"),
                                                    "translation: [.nan, 0, 0]", std::regex_constants::format_first_only)),
        {}, {"nan.yaml"}},
@@ -258,14 +239,14 @@ TEST_F(Fixture, TheCalibrationNodePublishesItsSavedCalibrationAtStartUp) {
   const std::string file = write("saved.yaml", io::format_pose_file(X, context));
   Launch launch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=start",
                  "robot_effector_frame:=start_tool0", "tracking_base_frame:=start_camera", "calibration_file:=" + file,
-                 "session_file:=" + kDir + "/start_session.yaml"},
+                 "session_file:=" + test::scratch_directory() + "/start_session.yaml"},
                 "start");
   expect_published(launch, "/start_eye_on_hand/handeye_calibration/calibration", context, X);
   // A saved calibration of other frames is not published.
   const std::string other = write("other.yaml", io::format_pose_file(X, context));
   Launch mismatch({"roslaunch", "handeye_covariance", "calibrate.launch", "namespace_prefix:=other",
                    "robot_effector_frame:=other_tool0", "tracking_base_frame:=other_camera",
-                   "calibration_file:=" + other, "session_file:=" + kDir + "/other_session.yaml"},
+                   "calibration_file:=" + other, "session_file:=" + test::scratch_directory() + "/other_session.yaml"},
                   "other");
   EXPECT_TRUE(test::wait_for([&] { return contains(mismatch.output(), "not published"); }, 30.0)) << mismatch.output();
   EXPECT_FALSE(latched("/other_eye_on_hand/handeye_calibration/calibration", 3.0).has_value());
@@ -280,12 +261,8 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh;
   // A camera driver's own tree (Debian ships no static_transform_publisher): X must be hung from its root.
   tf2_ros::StaticTransformBroadcaster camera_driver;
-  geometry_msgs::TransformStamped optical;
-  optical.header.stamp = ros::Time::now();
-  optical.header.frame_id = "pub_camera_link";
-  optical.child_frame_id = "pub_camera_optical_frame";
-  optical.transform = handeye::conversions::to_transform_msg(
-      handeye::se3::make_pose(Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix(), Eigen::Vector3d(0.01, 0.02, 0.03)));
-  camera_driver.sendTransform(optical);
+  camera_driver.sendTransform(handeye::conversions::to_transform_stamped(
+      handeye::se3::make_pose(Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix(), Eigen::Vector3d(0.01, 0.02, 0.03)),
+      "pub_camera_link", "pub_camera_optical_frame", ros::Time::now()));
   return RUN_ALL_TESTS();
 }

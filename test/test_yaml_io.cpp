@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "easy_handeye_file.h"
 #include "scratch_directory.h"
 #include "test_helpers.h"
 
@@ -339,17 +340,9 @@ TEST(YamlIo, AStoredCalibrationIsOursOrEasyHandeyesInBothItsFormats) {
   EXPECT_LE((ours.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-15);
   EXPECT_EQ(ours.T_parent_camera.covariance, X.covariance);
 
-  const Eigen::Quaterniond q(X.pose.linear());
-  std::ostringstream transformation;
-  transformation.precision(17);
-  transformation << "transformation: {x: " << X.pose.translation().x() << ", y: " << X.pose.translation().y()
-                 << ", z: " << X.pose.translation().z() << ", qx: " << q.x() << ", qy: " << q.y() << ", qz: " << q.z()
-                 << ", qw: " << q.w() << "}\n";
-  const std::string nested = "parameters: {eye_on_hand: true, robot_base_frame: base_link, robot_effector_frame: tool0,\n"
-                             "  tracking_base_frame: camera_color_optical_frame, tracking_marker_frame: marker}\n" +
-                             transformation.str();
-  const std::string flat = "eye_on_hand: false\nrobot_base_frame: world\nrobot_effector_frame: tool0\n"
-                           "tracking_base_frame: camera_link\n" + transformation.str();
+  const std::string transformation = test::easy_handeye_transformation(X.pose);
+  const std::string nested = test::easy_handeye_text(X.pose, true, "tool0", "camera_color_optical_frame", true);
+  const std::string flat = test::easy_handeye_text(X.pose, false, "world", "camera_link", false);
   const io::StoredCalibration a = io::parse_stored_calibration(nested, "easy.yaml");
   EXPECT_EQ(a.format, "easy_handeye");
   EXPECT_FALSE(a.has_covariance);
@@ -373,8 +366,8 @@ TEST(YamlIo, AStoredCalibrationIsOursOrEasyHandeyesInBothItsFormats) {
       EXPECT_NE(std::string(e.what()).find("Fix:"), std::string::npos) << e.what();
     }
   };
-  expect_error(transformation.str(), ErrorCode::MissingKey, "eye_on_hand");
-  expect_error("eye_on_hand: maybe\n" + transformation.str(), ErrorCode::MalformedFile, "eye_on_hand");
+  expect_error(transformation, ErrorCode::MissingKey, "eye_on_hand");
+  expect_error("eye_on_hand: maybe\n" + transformation, ErrorCode::MalformedFile, "eye_on_hand");
   expect_error("eye_on_hand: true\ntransformation: {x: 0, y: 0, z: 0, qx: 0, qy: 0, qz: 0, qw: 2}\n",
                ErrorCode::QuaternionNotUnit, "transformation");
   expect_error("eye_on_hand: true\ntransformation: {x: 0, y: 0, qx: 0, qy: 0, qz: 0, qw: 1}\n", ErrorCode::MissingKey,
