@@ -5,6 +5,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <visualization_msgs/MarkerArray.h>
+#include <yaml-cpp/yaml.h>
 
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
@@ -263,6 +264,29 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   ASSERT_TRUE(test::call(kNs + "save_calibration", save_calibration));
   EXPECT_TRUE(save_calibration.response.success) << save_calibration.response.message;
   EXPECT_TRUE(std::filesystem::exists(save_calibration.request.path));
+  EXPECT_TRUE(save_calibration.response.report.empty());  // none asked for
+
+  // With a report directory, the node writes `handeye report`'s page of the samples
+  // it calibrated (joint only: a corners report re-solves each half from the corners,
+  // minutes here, and its page is the same code).
+  if (kMethod == "joint") {
+    SaveCalibration with_report;
+    with_report.request.path = test::scratch_directory() + "/with_report.yaml";
+    with_report.request.report_directory = test::scratch_directory() + "/report";
+    ASSERT_TRUE(test::call(kNs + "save_calibration", with_report));
+    EXPECT_TRUE(with_report.response.success) << with_report.response.message;
+    EXPECT_EQ(with_report.response.report, with_report.request.report_directory + "/report.html")
+        << with_report.response.message;
+    for (const char* file : {"report.html", "report.yaml", "calibration.yaml", "residuals.png", "checks.png"}) {
+      EXPECT_TRUE(std::filesystem::exists(with_report.request.report_directory + "/" + file)) << file;
+    }
+    const YAML::Node report = YAML::LoadFile(with_report.request.report_directory + "/report.yaml");
+    // The samples of the last /calibrate: the session with the wrong detection at 3.
+    EXPECT_EQ(report["samples"].size(), static_cast<std::size_t>(n));
+    EXPECT_TRUE(report["samples"][3]["rejected"].as<bool>());
+    EXPECT_EQ(report["advice"][0].as<std::string>().rfind("sample 3 is ", 0), 0u) << report["advice"][0];
+    EXPECT_NE(report["source"].as<std::string>().find("/save_calibration"), std::string::npos);
+  }
 }
 
 }  // namespace

@@ -42,6 +42,8 @@ SplitCheck split_check(const SampleSet& samples, const std::function<Calibration
     const Matrix6d S = a.pose_covariance + b.pose_covariance;
     const double nees = d.dot(S.ldlt().solve(d));
     check.nees.push_back(nees);
+    check.differences.push_back(d);
+    check.difference_sigmas.push_back(S.diagonal().cwiseMax(0.0).cwiseSqrt());
     check.mean_nees_translation += d.head<3>().dot(S.topLeftCorner<3, 3>().ldlt().solve(d.head<3>()));
     check.mean_nees_rotation += d.tail<3>().dot(S.bottomRightCorner<3, 3>().ldlt().solve(d.tail<3>()));
   }

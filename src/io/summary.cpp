@@ -177,5 +177,30 @@ std::string split_check_summary(const SplitCheck& check) {
   return out;
 }
 
+std::string report_summary(const CalibrationReport& report) {
+  const auto row = [](const char* name, const Vector6d& sigma, const std::string& note) {
+    char line[200];
+    std::snprintf(line, sizeof line, "    %-15s %7.3f %7.3f %7.3f   %7.4f %7.4f %7.4f%s\n", name, sigma(0) * 1e3,
+                  sigma(1) * 1e3, sigma(2) * 1e3, sigma(3) * 180.0 / M_PI, sigma(4) * 180.0 / M_PI,
+                  sigma(5) * 180.0 / M_PI, note.c_str());
+    return std::string(line);
+  };
+  std::string out = "  1 sigma of X          x [mm]  y [mm]  z [mm]   rx [deg] ry [deg] rz [deg]\n";
+  out += row("predicted", report.predicted_sigma, "");
+  out += row("leave-one-out", report.leave_one_out_sigma,
+             "   (" + std::to_string(report.leave_one_out_solved) + " solves" +
+                 (report.leave_one_out_failed ? ", " + std::to_string(report.leave_one_out_failed) + " failed" : "") + ")");
+  if (report.split.splits > 0) {
+    out += row("split-half", report.split_half_sigma,
+               "   (" + std::to_string(report.split.splits) + " splits, NEES " + number_text(report.split.mean_nees, 3) +
+                   "; honest 6)");
+  } else {
+    out += "    split-half      " + report.split_problem + "\n";
+  }
+  out += "  advice\n";
+  for (const std::string& a : report.advice) out += "    - " + a + "\n";
+  return out;
+}
+
 }  // namespace io
 }  // namespace handeye

@@ -643,6 +643,82 @@ std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& c
   return std::string(out.c_str()) + "\n";
 }
 
+std::string format_report(const CalibrationReport& report, const ResultContext& context, const std::string& source) {
+  // Humans read this file: mm and degrees, in ROS order (x, y, z, rx, ry, rz).
+  const auto human = [](const Vector6d& sigma) {
+    std::vector<double> v(6);
+    for (int k = 0; k < 6; ++k) v[static_cast<std::size_t>(k)] = sigma(k) * (k < 3 ? 1e3 : 180.0 / M_PI);
+    return v;
+  };
+  const auto emit_list = [](YAML::Emitter& out, const std::vector<double>& v) { emit_numbers(out, v.data(), v.size()); };
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  out << YAML::Key << "source" << YAML::Value << source;
+  if (context.setup) out << YAML::Key << "setup" << YAML::Value << to_string(*context.setup);
+  out << YAML::Key << "frames" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "parent" << YAML::Value
+      << context.parent << YAML::Key << "camera" << YAML::Value << context.child << YAML::EndMap;
+  out << YAML::Key << "method" << YAML::Value << to_string(report.calibration.method);
+  out << YAML::Key << "advice_sigma" << YAML::Value << report.advice_sigma;
+  out << YAML::Key << "object" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "working_distance_m"
+      << YAML::Value << report.working_distance << YAML::Key << "sigma_mm" << YAML::Value << report.object_sigma * 1e3
+      << YAML::Key << "target_mm" << YAML::Value << report.target_object_sigma * 1e3 << YAML::EndMap;
+
+  out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
+  for (std::size_t i = 0; i < report.fits.size(); ++i) {
+    const SampleFit& f = report.fits[i];
+    std::string reason;
+    bool rejected = false;
+    for (const Calibration::Rejected& r : report.calibration.rejected) {
+      if (r.index == static_cast<int>(i)) rejected = true, reason = r.reason;
+    }
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << i << YAML::Key << "residual_mm"
+        << YAML::Value << f.translation * 1e3 << YAML::Key << "residual_deg" << YAML::Value
+        << f.rotation * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
+        << YAML::Value << rejected;
+    if (rejected) out << YAML::Key << "reason" << YAML::Value << reason;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+
+  out << YAML::Key << "checks" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "units" << YAML::Value << "mm, mm, mm, deg, deg, deg (x, y, z, rx, ry, rz)";
+  out << YAML::Key << "predicted_sigma" << YAML::Value;
+  emit_list(out, human(report.predicted_sigma));
+  out << YAML::Key << "leave_one_out_sigma" << YAML::Value;
+  emit_list(out, human(report.leave_one_out_sigma));
+  out << YAML::Key << "leave_one_out_solved" << YAML::Value << report.leave_one_out_solved;
+  out << YAML::Key << "leave_one_out_failed" << YAML::Value << report.leave_one_out_failed;
+  out << YAML::Key << "split_half_sigma" << YAML::Value;
+  emit_list(out, human(report.split_half_sigma));
+  out << YAML::Key << "split_half_splits" << YAML::Value << report.split.splits;
+  out << YAML::Key << "split_half_size" << YAML::Value << report.split.half_size;
+  out << YAML::Key << "split_half_nees" << YAML::Value << report.split.mean_nees;
+  out << YAML::Key << "split_half_nees_translation" << YAML::Value << report.split.mean_nees_translation;
+  out << YAML::Key << "split_half_nees_rotation" << YAML::Value << report.split.mean_nees_rotation;
+  if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
+  out << YAML::EndMap;
+
+  out << YAML::Key << "rotation_axes" << YAML::Value << YAML::BeginSeq;  // camera frame: x, y, z, angle (deg)
+  for (const MotionAxis& m : report.rotation_axes) {
+    emit_list(out, {m.axis.x(), m.axis.y(), m.axis.z(), m.angle * 180.0 / M_PI});
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "turning" << YAML::Value << YAML::BeginMap;  // eigen-decomposition of sum theta^2 a a^T, ascending
+  out << YAML::Key << "eigenvalues_rad2" << YAML::Value;
+  emit_list(out, {report.turning(0), report.turning(1), report.turning(2)});
+  out << YAML::Key << "axes" << YAML::Value << YAML::BeginSeq;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d a = report.turning_axes.col(k);
+    emit_list(out, {a.x(), a.y(), a.z()});
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+
+  out << YAML::Key << "advice" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& a : report.advice) out << a;
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
 std::string format_result(const Calibration& calibration, const ResultContext& context) {
   YAML::Emitter out;
   new_emitter(out) << YAML::BeginMap;

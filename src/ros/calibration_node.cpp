@@ -14,6 +14,7 @@
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
+#include "handeye_covariance/session/report.h"
 
 namespace handeye {
 
@@ -522,6 +523,19 @@ bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibr
     io::write_file_atomically(res.path, io::format_result(calibrated->calibration, io::context_of(calibrated->snapshot.samples)));
     res.success = true;
     res.message = "saved to " + res.path;
+    if (!req.report_directory.empty()) {
+      // The report of the samples /calibrate solved: the same session, as `handeye report` makes it.
+      // The calibration is saved whatever becomes of the report: a failing report is said, not fatal.
+      try {
+        const CalibrationReport report = make_report(session_, calibrated->snapshot);
+        const ReportFiles files = write_report(req.report_directory, report, calibrated->snapshot.samples,
+                                               "the node " + ros::this_node::getName() + " (/save_calibration)");
+        res.report = files.html;
+        res.message += files.problem.empty() ? "; report in " + files.html : "; no report page: " + files.problem;
+      } catch (const HandEyeError& e) {
+        res.message += std::string("; no report: ") + e.what();
+      }
+    }
   } catch (const HandEyeError& e) {
     res.success = false;
     res.message = e.what();

@@ -22,6 +22,7 @@
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/session/report.h"
 
 namespace handeye {
 namespace cli {
@@ -114,6 +115,60 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   out << "  result written to     " << output << "\n";
   (void)err;
   return kOk;
+}
+
+int report_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  SessionConfig config;
+  std::string input, output, noise_path, method = "joint", robust = "auto";
+  bool keep_outliers = false;
+  ReportOptions report_options;
+  double target_mm = config.target_tolerance_mm, working_distance = config.working_distance;
+  po::options_description options(
+      "report: how far X can be trusted and what to do about it: per-sample residuals, leave-one-out and split-half "
+      "checks, rotation axes, advice; an HTML page with figures");
+  options.add_options()("help,h", "show this help")(
+      "input,i", po::value(&input)->required(), "samples file (YAML), e.g. the node's saved session")(
+      "output,o", po::value(&output), "directory for report.html, the figures and the YAML; default: <input stem>_report")(
+      "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
+      "keep-outliers", po::bool_switch(&keep_outliers), "do not reject wrong detections (they are by default)")(
+      "method", po::value(&method), "joint (default) or pairs")(
+      "robust", po::value(&robust), "auto (default), on or off: as for solve")(
+      "splits", po::value(&report_options.splits), "random halves for the split-half check (default 40; 0: leave it out)")(
+      "working-distance", po::value(&working_distance),
+      ("m along the optical axis for the object's 1 sigma (default " + number_text(working_distance) + ")").c_str())(
+      "target-mm", po::value(&target_mm),
+      ("the object 1 sigma wanted (default " + number_text(target_mm) + ")").c_str());
+  po::variables_map vm;
+  if (!parse("report", "--input FILE [--output DIR] [--noise FILE] [--splits N]", options, args, vm, out)) return kOk;
+  if (!(working_distance > 0.0) || !(target_mm > 0.0) || report_options.splits < 0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "--working-distance and --target-mm must be > 0, --splits >= 0",
+                       "options", "give positive values");
+  }
+  if (output.empty()) output = std::filesystem::path(input).stem().string() + "_report";
+  config.working_distance = working_distance;
+  config.target_tolerance_mm = target_mm;
+  const SampleSet samples = io::read_samples(input);
+  // The session the node, solve and the bag replay use: the same X.
+  SessionSettings settings = session_settings(samples, config);
+  if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
+  settings.reject_outliers = !keep_outliers;
+  settings.method = method_from_string(method);
+  settings.robust = robust_from_string(robust);
+  CalibrationSession session(settings);
+  session.replace(samples.samples, "read " + input);
+  const SessionSnapshot snapshot = session.snapshot();
+  const CalibrationReport report = make_report(session, snapshot, report_options);
+  out << io::human_summary(report.calibration, io::context_of(snapshot.samples));
+  out << io::report_summary(report);
+  const ReportFiles files = write_report(output, report, snapshot.samples, input);
+  out << "  written to            " << output << "/ (calibration.yaml, report.yaml";
+  if (files.problem.empty()) {
+    out << ", report.html and its figures)\n  open it: xdg-open " << files.html << "\n";
+    return kOk;
+  }
+  out << ")\n";
+  err << "handeye report: " << files.problem << "\n";
+  return kInternal;
 }
 
 int sim_command(const Args& args, std::ostream& out, std::ostream& err) {
@@ -596,6 +651,8 @@ const CommandTable& commands() {
                  noise_command}},
       {"suggest", {"which poses to add next and how many more reach a target sigma (predicted covariance)",
                    suggest_command}},
+      {"report", {"a calibration report: residuals, leave-one-out and split-half checks, rotation axes, advice (HTML)",
+                  report_command}},
       {"validate", {"Monte-Carlo check of the covariance (paper section IV-A): epsilon, NEES, coverage, plots",
                     validate_command}},
   };

@@ -26,6 +26,9 @@ struct SplitCheck {
   double mean_nees = 0.0;   // 6-dof, over the solved splits
   double mean_nees_translation = 0.0, mean_nees_rotation = 0.0;  // 3-dof blocks
   std::vector<double> nees;  // each split's
+  /// Each solved split's d (ROS order, m and rad) and the 1 sigma per axis its
+  /// covariance Sigma_a + Sigma_b predicts: the per-axis check (report.h).
+  std::vector<Vector6d> differences, difference_sigmas;
   std::string first_failure;  // the first half's error, when some failed
 };
 

@@ -19,6 +19,10 @@ std::string human_summary(const Calibration& calibration, const ResultContext& c
 /// what it means (honest about 6; above 7.5 overconfident; below 5 cautious).
 std::string split_check_summary(const SplitCheck& check);
 
+/// The report's lines: 1 sigma per axis as predicted, by leave-one-out and by
+/// split-half (mm, degrees), then the advice.
+std::string report_summary(const CalibrationReport& report);
+
 /// T_base_object with 1 sigma per axis, each term's share of the position
 /// variance, and each point's worst-axis 1 sigma (`handeye compose`).
 std::string object_summary(const ObjectPose& object, const std::string& base, const std::string& object_frame,

@@ -15,6 +15,7 @@
 #include <variant>
 #include <vector>
 
+#include "handeye_covariance/estimation/calibration_report.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
@@ -96,6 +97,13 @@ ResultContext context_of(const SampleSet& samples);
 ResultContext context_of(const MotionSet& motions);
 
 std::string format_result(const Calibration& calibration, const ResultContext& context);
+
+/// The calibration report's data (session/report.h), read by scripts/report.py:
+/// source, setup, frames, per-sample residuals (with the rejected ones and
+/// their reason), the per-axis checks in mm and degrees, the motions' rotation
+/// axes in the camera frame and the advice. The calibration itself is the
+/// result file beside it (format_result).
+std::string format_report(const CalibrationReport& report, const ResultContext& context, const std::string& source);
 
 /// Only the result keys (no solver diagnostics): for a known truth, or a pose
 /// with covariance from elsewhere. `read_result` reads it.

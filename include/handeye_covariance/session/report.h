@@ -1,0 +1,70 @@
+// The calibration report: how far this session's X can be trusted, and what to
+// do about it, from the samples alone (no truth needed, so it works on real
+// sessions). `handeye report` and the node's /save_calibration write it; the
+// figures and the HTML page are scripts/report.py's.
+//
+// Three views of X's uncertainty, per axis (ROS order x, y, z, rx, ry, rz):
+//  - predicted: the estimator's covariance (the product);
+//  - leave-one-out: the jackknife over the kept samples. Each X_(i) is solved
+//    without sample i, d_i = (t_(i) - t, log(R_(i) R^T)), and
+//        sigma_k^2 = (n-1)/n * sum_i (d_ik - mean_k)^2        (Efron's jackknife);
+//  - split-half (split_check.h): each split's difference d = X_a - X_b over the
+//    sigma its covariance predicts, s_k = sqrt((Sigma_a + Sigma_b)_kk); the
+//    predicted sigma scaled by the RMS of d_k / s_k over the splits.
+// An honest covariance has all three alike. The jackknife variance itself has a
+// relative 1 sigma of about sqrt(2/(n-1)) (27% at 30 samples), so only ratios
+// beyond `ratio_advice` (and a split-half NEES beyond `nees_advice`) are called out.
+//
+// The rotation axes: each pair of kept samples i < j gives the camera-side
+// motion B = P_i P_j^-1 (P = T_camera_pattern), whose rotation axis is in the
+// camera frame. X's rotation is pinned only about axes the motions turn about:
+// the eigenvalues of M = sum_ij theta_ij^2 a_ij a_ij^T say how much turning
+// each direction saw; the weakest one, below `weak_axis_share` of the
+// strongest, is called out.
+#pragma once
+
+#include <string>
+
+#include "handeye_covariance/estimation/calibration_report.h"
+#include "handeye_covariance/session/calibration_session.h"
+
+namespace handeye {
+
+struct ReportOptions {
+  int splits = 40;                 // random halves for the split-half check (0: leave it out)
+  unsigned seed = 1;
+  /// A sample beyond this many sigmas (6-dof Mahalanobis length of its residual)
+  /// is called out: sqrt of the chi2(6) 0.999 quantile.
+  double advice_sigma = 4.74;
+  /// Leave-one-out or split-half sigma over the predicted one, per axis, and the
+  /// split-half NEES, beyond which the advice calls the covariance overconfident.
+  /// Honest simulated sessions (test_report) reach 1.98 and 9.9 at most.
+  double ratio_advice = 2.0;
+  double nees_advice = 10.0;
+  double weak_axis_share = 0.1;    // weakest over strongest eigenvalue of M
+};
+
+/// The report of `snapshot` as `session` calibrates it. Throws HandEyeError as
+/// calibrate() does (too few samples, degenerate motions).
+CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
+                              const ReportOptions& options = {});
+
+/// What write_report left in its directory.
+struct ReportFiles {
+  std::string directory;
+  std::string html;             // report.html; empty when the figures could not be made
+  std::string problem;          // why not (the page needs Debian's python3-matplotlib), else empty
+};
+
+/// Writes DIR/calibration.yaml (the result file), DIR/report.yaml (format_report)
+/// and, by scripts/report.py, the figures (PNG) and DIR/report.html. Creates DIR.
+/// Throws HandEyeError(CannotWrite...) when DIR cannot be written; a failing
+/// figure script is reported in `problem`, not thrown (the YAML files stand).
+ReportFiles write_report(const std::string& directory, const CalibrationReport& report, const SampleSet& samples,
+                         const std::string& source);
+
+/// "the camera's z (optical axis)" for a direction close to a camera axis, else
+/// "the camera-frame direction (0.57, 0.57, 0.57)".
+std::string camera_axis_name(const Eigen::Vector3d& direction);
+
+}  // namespace handeye

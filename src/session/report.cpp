@@ -1,0 +1,246 @@
+#include "handeye_covariance/session/report.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <set>
+
+#include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/io/yaml_io.h"
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+extern char** environ;
+
+namespace handeye {
+
+namespace {
+
+const char* const kAxisNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+
+/// X_other relative to X in ROS order: (t_other - t, log(R_other R^T)), the left
+/// perturbation of the conventions.
+Vector6d difference(const Eigen::Isometry3d& other, const Eigen::Isometry3d& X) {
+  Vector6d d;
+  d << other.translation() - X.translation(), so3::log(other.linear() * X.linear().transpose());
+  return d;
+}
+
+/// "1.8 mm" or "0.12 deg" for ROS axis k's value (m or rad).
+std::string axis_value(int k, double value) {
+  return k < 3 ? number_text(value * 1e3, 2) + " mm" : number_text(value * 180.0 / M_PI, 2) + " deg";
+}
+
+std::vector<int> kept_indices(std::size_t n, const Calibration& calibration) {
+  std::set<int> dropped;
+  for (const Calibration::Rejected& r : calibration.rejected) dropped.insert(r.index);
+  std::vector<int> kept;
+  for (int i = 0; i < static_cast<int>(n); ++i) {
+    if (!dropped.count(i)) kept.push_back(i);
+  }
+  return kept;
+}
+
+void leave_one_out(const CalibrationSession& session, const SessionSnapshot& snapshot, const std::vector<int>& kept,
+                   CalibrationReport& r) {
+  const Eigen::Isometry3d& X = r.calibration.T_parent_camera;
+  std::vector<Vector6d> d;
+  for (std::size_t skip = 0; skip < kept.size(); ++skip) {
+    SessionSnapshot without = snapshot;
+    without.samples.samples.clear();
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      if (k != skip) without.samples.samples.push_back(snapshot.samples.samples[static_cast<std::size_t>(kept[k])]);
+    }
+    try {
+      d.push_back(difference(session.calibrate(without).T_parent_camera, X));
+    } catch (const HandEyeError&) {
+      ++r.leave_one_out_failed;
+    }
+  }
+  r.leave_one_out_solved = static_cast<int>(d.size());
+  const double n = static_cast<double>(d.size());
+  if (d.size() < 3) return;
+  Vector6d mean = Vector6d::Zero();
+  for (const Vector6d& v : d) mean += v / n;
+  Vector6d sum = Vector6d::Zero();
+  for (const Vector6d& v : d) sum += (v - mean).cwiseAbs2();
+  r.leave_one_out_sigma = ((n - 1.0) / n * sum).cwiseSqrt();
+}
+
+void split_half(const CalibrationSession& session, const SessionSnapshot& snapshot, const std::vector<int>& kept,
+                const ReportOptions& options, CalibrationReport& r) {
+  if (options.splits <= 0) {
+    r.split_problem = "left out (splits: 0)";
+    return;
+  }
+  SessionSnapshot consistent = snapshot;
+  consistent.samples.samples.clear();
+  for (int i : kept) consistent.samples.samples.push_back(snapshot.samples.samples[static_cast<std::size_t>(i)]);
+  try {
+    r.split = session.split_check(consistent, options.splits, options.seed);
+  } catch (const HandEyeError& e) {
+    r.split_problem = e.what();
+    return;
+  }
+  if (r.split.splits == 0) {
+    r.split_problem = "no split could be solved: " + r.split.first_failure;
+    return;
+  }
+  Vector6d mean_square = Vector6d::Zero();
+  for (std::size_t s = 0; s < r.split.differences.size(); ++s) {
+    const Vector6d z = r.split.differences[s].cwiseQuotient(r.split.difference_sigmas[s].cwiseMax(1e-300));
+    mean_square += z.cwiseAbs2() / static_cast<double>(r.split.differences.size());
+  }
+  r.split_half_sigma = r.predicted_sigma.cwiseProduct(mean_square.cwiseSqrt());
+}
+
+void rotation_axes(const SampleSet& samples, const std::vector<int>& kept, CalibrationReport& r) {
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+  for (std::size_t a = 0; a < kept.size(); ++a) {
+    for (std::size_t b = a + 1; b < kept.size(); ++b) {
+      const PoseSample& i = samples.samples[static_cast<std::size_t>(kept[a])];
+      const PoseSample& j = samples.samples[static_cast<std::size_t>(kept[b])];
+      // B = P_i P_j^-1: the camera-side motion of AX = XB, its axis in camera i's frame.
+      const Eigen::Vector3d w = so3::log(i.T_camera_pattern.linear() * j.T_camera_pattern.linear().transpose());
+      const double angle = w.norm();
+      M += w * w.transpose();
+      if (angle < 1e-9) continue;
+      r.rotation_axes.push_back({kept[a], kept[b], w / angle, angle});
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(M);
+  r.turning = eig.eigenvalues().cwiseMax(0.0);
+  r.turning_axes = eig.eigenvectors();
+}
+
+void advise(const ReportOptions& options, CalibrationReport& r) {
+  std::vector<std::string>& advice = r.advice;
+  // Samples far off, worst first: rejected or not, the operator should remove them.
+  std::vector<int> off;
+  for (int i = 0; i < static_cast<int>(r.fits.size()); ++i) {
+    if (r.fits[static_cast<std::size_t>(i)].sigmas > options.advice_sigma) off.push_back(i);
+  }
+  std::sort(off.begin(), off.end(), [&](int a, int b) { return r.fits[a].sigmas > r.fits[b].sigmas; });
+  for (int i : off) {
+    const SampleFit& f = r.fits[static_cast<std::size_t>(i)];
+    const auto rejected = std::find_if(r.calibration.rejected.begin(), r.calibration.rejected.end(),
+                                       [&](const Calibration::Rejected& x) { return x.index == i; });
+    std::string text = "sample " + std::to_string(i) + " is " + number_text(f.sigmas, 2) + " sigma off (" +
+                       number_text(f.translation * 1e3, 2) + " mm, " + number_text(f.rotation * 180.0 / M_PI, 2) +
+                       " deg): remove it";
+    text += rejected != r.calibration.rejected.end()
+                ? " (X already leaves it out: " + rejected->reason + ")"
+                : " (X still uses it; the panel's Remove selected or /remove_sample " + std::to_string(i) + ")";
+    advice.push_back(text);
+  }
+  // Directions the motions hardly turned about.
+  if (r.turning(2) > 0.0 && r.turning(0) < options.weak_axis_share * r.turning(2)) {
+    advice.push_back("little rotation about " + camera_axis_name(r.turning_axes.col(0)) + " (" +
+                     number_text(100.0 * r.turning(0) / r.turning(2), 2) +
+                     "% of the best-turned direction): add views turned about it");
+  }
+  // The checks against the predicted sigma.
+  for (int k = 0; k < 6; ++k) {
+    const double predicted = r.predicted_sigma(k);
+    if (!(predicted > 0.0)) continue;
+    const double loo = r.leave_one_out_sigma(k) / predicted, split = r.split_half_sigma(k) / predicted;
+    const double worst = std::max(loo, split);
+    if (worst > options.ratio_advice) {
+      advice.push_back(std::string("X's ") + kAxisNames[k] + " moves " + number_text(worst, 2) +
+                       " times its predicted 1 sigma (" + axis_value(k, predicted) + ") under " +
+                       (loo >= split ? "leave-one-out" : "split-half") +
+                       ": the covariance is overconfident there; look for systematic errors (camera intrinsics, "
+                       "robot kinematics, a loose mount) or calibrate with robust: on");
+    }
+  }
+  if (r.split.splits > 0 && r.split.mean_nees > options.nees_advice) {
+    advice.push_back("split-half NEES " + number_text(r.split.mean_nees, 3) +
+                     " (honest: 6): the halves disagree more than their covariances say; see the axes above, or look for a "
+                     "bad sample or a systematic error");
+  }
+  if (!r.split_problem.empty() && options.splits > 0) {
+    advice.push_back("no split-half check: " + r.split_problem);
+  }
+  if (r.target_object_sigma > 0.0 && r.object_sigma > r.target_object_sigma) {
+    advice.push_back("an object at " + number_text(r.working_distance, 2) + " m is known to " +
+                     number_text(r.object_sigma * 1e3, 2) + " mm (1 sigma, worst axis), the target is " +
+                     number_text(r.target_object_sigma * 1e3, 2) +
+                     " mm: take more samples at the suggested poses (the panel's Suggest pose, or handeye suggest)");
+  }
+  for (const std::string& w : r.calibration.warnings) advice.push_back("the estimator warns: " + w);
+  if (advice.empty()) {
+    advice.push_back("nothing to mend: every sample is within " + number_text(options.advice_sigma, 3) +
+                     " sigma, the motions turn about every axis, and leave-one-out and split-half agree with the "
+                     "predicted 1 sigma");
+  }
+}
+
+}  // namespace
+
+ReportFiles write_report(const std::string& directory, const CalibrationReport& report, const SampleSet& samples,
+                         const std::string& source) {
+  const std::string dir = directory.empty() ? std::string(".") : directory;
+  const io::ResultContext context = io::context_of(samples);
+  io::write_file_atomically(dir + "/calibration.yaml", io::format_result(report.calibration, context));
+  io::write_file_atomically(dir + "/report.yaml", io::format_report(report, context, source));
+  ReportFiles files;
+  files.directory = dir;
+  // The figures are matplotlib's (scripts/report.py), run without a shell: the
+  // directory's name is an argument, never parsed.
+  std::string python = "/usr/bin/python3", script = HANDEYE_REPORT_SCRIPT, target = dir;
+  char* argv[] = {python.data(), script.data(), target.data(), nullptr};
+  pid_t pid = 0;
+  int status = 0;
+  const int spawned = ::posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv, environ);
+  if (spawned != 0) {
+    files.problem = "cannot run " + python + ": " + std::strerror(spawned) + " (needs Debian's python3-matplotlib)";
+  } else {
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      files.problem = python + " " + script + " " + dir + " failed (exit " +
+                      std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                      "; needs Debian's python3-matplotlib): the YAML files stand, the figures and the page are missing";
+    } else {
+      files.html = dir + "/report.html";
+    }
+  }
+  return files;
+}
+
+std::string camera_axis_name(const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d u = direction.normalized();
+  const char* names[3] = {"the camera's x (image right)", "the camera's y (image down)",
+                          "the camera's z (optical axis)"};
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(u(k)) > 0.9) return names[k];
+  }
+  const Eigen::Vector3d v = u.x() < 0.0 ? Eigen::Vector3d(-u) : u;
+  char text[96];
+  std::snprintf(text, sizeof text, "the camera-frame direction (%.2f, %.2f, %.2f)", v.x(), v.y(), v.z());
+  return text;
+}
+
+CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
+                              const ReportOptions& options) {
+  CalibrationReport r;
+  r.calibration = session.calibrate(snapshot);
+  r.fits = sample_fits(snapshot.samples, r.calibration);
+  r.advice_sigma = options.advice_sigma;
+  r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const std::vector<int> kept = kept_indices(snapshot.samples.samples.size(), r.calibration);
+  leave_one_out(session, snapshot, kept, r);
+  split_half(session, snapshot, kept, options, r);
+  rotation_axes(snapshot.samples, kept, r);
+  r.working_distance = session.settings().suggest.working_distance;
+  r.object_sigma = object_sigma({r.calibration.T_parent_camera, r.calibration.pose_covariance}, r.working_distance);
+  r.target_object_sigma = session.settings().target_object_sigma;
+  advise(options, r);
+  return r;
+}
+
+}  // namespace handeye
