@@ -45,7 +45,7 @@ def residuals_figure(report, path):
     ax = axes[0]
     ax.bar(index, sigma, color=colors)
     ax.axhline(report["advice_sigma"], color="k", ls="--", lw=1, label=f"advice threshold {report['advice_sigma']:.2f} sigma")
-    ax.legend(fontsize=8, loc="upper left")
+    ax.legend(fontsize=8, loc="upper right")
     median = float(np.median(sigma))
     if max(sigma) > 20 * median:
         ax.set_yscale("log")
@@ -246,6 +246,7 @@ body {{ font-family: sans-serif; margin: 24px; max-width: 1200px; color: #222; }
 h1 {{ font-size: 22px; }} h2 {{ font-size: 18px; margin-top: 28px; border-bottom: 1px solid #ccc; }}
 table {{ border-collapse: collapse; font-size: 13px; margin: 8px 0; }}
 td, th {{ border: 1px solid #ccc; padding: 3px 8px; text-align: right; }} th {{ background: #f2f2f2; }}
+td:first-child, td:last-child {{ text-align: left; }}
 tr.rejected td {{ background: #fadbd8; }} tr.off td {{ background: #fdebd0; }}
 .advice li {{ margin: 4px 0; }} .advice {{ background: #fef9e7; border: 1px solid #f4d03f; padding: 8px 24px; }}
 img {{ max-width: 100%; border: 1px solid #eee; }} .small {{ color: #666; font-size: 12px; }}

@@ -55,6 +55,15 @@ TEST(ReadmeCommands, StatusEchoAndCalibrateCallWorkAsTyped) {
   ASSERT_EQ(suggest.exit_code, 0) << suggest.output;
   EXPECT_TRUE(contains(suggest.output, "success: True")) << suggest.output;
   EXPECT_TRUE(contains(suggest.output, "predicted_object_error_mm: [")) << suggest.output;
+
+  // The report, as the README asks the node for one (into this test's own directory).
+  const std::string dir = test::scratch_directory();
+  const Shell save = shell("timeout 60 rosservice call " + ns + "/save_calibration \"{path: '" + dir +
+                           "/calibration.yaml', report_directory: '" + dir + "/report'}\"");
+  ASSERT_EQ(save.exit_code, 0) << save.output;
+  EXPECT_TRUE(contains(save.output, "success: True")) << save.output;
+  EXPECT_TRUE(contains(save.output, "report: \"" + dir + "/report/report.html\"")) << save.output;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/report/residuals.png")) << save.output;
 }
 
 }  // namespace

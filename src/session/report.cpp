@@ -35,6 +35,11 @@ std::string axis_value(int k, double value) {
   return k < 3 ? number_text(value * 1e3, 2) + " mm" : number_text(value * 180.0 / M_PI, 2) + " deg";
 }
 
+/// "1009", "12", "4.9", "0.31": whole numbers from 10 on (no "1e+03" for people).
+std::string readable(double value) {
+  return std::abs(value) >= 10.0 ? std::to_string(std::llround(value)) : number_text(value, 2);
+}
+
 std::vector<int> kept_indices(std::size_t n, const Calibration& calibration) {
   std::set<int> dropped;
   for (const Calibration::Rejected& r : calibration.rejected) dropped.insert(r.index);
@@ -129,9 +134,8 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
     const SampleFit& f = r.fits[static_cast<std::size_t>(i)];
     const auto rejected = std::find_if(r.calibration.rejected.begin(), r.calibration.rejected.end(),
                                        [&](const Calibration::Rejected& x) { return x.index == i; });
-    std::string text = "sample " + std::to_string(i) + " is " + number_text(f.sigmas, 2) + " sigma off (" +
-                       number_text(f.translation * 1e3, 2) + " mm, " + number_text(f.rotation * 180.0 / M_PI, 2) +
-                       " deg): remove it";
+    std::string text = "sample " + std::to_string(i) + " is " + readable(f.sigmas) + " sigma off (" +
+                       readable(f.translation * 1e3) + " mm, " + readable(f.rotation * 180.0 / M_PI) + " deg): remove it";
     text += rejected != r.calibration.rejected.end()
                 ? " (X already leaves it out: " + rejected->reason + ")"
                 : " (X still uses it; the panel's Remove selected or /remove_sample " + std::to_string(i) + ")";
@@ -171,7 +175,9 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
                      number_text(r.target_object_sigma * 1e3, 2) +
                      " mm: take more samples at the suggested poses (the panel's Suggest pose, or handeye suggest)");
   }
-  for (const std::string& w : r.calibration.warnings) advice.push_back("the estimator warns: " + w);
+  for (const std::string& w : r.calibration.warnings) {
+    if (w.find("rejected as outliers") == std::string::npos) advice.push_back("the estimator warns: " + w);  // said above
+  }
   if (advice.empty()) {
     advice.push_back("nothing to mend: every sample is within " + number_text(options.advice_sigma, 3) +
                      " sigma, the motions turn about every axis, and leave-one-out and split-half agree with the "
