@@ -163,6 +163,21 @@ TEST(Report, AdviceNamesTheAxisTheMotionsDoNotTurnAbout) {
             << r.turning(0) / r.turning(2) << ", rolled " << rolled.turning(0) / rolled.turning(2) << "\n";
 }
 
+// 100 samples: 4950 motions. The turning uses every one; the figure gets at most
+// 2000, evenly spread; the split-half check can be left out.
+TEST(Report, ALargeSessionKeepsTheFigureSmall) {
+  ReportOptions options;
+  options.splits = 0;
+  const CalibrationReport r = report_of(simulated(100, 8), options);
+  EXPECT_EQ(r.leave_one_out_solved, 100);
+  EXPECT_GT(r.rotation_axes.size(), 1000u);
+  EXPECT_LE(r.rotation_axes.size(), 2000u);
+  EXPECT_EQ(r.split.splits, 0);
+  EXPECT_EQ(r.split_problem, "left out (splits: 0)");
+  EXPECT_FALSE(mentions(r.advice, "no split-half check")) << r.advice.front();
+  EXPECT_GT(r.turning(0), 0.1 * r.turning(2));
+}
+
 TEST(Report, CameraAxisNames) {
   EXPECT_EQ(camera_axis_name({0, 0, -1}), "the camera's z (optical axis)");
   EXPECT_EQ(camera_axis_name({0.99, 0.1, 0}), "the camera's x (image right)");

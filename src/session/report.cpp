@@ -103,17 +103,23 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& snapsh
   r.split_half_sigma = r.predicted_sigma.cwiseProduct(mean_square.cwiseSqrt());
 }
 
-void rotation_axes(const SampleSet& samples, const std::vector<int>& kept, CalibrationReport& r) {
+void rotation_axes(const SampleSet& samples, const std::vector<int>& kept, const ReportOptions& options,
+                   CalibrationReport& r) {
+  // M from every pair; the figure gets at most max_rotation_axes of them, evenly spread.
+  const std::size_t pairs = kept.size() * (kept.size() - std::min<std::size_t>(kept.size(), 1)) / 2;
+  const std::size_t most = std::max<std::size_t>(1, options.max_rotation_axes);
+  const std::size_t stride = std::max<std::size_t>(1, (pairs + most - 1) / most);
+  std::size_t pair = 0;
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
   for (std::size_t a = 0; a < kept.size(); ++a) {
-    for (std::size_t b = a + 1; b < kept.size(); ++b) {
+    for (std::size_t b = a + 1; b < kept.size(); ++b, ++pair) {
       const PoseSample& i = samples.samples[static_cast<std::size_t>(kept[a])];
       const PoseSample& j = samples.samples[static_cast<std::size_t>(kept[b])];
       // B = P_i P_j^-1: the camera-side motion of AX = XB, its axis in camera i's frame.
       const Eigen::Vector3d w = so3::log(i.T_camera_pattern.linear() * j.T_camera_pattern.linear().transpose());
       const double angle = w.norm();
       M += w * w.transpose();
-      if (angle < 1e-9) continue;
+      if (angle < 1e-9 || pair % stride != 0) continue;
       r.rotation_axes.push_back({kept[a], kept[b], w / angle, angle});
     }
   }
@@ -241,7 +247,7 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
   const std::vector<int> kept = kept_indices(snapshot.samples.samples.size(), r.calibration);
   leave_one_out(session, snapshot, kept, r);
   split_half(session, snapshot, kept, options, r);
-  rotation_axes(snapshot.samples, kept, r);
+  rotation_axes(snapshot.samples, kept, options, r);
   r.working_distance = session.settings().suggest.working_distance;
   r.object_sigma = object_sigma({r.calibration.T_parent_camera, r.calibration.pose_covariance}, r.working_distance);
   r.target_object_sigma = session.settings().target_object_sigma;

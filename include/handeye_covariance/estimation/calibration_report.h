@@ -36,7 +36,7 @@ struct CalibrationReport {
   Vector6d split_half_sigma = Vector6d::Zero();
   std::string split_problem;
 
-  std::vector<MotionAxis> rotation_axes;
+  std::vector<MotionAxis> rotation_axes;  // at most ReportOptions::max_rotation_axes, evenly spread over the pairs
   Eigen::Vector3d turning = Eigen::Vector3d::Zero();   // eigenvalues of M (rad^2), ascending
   Eigen::Matrix3d turning_axes = Eigen::Matrix3d::Identity();  // their eigenvectors (columns, camera frame)
 

@@ -42,6 +42,7 @@ struct ReportOptions {
   double ratio_advice = 2.0;
   double nees_advice = 10.0;
   double weak_axis_share = 0.1;    // weakest over strongest eigenvalue of M
+  std::size_t max_rotation_axes = 2000;  // motions kept for the figure (M uses every pair)
 };
 
 /// The report of `snapshot` as `session` calibrates it. Throws HandEyeError as
