@@ -50,6 +50,24 @@ std::vector<int> kept_indices(std::size_t n, const Calibration& calibration) {
   return kept;
 }
 
+/// The sigmas beyond which a sample is called out. As the outlier gate does
+/// (outliers.h): when the kept samples' median squared distance exceeds chi2(6)'s
+/// median (5.348), every residual is larger than the detections' stated noise
+/// says (a real session's detector understates it), and the threshold grows with
+/// it; otherwise a session whose samples are all alike would have them all called out.
+double advice_threshold(const CalibrationReport& r, const ReportOptions& options) {
+  std::vector<double> squared;
+  std::set<int> dropped;
+  for (const Calibration::Rejected& x : r.calibration.rejected) dropped.insert(x.index);
+  for (std::size_t i = 0; i < r.fits.size(); ++i) {
+    if (!dropped.count(static_cast<int>(i))) squared.push_back(r.fits[i].sigmas * r.fits[i].sigmas);
+  }
+  if (squared.empty()) return options.advice_sigma;
+  std::nth_element(squared.begin(), squared.begin() + static_cast<std::ptrdiff_t>(squared.size() / 2), squared.end());
+  const double median = squared[squared.size() / 2];
+  return options.advice_sigma * std::sqrt(std::max(1.0, median / 5.348));
+}
+
 void leave_one_out(const CalibrationSession& session, const SessionSnapshot& snapshot, const std::vector<int>& kept,
                    CalibrationReport& r) {
   const Eigen::Isometry3d& X = r.calibration.T_parent_camera;
@@ -133,7 +151,7 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
   // Samples far off, worst first: rejected or not, the operator should remove them.
   std::vector<int> off;
   for (int i = 0; i < static_cast<int>(r.fits.size()); ++i) {
-    if (r.fits[static_cast<std::size_t>(i)].sigmas > options.advice_sigma) off.push_back(i);
+    if (r.fits[static_cast<std::size_t>(i)].sigmas > r.advice_sigma) off.push_back(i);
   }
   std::sort(off.begin(), off.end(), [&](int a, int b) { return r.fits[a].sigmas > r.fits[b].sigmas; });
   for (int i : off) {
@@ -185,7 +203,7 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
     if (w.find("rejected as outliers") == std::string::npos) advice.push_back("the estimator warns: " + w);  // said above
   }
   if (advice.empty()) {
-    advice.push_back("nothing to mend: every sample is within " + number_text(options.advice_sigma, 3) +
+    advice.push_back("nothing to mend: every sample is within " + number_text(r.advice_sigma, 3) +
                      " sigma, the motions turn about every axis, and leave-one-out and split-half agree with the "
                      "predicted 1 sigma");
   }
@@ -242,7 +260,7 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
   CalibrationReport r;
   r.calibration = session.calibrate(snapshot);
   r.fits = sample_fits(snapshot.samples, r.calibration);
-  r.advice_sigma = options.advice_sigma;
+  r.advice_sigma = advice_threshold(r, options);
   r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   const std::vector<int> kept = kept_indices(snapshot.samples.samples.size(), r.calibration);
   leave_one_out(session, snapshot, kept, r);

@@ -22,7 +22,9 @@ struct MotionAxis {
 struct CalibrationReport {
   Calibration calibration;       // as the session calibrates it
   std::vector<SampleFit> fits;   // every sample's, the rejected ones too (sample_fits)
-  double advice_sigma = 0.0;     // the options' threshold, for the figures
+  /// A sample beyond this is called out: the options' advice_sigma, scaled up as the
+  /// outlier gate scales (by the kept samples' median squared sigmas over 5.348, when above 1).
+  double advice_sigma = 0.0;
 
   Vector6d predicted_sigma = Vector6d::Zero();  // ROS order (m, rad)
 
