@@ -5,6 +5,13 @@
 
 namespace handeye {
 
+Vector6d pose_error(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& reference) {
+  Vector6d error;
+  error.head<3>() = pose.translation() - reference.translation();
+  error.tail<3>() = so3::log(pose.linear() * reference.linear().transpose());
+  return error;
+}
+
 using Eigen::Matrix3d;
 
 Matrix6d DecoupledCovariance::as_pose_covariance() const {

@@ -40,14 +40,6 @@ Isometry3d pattern_pose(const SampleSet& samples, const Isometry3d& X) {
 
 namespace {
 
-/// Eq. (64-65): the left-perturbation error of `pose` about `mean`, ROS order.
-Vector6d error_about(const Isometry3d& pose, const Isometry3d& mean) {
-  Vector6d e;
-  e.head<3>() = pose.translation() - mean.translation();
-  e.tail<3>() = so3::log(pose.linear() * mean.linear().transpose());
-  return e;
-}
-
 /// The nearest PSD matrix (negative eigenvalues set to 0); notes when it clipped.
 Matrix3d clip_to_psd(const Matrix3d& C, const std::string& what, std::vector<std::string>& notes) {
   const Eigen::SelfAdjointEigenSolver<Matrix3d> eig(0.5 * (C + C.transpose()));
@@ -73,7 +65,7 @@ SampleResidual sample_residual(const Rig& rig, const PoseSample& sample, const I
   const Isometry3d V = rig.robot_link(E);
   SampleResidual r;
   // P = exp(e) P_bar, so d e = -d P_bar for the effector's part.
-  r.error = error_about(sample.T_camera_pattern, rig.predicted_view(E, X, pattern));  // eq. (64-65)
+  r.error = pose_error(sample.T_camera_pattern, rig.predicted_view(E, X, pattern));  // eq. (64-65)
   r.d_effector = -compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, pattern) * rig.robot_link_jacobian(E);
   return r;
 }
@@ -109,7 +101,7 @@ NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const R
     }
     const Isometry3d E_mean = mean_pose(E), P_mean = mean_pose(P);
     for (std::size_t k = 0; k < g.size(); ++k) {
-      const Vector6d e = error_about(E[k], E_mean), p = error_about(P[k], P_mean);
+      const Vector6d e = pose_error(E[k], E_mean), p = pose_error(P[k], P_mean);
       robot += e * e.transpose();
       camera += p * p.transpose();
     }

@@ -36,9 +36,7 @@ SplitCheck split_check(const SampleSet& samples, const std::function<Calibration
       ++check.failed;
       continue;
     }
-    Vector6d d;
-    d << a.T_parent_camera.translation() - b.T_parent_camera.translation(),
-        so3::log(a.T_parent_camera.linear() * b.T_parent_camera.linear().transpose());
+    const Vector6d d = pose_error(a.T_parent_camera, b.T_parent_camera);
     const Matrix6d S = a.pose_covariance + b.pose_covariance;
     const double nees = d.dot(S.ldlt().solve(d));
     check.nees.push_back(nees);

@@ -4,13 +4,6 @@
 
 namespace handeye {
 
-Vector6d pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
-  Vector6d error;
-  error.head<3>() = estimate.translation() - truth.translation();
-  error.tail<3>() = so3::log(estimate.linear() * truth.linear().transpose());
-  return error;
-}
-
 double relative_frobenius_error(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& monte_carlo) {
   return (predicted - monte_carlo).norm() / monte_carlo.norm();
 }

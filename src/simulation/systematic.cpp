@@ -31,12 +31,7 @@ Isometry3d SerialArm::forward(const Vector6d& q) const {
 }
 
 std::optional<Vector6d> SerialArm::inverse(const Isometry3d& target) const {
-  const auto error = [&](const Vector6d& q) {
-    const Isometry3d T = forward(q);
-    Vector6d e;
-    e << target.translation() - T.translation(), so3::log(target.linear() * T.linear().transpose());
-    return e;
-  };
+  const auto error = [&](const Vector6d& q) { return pose_error(target, forward(q)); };
   // Seeds: the shoulder facing the target (and away), elbow up/down, wrist flipped;
   // then random ones from a fixed seed (the result must not depend on call order).
   std::vector<Vector6d> seeds;

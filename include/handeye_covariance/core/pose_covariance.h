@@ -19,6 +19,11 @@ struct PoseWithCovariance {
   Matrix6d covariance = Matrix6d::Zero();
 };
 
+/// The perturbation (xi_t, xi_R) above that takes `reference` to `pose`:
+/// (t - t_ref, log(R R_ref^T)), ROS order. An estimate's error against the truth
+/// (the paper's definitions), a sample's residual (eq. 64-65), two estimates' difference.
+Vector6d pose_error(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& reference);
+
 /// Rotation and translation covariances with no cross term, as in the paper.
 struct DecoupledCovariance {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();     // rad^2, left perturbation

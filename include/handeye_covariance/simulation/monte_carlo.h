@@ -15,8 +15,6 @@
 
 namespace handeye {
 
-Vector6d pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
-
 /// Eq. (63).
 double relative_frobenius_error(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& monte_carlo);
 
