@@ -124,14 +124,8 @@ Calibration judge(const RealSession& session, const Eigen::Isometry3d& published
   for (std::size_t k = 0; k < session.samples.samples.size(); ++k) {
     leave_one_out.push_back(pose_error(calibrate(session.without(k)).T_parent_camera, published));
   }
-  Vector6d mean = Vector6d::Zero(), jackknife = Vector6d::Zero();
-  for (const Vector6d& e : leave_one_out) mean += e / static_cast<double>(leave_one_out.size());
-  for (const Vector6d& e : leave_one_out) jackknife += (e - mean).cwiseAbs2();
-  const double m = static_cast<double>(leave_one_out.size());
-  jackknife *= (m - 1.0) / m;
-
-  const Vector6d ours = c.pose_covariance.diagonal().cwiseSqrt(), theirs = jackknife.cwiseSqrt();
-  const Vector6d combined = (ours.cwiseAbs2() + jackknife).cwiseSqrt();
+  const Vector6d ours = c.pose_covariance.diagonal().cwiseSqrt(), theirs = jackknife_sigma(leave_one_out);
+  const Vector6d combined = (ours.cwiseAbs2() + theirs.cwiseAbs2()).cwiseSqrt();
   std::printf("  noise: %s\n", c.noise_model.c_str());
   for (const auto& check : c.residual_checks) {
     std::printf("  check: %s = %.3g (bound %.3g) %s\n", check.test.c_str(), check.statistic, check.bound,

@@ -17,11 +17,6 @@
 namespace handeye {
 namespace {
 
-SessionSettings settings_of(const SampleSet& samples) {
-  SessionSettings s = session_settings(samples);
-  return s;
-}
-
 SampleSet simulated(int n, unsigned seed, const ViewpointOptions& views = {}) {
   Rng rng(seed);
   SampleSet samples =
@@ -31,7 +26,7 @@ SampleSet simulated(int n, unsigned seed, const ViewpointOptions& views = {}) {
 }
 
 CalibrationReport report_of(const SampleSet& samples, const ReportOptions& options = {}) {
-  CalibrationSession session(settings_of(samples));
+  CalibrationSession session(session_settings(samples));
   session.replace(samples.samples, "test");
   return make_report(session, session.snapshot(), options);
 }
@@ -96,7 +91,7 @@ TEST(Report, OnAnOverconfidentSessionTheChecksSeeIt) {
   samples.noise->robot.rotation /= 9.0;
   samples.noise->robot.translation /= 9.0;
   CalibrationSession session([&] {
-    SessionSettings s = settings_of(samples);
+    SessionSettings s = session_settings(samples);
     s.method = Method::Pairs;
     return s;
   }());
@@ -150,7 +145,7 @@ TEST(Report, AdviceNamesAPlantedOutlierFirst) {
   EXPECT_NE(rejected.advice.front().find("remove it (X already leaves it out"), std::string::npos);
 
   CalibrationSession keeping([&] {
-    SessionSettings s = settings_of(samples);
+    SessionSettings s = session_settings(samples);
     s.reject_outliers = false;
     return s;
   }());

@@ -135,6 +135,20 @@ SampleSet without_rejected(const SampleSet& samples, const Calibration& calibrat
   return without(samples, dropped);
 }
 
+const Calibration::Rejected* rejection_of(const Calibration& calibration, int index) {
+  for (const Calibration::Rejected& r : calibration.rejected) {
+    if (r.index == index) return &r;
+  }
+  return nullptr;
+}
+
+double residual_scale(std::vector<double> squared_distances) {
+  if (squared_distances.empty()) return 1.0;
+  const auto middle = squared_distances.begin() + static_cast<std::ptrdiff_t>(squared_distances.size() / 2);
+  std::nth_element(squared_distances.begin(), middle, squared_distances.end());
+  return std::max(1.0, *middle / 5.348);
+}
+
 std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration) {
   return fits_against(without_rejected(samples, calibration), calibration, samples);
 }
@@ -165,12 +179,7 @@ Calibration solve_robust(const SampleSet& samples, Method method, const OutlierO
     Calibration c = estimate(kept, method, joint);
     std::vector<double> distance;
     for (const SampleFit& fit : fits_against(kept, c, kept)) distance.push_back(fit.sigmas * fit.sigmas);
-    // A detector's decoupled covariance may still understate a correlated truth:
-    // when the typical distance exceeds chi2(6)'s median (5.35), the gate scales
-    // with it, so samples are judged against each other.
-    std::vector<double> sorted = distance;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double gate = o.residual_gate * std::max(1.0, sorted[sorted.size() / 2] / 5.348);
+    const double gate = o.residual_gate * residual_scale(distance);
     int worst = -1;
     double worst_distance = gate;
     for (std::size_t k = 0; k < distance.size(); ++k) {

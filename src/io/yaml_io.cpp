@@ -666,16 +666,12 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
   for (std::size_t i = 0; i < report.fits.size(); ++i) {
     const SampleFit& f = report.fits[i];
-    std::string reason;
-    bool rejected = false;
-    for (const Calibration::Rejected& r : report.calibration.rejected) {
-      if (r.index == static_cast<int>(i)) rejected = true, reason = r.reason;
-    }
+    const Calibration::Rejected* rejected = rejection_of(report.calibration, static_cast<int>(i));
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << i << YAML::Key << "residual_mm"
         << YAML::Value << f.translation * 1e3 << YAML::Key << "residual_deg" << YAML::Value
         << f.rotation * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
-        << YAML::Value << rejected;
-    if (rejected) out << YAML::Key << "reason" << YAML::Value << reason;
+        << YAML::Value << (rejected != nullptr);
+    if (rejected) out << YAML::Key << "reason" << YAML::Value << rejected->reason;
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;

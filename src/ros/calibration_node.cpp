@@ -507,7 +507,7 @@ bool CalibrationNode::load_samples(LoadSamples::Request& req, LoadSamples::Respo
 }
 
 bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibration::Response& res) {
-  std::lock_guard<std::mutex> outputs(output_mutex_);  // not while /calibrate writes the same file
+  std::unique_lock<std::mutex> outputs(output_mutex_);  // not while /calibrate writes the same file
   std::optional<Calibrated> calibrated;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -523,22 +523,24 @@ bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibr
     io::write_file_atomically(res.path, io::format_result(calibrated->calibration, io::context_of(calibrated->snapshot.samples)));
     res.success = true;
     res.message = "saved to " + res.path;
-    if (!req.report_directory.empty()) {
-      // The report of the samples /calibrate solved: the same session, as `handeye report` makes it.
-      // The calibration is saved whatever becomes of the report: a failing report is said, not fatal.
-      try {
-        const CalibrationReport report = make_report(session_, calibrated->snapshot);
-        const ReportFiles files = write_report(req.report_directory, report, calibrated->snapshot.samples,
-                                               "the node " + ros::this_node::getName() + " (/save_calibration)");
-        res.report = files.html;
-        res.message += files.problem.empty() ? "; report in " + files.html : "; no report page: " + files.problem;
-      } catch (const HandEyeError& e) {
-        res.message += std::string("; no report: ") + e.what();
-      }
-    }
   } catch (const HandEyeError& e) {
     res.success = false;
     res.message = e.what();
+    return true;
+  }
+  outputs.unlock();  // the report takes seconds (leave-one-out, split-half, figures): /calibrate need not wait
+  if (!req.report_directory.empty()) {
+    // The report of the samples /calibrate solved, of the X it gave: as `handeye report` makes it.
+    // The calibration is saved whatever becomes of the report: a failing report is said, not fatal.
+    try {
+      const CalibrationReport report = make_report(session_, calibrated->snapshot, calibrated->calibration);
+      const ReportFiles files = write_report(req.report_directory, report, calibrated->snapshot.samples,
+                                             "the node " + ros::this_node::getName() + " (/save_calibration)");
+      res.report = files.html;
+      res.message += files.problem.empty() ? "; report in " + files.html : "; no report page: " + files.problem;
+    } catch (const HandEyeError& e) {
+      res.message += std::string("; no report: ") + e.what();
+    }
   }
   return true;
 }

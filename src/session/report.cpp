@@ -6,7 +6,6 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <set>
 
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -22,14 +21,6 @@ namespace {
 
 const char* const kAxisNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
 
-/// X_other relative to X in ROS order: (t_other - t, log(R_other R^T)), the left
-/// perturbation of the conventions.
-Vector6d difference(const Eigen::Isometry3d& other, const Eigen::Isometry3d& X) {
-  Vector6d d;
-  d << other.translation() - X.translation(), so3::log(other.linear() * X.linear().transpose());
-  return d;
-}
-
 /// "1.8 mm" or "0.12 deg" for ROS axis k's value (m or rad).
 std::string axis_value(int k, double value) {
   return k < 3 ? number_text(value * 1e3, 2) + " mm" : number_text(value * 180.0 / M_PI, 2) + " deg";
@@ -40,71 +31,43 @@ std::string readable(double value) {
   return std::abs(value) >= 10.0 ? std::to_string(std::llround(value)) : number_text(value, 2);
 }
 
-std::vector<int> kept_indices(std::size_t n, const Calibration& calibration) {
-  std::set<int> dropped;
-  for (const Calibration::Rejected& r : calibration.rejected) dropped.insert(r.index);
-  std::vector<int> kept;
-  for (int i = 0; i < static_cast<int>(n); ++i) {
-    if (!dropped.count(i)) kept.push_back(i);
-  }
-  return kept;
-}
-
-/// The sigmas beyond which a sample is called out. As the outlier gate does
-/// (outliers.h): when the kept samples' median squared distance exceeds chi2(6)'s
-/// median (5.348), every residual is larger than the detections' stated noise
-/// says (a real session's detector understates it), and the threshold grows with
-/// it; otherwise a session whose samples are all alike would have them all called out.
+/// The sigmas beyond which a sample is called out: the options' threshold, scaled
+/// as the outlier gate scales (outliers.h residual_scale) by the kept samples. When
+/// every residual is larger than the detections' stated noise says (real detectors
+/// understate it), a session whose samples are all alike would otherwise have them
+/// all called out.
 double advice_threshold(const CalibrationReport& r, const ReportOptions& options) {
   std::vector<double> squared;
-  std::set<int> dropped;
-  for (const Calibration::Rejected& x : r.calibration.rejected) dropped.insert(x.index);
   for (std::size_t i = 0; i < r.fits.size(); ++i) {
-    if (!dropped.count(static_cast<int>(i))) squared.push_back(r.fits[i].sigmas * r.fits[i].sigmas);
+    if (!rejection_of(r.calibration, static_cast<int>(i))) squared.push_back(r.fits[i].sigmas * r.fits[i].sigmas);
   }
-  if (squared.empty()) return options.advice_sigma;
-  std::nth_element(squared.begin(), squared.begin() + static_cast<std::ptrdiff_t>(squared.size() / 2), squared.end());
-  const double median = squared[squared.size() / 2];
-  return options.advice_sigma * std::sqrt(std::max(1.0, median / 5.348));
+  return options.advice_sigma * std::sqrt(residual_scale(squared));
 }
 
-void leave_one_out(const CalibrationSession& session, const SessionSnapshot& snapshot, const std::vector<int>& kept,
-                   CalibrationReport& r) {
+void leave_one_out(const CalibrationSession& session, const SessionSnapshot& kept, CalibrationReport& r) {
   const Eigen::Isometry3d& X = r.calibration.T_parent_camera;
   std::vector<Vector6d> d;
-  for (std::size_t skip = 0; skip < kept.size(); ++skip) {
-    SessionSnapshot without = snapshot;
-    without.samples.samples.clear();
-    for (std::size_t k = 0; k < kept.size(); ++k) {
-      if (k != skip) without.samples.samples.push_back(snapshot.samples.samples[static_cast<std::size_t>(kept[k])]);
-    }
+  for (std::size_t skip = 0; skip < kept.samples.samples.size(); ++skip) {
+    SessionSnapshot without = kept;
+    without.samples.samples.erase(without.samples.samples.begin() + static_cast<std::ptrdiff_t>(skip));
     try {
-      d.push_back(difference(session.calibrate(without).T_parent_camera, X));
+      d.push_back(pose_error(session.calibrate(without).T_parent_camera, X));
     } catch (const HandEyeError&) {
       ++r.leave_one_out_failed;
     }
   }
   r.leave_one_out_solved = static_cast<int>(d.size());
-  const double n = static_cast<double>(d.size());
-  if (d.size() < 3) return;
-  Vector6d mean = Vector6d::Zero();
-  for (const Vector6d& v : d) mean += v / n;
-  Vector6d sum = Vector6d::Zero();
-  for (const Vector6d& v : d) sum += (v - mean).cwiseAbs2();
-  r.leave_one_out_sigma = ((n - 1.0) / n * sum).cwiseSqrt();
+  r.leave_one_out_sigma = jackknife_sigma(d);
 }
 
-void split_half(const CalibrationSession& session, const SessionSnapshot& snapshot, const std::vector<int>& kept,
-                const ReportOptions& options, CalibrationReport& r) {
+void split_half(const CalibrationSession& session, const SessionSnapshot& kept, const ReportOptions& options,
+                CalibrationReport& r) {
   if (options.splits <= 0) {
     r.split_problem = "left out (splits: 0)";
     return;
   }
-  SessionSnapshot consistent = snapshot;
-  consistent.samples.samples.clear();
-  for (int i : kept) consistent.samples.samples.push_back(snapshot.samples.samples[static_cast<std::size_t>(i)]);
   try {
-    r.split = session.split_check(consistent, options.splits, options.seed);
+    r.split = session.split_check(kept, options.splits, options.seed);
   } catch (const HandEyeError& e) {
     r.split_problem = e.what();
     return;
@@ -121,24 +84,24 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& snapsh
   r.split_half_sigma = r.predicted_sigma.cwiseProduct(mean_square.cwiseSqrt());
 }
 
-void rotation_axes(const SampleSet& samples, const std::vector<int>& kept, const ReportOptions& options,
-                   CalibrationReport& r) {
+void rotation_axes(const SampleSet& kept, const ReportOptions& options, CalibrationReport& r) {
   // M from every pair; the figure gets at most max_rotation_axes of them, evenly spread.
-  const std::size_t pairs = kept.size() * (kept.size() - std::min<std::size_t>(kept.size(), 1)) / 2;
+  const std::size_t n = kept.samples.size();
+  const std::size_t pairs = n * (n - std::min<std::size_t>(n, 1)) / 2;
   const std::size_t most = std::max<std::size_t>(1, options.max_rotation_axes);
   const std::size_t stride = std::max<std::size_t>(1, (pairs + most - 1) / most);
   std::size_t pair = 0;
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
-  for (std::size_t a = 0; a < kept.size(); ++a) {
-    for (std::size_t b = a + 1; b < kept.size(); ++b, ++pair) {
-      const PoseSample& i = samples.samples[static_cast<std::size_t>(kept[a])];
-      const PoseSample& j = samples.samples[static_cast<std::size_t>(kept[b])];
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b, ++pair) {
+      const PoseSample& i = kept.samples[a];
+      const PoseSample& j = kept.samples[b];
       // B = P_i P_j^-1: the camera-side motion of AX = XB, its axis in camera i's frame.
       const Eigen::Vector3d w = so3::log(i.T_camera_pattern.linear() * j.T_camera_pattern.linear().transpose());
       const double angle = w.norm();
       M += w * w.transpose();
       if (angle < 1e-9 || pair % stride != 0) continue;
-      r.rotation_axes.push_back({kept[a], kept[b], w / angle, angle});
+      r.rotation_axes.push_back({w / angle, angle});
     }
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(M);
@@ -156,11 +119,10 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
   std::sort(off.begin(), off.end(), [&](int a, int b) { return r.fits[a].sigmas > r.fits[b].sigmas; });
   for (int i : off) {
     const SampleFit& f = r.fits[static_cast<std::size_t>(i)];
-    const auto rejected = std::find_if(r.calibration.rejected.begin(), r.calibration.rejected.end(),
-                                       [&](const Calibration::Rejected& x) { return x.index == i; });
+    const Calibration::Rejected* rejected = rejection_of(r.calibration, i);
     std::string text = "sample " + std::to_string(i) + " is " + readable(f.sigmas) + " sigma off (" +
                        readable(f.translation * 1e3) + " mm, " + readable(f.rotation * 180.0 / M_PI) + " deg): remove it";
-    text += rejected != r.calibration.rejected.end()
+    text += rejected
                 ? " (X already leaves it out: " + rejected->reason + ")"
                 : " (X still uses it; the panel's Remove selected or /remove_sample " + std::to_string(i) + ")";
     advice.push_back(text);
@@ -242,6 +204,15 @@ ReportFiles write_report(const std::string& directory, const CalibrationReport& 
   return files;
 }
 
+Vector6d jackknife_sigma(const std::vector<Vector6d>& leave_one_out) {
+  if (leave_one_out.size() < 3) return Vector6d::Zero();
+  const double n = static_cast<double>(leave_one_out.size());
+  Vector6d mean = Vector6d::Zero(), sum = Vector6d::Zero();
+  for (const Vector6d& d : leave_one_out) mean += d / n;
+  for (const Vector6d& d : leave_one_out) sum += (d - mean).cwiseAbs2();
+  return ((n - 1.0) / n * sum).cwiseSqrt();
+}
+
 std::string camera_axis_name(const Eigen::Vector3d& direction) {
   const Eigen::Vector3d u = direction.normalized();
   const char* names[3] = {"the camera's x (image right)", "the camera's y (image down)",
@@ -257,15 +228,20 @@ std::string camera_axis_name(const Eigen::Vector3d& direction) {
 
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
                               const ReportOptions& options) {
+  return make_report(session, snapshot, session.calibrate(snapshot), options);
+}
+
+CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
+                              Calibration calibration, const ReportOptions& options) {
   CalibrationReport r;
-  r.calibration = session.calibrate(snapshot);
+  r.calibration = std::move(calibration);
   r.fits = sample_fits(snapshot.samples, r.calibration);
   r.advice_sigma = advice_threshold(r, options);
   r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  const std::vector<int> kept = kept_indices(snapshot.samples.samples.size(), r.calibration);
-  leave_one_out(session, snapshot, kept, r);
-  split_half(session, snapshot, kept, options, r);
-  rotation_axes(snapshot.samples, kept, options, r);
+  const SessionSnapshot kept{snapshot.generation, without_rejected(snapshot.samples, r.calibration)};
+  leave_one_out(session, kept, r);
+  split_half(session, kept, options, r);
+  rotation_axes(kept.samples, options, r);
   r.working_distance = session.settings().suggest.working_distance;
   r.object_sigma = object_sigma({r.calibration.T_parent_camera, r.calibration.pose_covariance}, r.working_distance);
   r.target_object_sigma = session.settings().target_object_sigma;

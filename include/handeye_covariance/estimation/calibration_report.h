@@ -14,7 +14,6 @@ namespace handeye {
 
 /// One motion's rotation between two kept samples, in the camera frame.
 struct MotionAxis {
-  int from = 0, to = 0;          // sample indices (the session's)
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit
   double angle = 0.0;            // rad
 };

@@ -60,6 +60,15 @@ struct SampleFit {
 /// the ones `calibration.rejected` names: the rejected are judged against the rest.
 std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration);
 
+/// What solve_robust said of sample `index`, or nullptr when it was kept.
+const Calibration::Rejected* rejection_of(const Calibration& calibration, int index);
+
+/// The factor on chi2(6) thresholds for samples whose squared Mahalanobis
+/// distances are `squared_distances`: their median over chi2(6)'s median (5.348),
+/// at least 1 (1 for none). A detector's decoupled covariance can understate a
+/// correlated truth; scaled so, samples are judged against each other (stage 2).
+double residual_scale(std::vector<double> squared_distances);
+
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);
 

@@ -49,6 +49,15 @@ struct ReportOptions {
 /// calibrate() does (too few samples, degenerate motions).
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
                               const ReportOptions& options = {});
+/// The same of `calibration`, which session.calibrate(snapshot) gave already (the
+/// node's last /calibrate): it is not solved again.
+CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
+                              Calibration calibration, const ReportOptions& options = {});
+
+/// Efron's jackknife 1 sigma per axis from the leave-one-out estimates d_i (each
+/// X_(i) against any one reference, ROS order): sqrt((n-1)/n * sum_i (d_i - mean)^2).
+/// Zero for fewer than 3 estimates.
+Vector6d jackknife_sigma(const std::vector<Vector6d>& leave_one_out);
 
 /// What write_report left in its directory.
 struct ReportFiles {
