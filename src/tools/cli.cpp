@@ -59,6 +59,22 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
   return run_tool("handeye_bag", command, args, out, err);
 }
 
+/// The session `handeye solve` and `handeye report` run on the samples of `input`:
+/// the file's setup, frames and noise (or --noise's), the options' rejection,
+/// method and robust mode, the node's other settings from `config`.
+CalibrationSession samples_session(const SampleSet& samples, const std::string& input, const SessionConfig& config,
+                                   const std::string& noise_path, bool keep_outliers, const std::string& method,
+                                   const std::string& robust) {
+  SessionSettings settings = session_settings(samples, config);
+  if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
+  settings.reject_outliers = !keep_outliers;
+  settings.method = method_from_string(method);
+  settings.robust = robust_from_string(robust);
+  CalibrationSession session(settings);
+  session.replace(samples.samples, "read " + input);
+  return session;
+}
+
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string input, output, noise_path, method = "joint", robust = "auto";
   bool keep_outliers = false;
@@ -90,13 +106,7 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   std::string split_report;
   if (const SampleSet* samples = std::get_if<SampleSet>(&data)) {
     // Samples go through the session the node and the bag replay use.
-    SessionSettings settings = session_settings(*samples);
-    if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
-    settings.reject_outliers = !keep_outliers;
-    settings.method = method_from_string(method);
-    settings.robust = robust_from_string(robust);
-    CalibrationSession session(settings);
-    session.replace(samples->samples, "read " + input);
+    const CalibrationSession session = samples_session(*samples, input, {}, noise_path, keep_outliers, method, robust);
     const SessionSnapshot snapshot = session.snapshot();
     calibration = session.calibrate(snapshot);
     context = io::context_of(snapshot.samples);
@@ -149,13 +159,7 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
   config.target_tolerance_mm = target_mm;
   const SampleSet samples = io::read_samples(input);
   // The session the node, solve and the bag replay use: the same X.
-  SessionSettings settings = session_settings(samples, config);
-  if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
-  settings.reject_outliers = !keep_outliers;
-  settings.method = method_from_string(method);
-  settings.robust = robust_from_string(robust);
-  CalibrationSession session(settings);
-  session.replace(samples.samples, "read " + input);
+  const CalibrationSession session = samples_session(samples, input, config, noise_path, keep_outliers, method, robust);
   const SessionSnapshot snapshot = session.snapshot();
   const CalibrationReport report = make_report(session, snapshot, report_options);
   out << io::human_summary(report.calibration, io::context_of(snapshot.samples));
