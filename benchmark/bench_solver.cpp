@@ -1,6 +1,7 @@
 // Solve-plus-covariance time, all sizes in one process so the ratios are fair.
 // Regenerate BENCHMARKS.md figures with:  ./scripts/bench
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
@@ -10,6 +11,18 @@
 namespace {
 
 using namespace handeye;
+
+/// Minor page faults so far: a solve that faults its buffers in anew each time
+/// (glibc returning freed memory to the kernel) pays for it here, about 10 us a
+/// fault on this sandbox. Reported per iteration, beside the time.
+long minor_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
+void count_faults(benchmark::State& state, long before) {
+  state.counters["faults"] = benchmark::Counter(static_cast<double>(minor_faults() - before), benchmark::Counter::kAvgIterations);
+}
 
 // Independent motion pairs, the paper's protocol at lambda = 1e-4.
 void BM_SolveMotions(benchmark::State& state) {
@@ -59,10 +72,12 @@ void BM_SolveJoint(benchmark::State& state) {
   const SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                               static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
   benchmark::DoNotOptimize(solve_joint(s.samples).pose_covariance);  // warm-up, as above
+  const long faults = minor_faults();
   for (auto _ : state) {
     Calibration c = solve_joint(s.samples);
     benchmark::DoNotOptimize(c.pose_covariance);
   }
+  count_faults(state, faults);
   state.SetComplexityN(state.range(0));
 }
 BENCHMARK(BM_SolveJoint)->Arg(30)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond)->Complexity(benchmark::oN);
@@ -74,10 +89,12 @@ void BM_SolveJointEstimatedNoise(benchmark::State& state) {
                                         static_cast<int>(state.range(0)) + 1, paper_noise(1e-5));
   s.samples.noise.reset();
   benchmark::DoNotOptimize(solve_joint(s.samples).pose_covariance);
+  const long faults = minor_faults();
   for (auto _ : state) {
     Calibration c = solve_joint(s.samples);
     benchmark::DoNotOptimize(c.pose_covariance);
   }
+  count_faults(state, faults);
 }
 BENCHMARK(BM_SolveJointEstimatedNoise)->Arg(30)->Unit(benchmark::kMicrosecond);
 
@@ -95,12 +112,14 @@ void BM_SolveJointSessions(benchmark::State& state) {
     sessions.push_back(s.samples);
   }
   for (const SampleSet& s : sessions) benchmark::DoNotOptimize(solve_joint(s).pose_covariance);
+  const long faults = minor_faults();
   for (auto _ : state) {
     for (const SampleSet& s : sessions) {
       Calibration c = solve_joint(s);
       benchmark::DoNotOptimize(c.pose_covariance);
     }
   }
+  count_faults(state, faults);
   state.counters["sessions"] = kSessions;
 }
 BENCHMARK(BM_SolveJointSessions)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);

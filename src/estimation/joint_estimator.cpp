@@ -22,20 +22,32 @@ using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
 
 namespace {
 
-/// One sample, as the solver needs it: the robot's link in the loop with its
-/// Jacobian, the view, and the stated noise (zero when none). The noise points
-/// into its Terms' storage: most samples share the global one, and a copy per
-/// sample is memory that every pass over 10^4 samples streams through.
+/// One sample, as the solver needs it: the robot's link V in the loop, the view
+/// P, and the stated noise (zero when none). Kept small, since every pass over
+/// 10^4 samples streams through them: rotations and translations without the
+/// Isometry's fourth row, no stored dV/dE (Rig::robot_link_jacobian: I eye-to-hand,
+/// the inverse's Jacobian of E = V^-1 eye-in-hand, which linearize writes out from V),
+/// and the noise as pointers into its Terms' storage (most samples share the global one).
 struct Term {
   Term() {}  // user-provided: a vector of 10^4 terms is not zero-filled before it is written
-  Isometry3d V, P;
-  Matrix6d dV_dE;
+  Matrix3d RV, RP;
+  Vector3d tV, tP;
+  bool link_is_inverse = false;  // V = E^-1 (eye-in-hand)
+  bool has_robot = false;
   const Matrix6d* camera_noise = nullptr;
   const Matrix6d* robot_noise = nullptr;
-  bool has_robot = false;
   const Matrix6d& camera() const { return *camera_noise; }
   const Matrix6d& robot() const { return *robot_noise; }
 };
+
+Term make_term(const Rig& rig, const PoseSample& sample) {
+  Term t;
+  const Isometry3d V = rig.robot_link(sample.T_base_effector);
+  t.RV = V.linear(), t.tV = V.translation();
+  t.RP = sample.T_camera_pattern.linear(), t.tP = sample.T_camera_pattern.translation();
+  t.link_is_inverse = rig.eye_in_hand();
+  return t;
+}
 
 /// The terms and the noise matrices they point to (reserved up front, so the
 /// pointers stay valid; moving the vector keeps its buffer).
@@ -60,11 +72,10 @@ struct Linear {
 
 /// e = (t_P - t_hat, log(R_P R_hat^T)) with P_hat = X^-1 V Y.
 Vector6d residual(const Term& t, const Frame& f) {
-  const Matrix3d RV = t.V.linear();
-  const Vector3d t_hat = f.RXt * (RV * f.tY + t.V.translation() - f.tX);
-  const Matrix3d R_hat = f.RXt * RV * f.RY;
+  const Vector3d t_hat = f.RXt * (t.RV * f.tY + t.tV - f.tX);
+  const Matrix3d R_hat = f.RXt * t.RV * f.RY;
   Vector6d e;
-  e << t.P.translation() - t_hat, so3::log(t.P.linear() * R_hat.transpose());
+  e << t.tP - t_hat, so3::log(t.RP * R_hat.transpose());
   return e;
 }
 
@@ -72,17 +83,19 @@ Vector6d residual(const Term& t, const Frame& f) {
 ///   d P_hat / d xi_X = [[-RX^T, RX^T [t_VY - t_X]x], [0, -RX^T]],
 ///   d P_hat / d xi_Y = diag(RX^T RV, RX^T RV),
 ///   d P_hat / d xi_E = diag(RX^T, RX^T) [[I, -[RV t_Y]x], [0, I]] dV/dE,
-/// and e's sensitivity to P_hat is -I for t and -J_r^-1(phi) for R
+/// with dV/dE = I eye-to-hand (V = E) and [[-RV, [t_V]x RV], [0, -RV]] eye-in-hand
+/// (V = E^-1), where the product is [[-RX^T RV, RX^T [t_VY]x RV], [0, -RX^T RV]];
+/// e's sensitivity to P_hat is -I for t and -J_r^-1(phi) for R
 /// (log(exp(phi) exp(-d)) = phi - J_r^-1(phi) d). Checked numerically in test_joint_estimator.
 void linearize(const Term& t, const Frame& f, Linear& out, bool with_robot = true) {
-  const Matrix3d RV = t.V.linear();
+  const Matrix3d& RV = t.RV;
   const Vector3d RV_tY = RV * f.tY;
-  const Vector3d t_VY = RV_tY + t.V.translation();
+  const Vector3d t_VY = RV_tY + t.tV;
   const Matrix3d RXt_RV = f.RXt * RV;
   const Vector3d t_hat = f.RXt * (t_VY - f.tX);
   const Matrix3d R_hat = RXt_RV * f.RY;
-  const Vector3d phi = so3::log(t.P.linear() * R_hat.transpose());
-  out.e << t.P.translation() - t_hat, phi;
+  const Vector3d phi = so3::log(t.RP * R_hat.transpose());
+  out.e << t.tP - t_hat, phi;
   const Matrix3d Jr_inverse = so3::left_jacobian_inverse(-phi);
   out.J.setZero();
   out.J.block<3, 3>(0, 0) = f.RXt;
@@ -91,11 +104,16 @@ void linearize(const Term& t, const Frame& f, Linear& out, bool with_robot = tru
   out.J.block<3, 3>(0, 6) = -RXt_RV;
   out.J.block<3, 3>(3, 9) = -Jr_inverse * RXt_RV;
   if (!with_robot) return;
-  Matrix6d chain = Matrix6d::Zero();  // diag(RX^T, RX^T) [[I, -[RV tY]x], [0, I]]
-  chain.topLeftCorner<3, 3>() = f.RXt;
-  chain.topRightCorner<3, 3>() = -f.RXt * so3::hat(RV_tY);
-  chain.bottomRightCorner<3, 3>() = f.RXt;
-  out.D.noalias() = chain.lazyProduct(t.dV_dE);
+  out.D.bottomLeftCorner<3, 3>().setZero();
+  if (t.link_is_inverse) {
+    out.D.topLeftCorner<3, 3>() = -RXt_RV;
+    out.D.topRightCorner<3, 3>().noalias() = f.RXt * so3::hat(t_VY) * RV;
+    out.D.bottomRightCorner<3, 3>() = -RXt_RV;
+  } else {
+    out.D.topLeftCorner<3, 3>() = f.RXt;
+    out.D.topRightCorner<3, 3>().noalias() = -f.RXt * so3::hat(RV_tY);
+    out.D.bottomRightCorner<3, 3>() = f.RXt;
+  }
 }
 
 /// Jw = L^-1 J by 3x3 blocks: L^-1 is lower triangular and J (linearize) is
@@ -429,9 +447,7 @@ Terms make_terms(const SampleSet& set, bool& given) {
       check_covariance(own->camera, where + ".pattern");
     }
     Term& t = terms[i];
-    t.V = set.rig.robot_link(sample.T_base_effector);
-    t.dV_dE = set.rig.robot_link_jacobian(sample.T_base_effector);
-    t.P = sample.T_camera_pattern;
+    t = make_term(set.rig, sample);
     t.camera_noise = global_camera, t.robot_noise = global_robot;
     if (own) {
       out.noises.push_back(own->camera.as_pose_covariance());
@@ -990,10 +1006,7 @@ Matrix12d sandwich(const Solution& s, double k_scaled) {
 }  // namespace
 
 JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Isometry3d& X, const Isometry3d& Y) {
-  Term t;
-  t.V = rig.robot_link(sample.T_base_effector);
-  t.dV_dE = rig.robot_link_jacobian(sample.T_base_effector);
-  t.P = sample.T_camera_pattern;
+  const Term t = make_term(rig, sample);
   Linear l;
   linearize(t, Frame(X, Y), l);
   JointResidual r;
