@@ -223,7 +223,7 @@ lines += [
     "solver below; bare-metal Linux takes 0.1-0.25 us). A solve at k = 1 000 allocates about 2 MB of per-motion",
     "state; glibc returns it to the kernel when the solve ends (heap trimming) and faults it back in",
     "at the next solve, about 230 faults per solve, which is about 2.5 ms here. `handeye_benchmark` reports",
-    "the faults per solve of the joint benchmarks (`faults`): the joint solve at 1 000 poses faulted 343",
+    "the faults per iteration of the joint benchmarks (`faults`; one solve, 32 in the sessions one): the solve at 1 000 poses faulted 343",
     "pages back in per solve (2.17 ms against 1.43 ms without) until its terms were made smaller; now",
     "none of the joint benchmarks faults in either column. The \"heap trimming off\" column",
     "(`MALLOC_TRIM_THRESHOLD_`, `MALLOC_MMAP_THRESHOLD_` raised) measures the solver itself; the",
