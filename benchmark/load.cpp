@@ -152,13 +152,9 @@ LoadReport run_load(const LoadOptions& o) {
 
   std::thread tf_thread = periodic(o.tf_rate, stop, [&] {
     const double t = elapsed();
-    geometry_msgs::TransformStamped tf;
-    tf.header.stamp = ros::Time::now();
-    tf.header.frame_id = o.base_frame;
-    tf.child_frame_id = o.effector_frame;
-    tf.transform = conversions::to_transform_msg(trajectory.effector_at(session_time(t)));
     tf2_msgs::TFMessage msg;
-    msg.transforms.push_back(tf);
+    msg.transforms.push_back(conversions::to_transform_stamped(trajectory.effector_at(session_time(t)), o.base_frame,
+                                                               o.effector_frame, ros::Time::now()));
     tf_pub.publish(msg);
     ++tf_sent;
   });

@@ -113,13 +113,9 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
       P = P * se3::make_pose(so3::exp(Eigen::Vector3d(0.35, 0, 0)), Eigen::Vector3d::Zero());  // a flipped pose
       ++result.wrong_detections;
     }
-    geometry_msgs::PoseWithCovarianceStamped pose;
-    pose.header.stamp = capture;
-    pose.header.frame_id = f.camera;
-    pose.pose.pose = conversions::to_pose_msg(P);
-    if (o.detection_covariance) {
-      pose.pose.covariance = conversions::to_msg(PoseWithCovariance{P, noise.as_pose_covariance()}).covariance;
-    }
+    // Without detection_covariance, zeros: what apriltag_ros and most detectors send.
+    const geometry_msgs::PoseWithCovarianceStamped pose = conversions::to_stamped_msg(
+        {P, o.detection_covariance ? noise.as_pose_covariance() : Matrix6d::Zero()}, f.camera, capture);
     const double delay = o.latency + o.latency_jitter * (2.0 * unit(rng) - 1.0);
     const ros::Time received = capture + ros::Duration(std::max(0.0, delay));
     if (o.detection_type == "tags") {
