@@ -11,13 +11,32 @@
 namespace handeye {
 namespace {
 
-/// Bilinear gray level, or NaN outside the image.
+/// Keys' cubic convolution kernel (a = -0.5, exact for quadratics).
+double keys_weight(double t) {
+  t = std::abs(t);
+  if (t < 1.0) return (1.5 * t - 2.5) * t * t + 1.0;
+  if (t < 2.0) return ((-0.5 * t + 2.5) * t - 4.0) * t + 2.0;
+  return 0.0;
+}
+
+/// Bicubic gray level (Keys), or NaN where its 4 x 4 support leaves the image.
+/// Not bilinear: a linear interpolant of a blurred edge pulls the gradient-weighted
+/// mean towards pixel centres (pixel locking), and where an edge runs along the
+/// pixel grid every point on it shares that pull. Noise-free rendered 2 x 2 boards
+/// at 0.85-1.0 m (corners_study, 6 sessions): corners 0.0019 px outwards from each
+/// tag's centre and X 0.027 mm RMS off bilinearly; 0.0006 px and 0.018 mm bicubically.
+/// Not cv::remap with INTER_CUBIC either: it rounds positions to 1/32 px.
 double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
   const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
-  if (x < 0 || y < 0 || x + 1 >= gray.cols || y + 1 >= gray.rows) return std::nan("");
-  const double fx = p.x() - x, fy = p.y() - y;
-  const auto at = [&](int u, int v) { return static_cast<double>(gray.at<std::uint8_t>(v, u)); };
-  return (1 - fy) * ((1 - fx) * at(x, y) + fx * at(x + 1, y)) + fy * ((1 - fx) * at(x, y + 1) + fx * at(x + 1, y + 1));
+  if (x < 1 || y < 1 || x + 2 >= gray.cols || y + 2 >= gray.rows) return std::nan("");
+  double value = 0.0;
+  for (int j = -1; j <= 2; ++j) {
+    const std::uint8_t* row = gray.ptr<std::uint8_t>(y + j);
+    double across = 0.0;
+    for (int i = -1; i <= 2; ++i) across += keys_weight(p.x() - (x + i)) * row[x + i];
+    value += keys_weight(p.y() - (y + j)) * across;
+  }
+  return value;
 }
 
 /// libapriltag's edge refinement (refine_edges in apriltag.c), which the edge-fit

@@ -23,15 +23,13 @@ namespace handeye {
 /// Why the window may narrow: the gradients within +-2 px also see the border's
 /// inner side, where white data cells lighten it, and the fitted edge moves
 /// outwards. Measured on rendered sessions (corners_study, mean outward shift per
-/// corner): a 2 x 2 board of 60 mm AprilTags at 0.4-1.0 m 0.0024 px with +-2 px,
-/// 0.0010 with +-1.5, 0.0002 with +-1; small enough to bias X and a refined focal
-/// length once the pixel noise is a few hundredths of a pixel (2 sigma coverage
-/// of the focal length 8%, 52%, 82%). It does not vanish: one 48 mm tag keeps
-/// 0.0034 px outwards with +-1 px (0.011 px at 0.85-1.0 m, its cells 3.6 px
-/// wide). And a +-1 px window is noisier, and on single 0.1 m markers at
-/// 0.4-0.8 m it shifts the corners inwards (0.0010-0.0015 px), which leaves one
-/// ArUco marker's X less honest (test_images: NEES 9.9 against 8.1 with +-2):
-/// the AprilTag detector narrows it, the ArUco detector does not.
+/// corner, noise-free, 0.4-1.0 m, bicubic samples): a 2 x 2 board of 60 mm
+/// AprilTags 0.0008 px with +-2 px, 0.0003 with +-1.5, 0.0002 with +-1; one 48 mm
+/// tag (cells 3.6 px wide at 1 m) 0.0059, 0.0037, 0.0017. Bilinear samples gave
+/// 0.0006 on the board and 0.0036 on the single tag with +-1 px, and with +-1 px
+/// shifted single 0.1 m ArUco markers at 0.4-0.8 m inwards (0.0010-0.0015 px;
+/// test_images: one ArUco marker's NEES of X 9.9 against 8.1 with +-2). The
+/// AprilTag detector narrows the window, the ArUco detector keeps +-2 px.
 ///
 /// `corners` in OpenCV's pixel convention (centres at integers), consecutive
 /// around the marker; `dark_inside` false for a square brighter than around it
