@@ -321,8 +321,6 @@ int main(int argc, char** argv) {
   options.render.supersample = 5;
   std::string kinds = "apriltag,charuco,chessboard";
   bool print_corner_bias = false, print_why = false;
-  double& focal_error = options.focal_error;
-  Eigen::Vector2d& distances = options.distances;
   const auto usage = [&] {
     std::fprintf(stderr, "usage: %s [--sessions M] [--images n] [--kinds apriltag,charuco,chessboard] "
                          "[--focal-error e] [--threads t] [--corner-bias] [--why] [--distances lo,hi (m)] [--supersample s] [--noise gray levels]\n", argv[0]);
@@ -341,11 +339,11 @@ int main(int argc, char** argv) {
     else if (key == "--supersample") options.render.supersample = std::max(1, std::atoi(value));
     else if (key == "--noise") options.render.noise_sigma = std::max(0.0, std::atof(value));
     else if (key == "--threads") threads = std::max(1, std::atoi(value));
-    else if (key == "--focal-error") focal_error = std::atof(value);
+    else if (key == "--focal-error") options.focal_error = std::atof(value);
     else if (key == "--kinds") kinds = value;
     else if (key == "--distances") {
-      if (std::sscanf(value, "%lf,%lf", &distances[0], &distances[1]) != 2 || !(distances[0] > 0.0) ||
-          !(distances[1] >= distances[0])) {
+      Eigen::Vector2d& d = options.distances;
+      if (std::sscanf(value, "%lf,%lf", &d[0], &d[1]) != 2 || !(d[0] > 0.0) || !(d[1] >= d[0])) {
         return usage();
       }
     } else {
@@ -353,7 +351,7 @@ int main(int argc, char** argv) {
     }
   }
   const double deg = 180.0 / M_PI;
-  if (focal_error == 0.0) {
+  if (options.focal_error == 0.0) {
     std::printf("| target | sessions (images used) | X RMS poses [mm / deg] | X RMS corners [mm / deg] | corners / poses | "
                 "corner-model bound [mm / deg] | corners / bound | poses / bound | NEES X poses | NEES X corners | per-image sigma |\n");
     std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -367,7 +365,7 @@ int main(int argc, char** argv) {
   while (std::getline(list, kind, ',')) {
     const Summary s = study(kind, M, options, threads);
     const Eigen::Vector2d poses = s.poses_ms.cwiseSqrt(), corners = s.corners_ms.cwiseSqrt(), bound = s.bound_ms.cwiseSqrt();
-    if (focal_error == 0.0) {
+    if (options.focal_error == 0.0) {
       std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2fx / %.2fx | %.2f | "
                   "%.2f | %.0f%% |\n",
                   kind.c_str(), s.sessions, s.images, poses[0] * 1e3, poses[1] * deg, corners[0] * 1e3, corners[1] * deg,

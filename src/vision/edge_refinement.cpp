@@ -1,6 +1,7 @@
 #include "edge_refinement.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -29,12 +30,17 @@ double keys_weight(double t) {
 double sample(const cv::Mat& gray, const Eigen::Vector2d& p) {
   const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
   if (x < 1 || y < 1 || x + 2 >= gray.cols || y + 2 >= gray.rows) return std::nan("");
+  std::array<double, 4> wx, wy;  // the four columns' and rows' weights, once each
+  for (int k = 0; k < 4; ++k) {
+    wx[k] = keys_weight(p.x() - (x + k - 1));
+    wy[k] = keys_weight(p.y() - (y + k - 1));
+  }
   double value = 0.0;
-  for (int j = -1; j <= 2; ++j) {
-    const std::uint8_t* row = gray.ptr<std::uint8_t>(y + j);
+  for (int j = 0; j < 4; ++j) {
+    const std::uint8_t* row = gray.ptr<std::uint8_t>(y + j - 1);
     double across = 0.0;
-    for (int i = -1; i <= 2; ++i) across += keys_weight(p.x() - (x + i)) * row[x + i];
-    value += keys_weight(p.y() - (y + j)) * across;
+    for (int i = 0; i < 4; ++i) across += wx[i] * row[x + i - 1];
+    value += wy[j] * across;
   }
   return value;
 }
