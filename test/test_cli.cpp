@@ -60,12 +60,13 @@ TEST(Cli, EstimatedNoiseIsAnnounced) {
   EXPECT_NE(handeye::io::read_file(result).find("estimated_from_residuals"), std::string::npos);
 }
 
-// The split-half check a user runs on a session: about 6 on an honest
-// simulated one; a few samples, a motions file and an unknown robust mode are refused.
+// The split-half check a user runs on a session: about 6 on an honest simulated
+// one, judged against its own reference (an honest covariance on the same poses);
+// a few samples, a motions file and an unknown robust mode are refused.
 TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
   const std::string samples = temp("split.yaml"), result = temp("split_result.yaml");
   ASSERT_EQ(run("sim --output " + samples + " --omit-noise-block --samples 60 --seed 3").exit_code, 0);
-  const CliRun r = run("solve --input " + samples + " --output " + result + " --split-check 40");
+  const CliRun r = run("solve --input " + samples + " --output " + result + " --split-check 40 --reference-sessions 30");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::size_t at = r.out.find("mean NEES of X_a - X_b ");
   ASSERT_NE(at, std::string::npos) << r.out;
@@ -73,7 +74,14 @@ TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
   EXPECT_GT(nees, 4.5) << r.out;
   EXPECT_LT(nees, 7.5) << r.out;
   EXPECT_NE(r.out.find("40 random splits into halves of 30 samples"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("consistent with an honest covariance"), std::string::npos) << r.out;
+  const std::string reference = "an honest covariance on these poses and this noise (middle 90%): ";
+  const std::size_t ref_at = r.out.find(reference);
+  ASSERT_NE(ref_at, std::string::npos) << r.out;
+  const double honest = std::stod(r.out.substr(ref_at + reference.size()));
+  EXPECT_GT(honest, 5.0) << r.out;
+  EXPECT_LT(honest, 7.5) << r.out;
+  EXPECT_NE(r.out.find("30 simulated sessions"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(": honest\n"), std::string::npos) << r.out;
 
   const std::string few = temp("split_few.yaml");
   ASSERT_EQ(run("sim --output " + few + " --samples 6").exit_code, 0);

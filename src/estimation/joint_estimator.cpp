@@ -256,10 +256,21 @@ class JointProblem {
 
   /// From now on each linearisation keeps D (the noise fit's robot factors need it).
   void keep_robot_jacobians() { keep_D_ = true; }
-  /// The stated camera noise's square roots, for the fit of its scale.
+  /// The stated camera noise's square roots F (F F^T = Sigma_P: the fit reads only
+  /// that product), for the fit of its scale: its Cholesky factor, or its
+  /// symmetric root when it is only semi-definite (a zero-noise axis).
   void set_camera_roots() {
     camera_roots_.resize(terms_.size());
     for (std::size_t i = 0; i < terms_.size(); ++i) {
+      if (i > 0 && terms_[i].camera_noise == terms_[i - 1].camera_noise) {  // the global noise, shared
+        camera_roots_[i] = camera_roots_[i - 1];
+        continue;
+      }
+      const Eigen::LLT<Matrix6d> llt(terms_[i].camera());
+      if (llt.info() == Eigen::Success) {
+        camera_roots_[i] = llt.matrixL();
+        continue;
+      }
       const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(terms_[i].camera());
       camera_roots_[i] = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
     }
@@ -1240,6 +1251,8 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     result.noise.robot = PoseNoise::from_pose_covariance(robot_mean + model.robot);
   }
 
+  result.residual_noise = Calibration::ResidualNoise{model.camera_scale, model.camera, model.robot};
+
   // Robust mode: heavy-tailed residuals get Huber's loss and the sandwich.
   const Matrix12d information_inverse = covariance_of(s);
   // X's block by X's inflation, Y's by Y's, X-Y by their geometric mean: D Sigma D stays a covariance.
@@ -1298,6 +1311,32 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
                        "input", "add samples with larger rotations about different axes, or reduce the noise");
   }
   return result;
+}
+
+std::vector<Matrix6d> residual_covariances(const SampleSet& samples, const Calibration& calibration) {
+  if (!calibration.pattern) {
+    throw HandEyeError(ErrorCode::InvalidNoise, "the calibration has no pattern pose to predict the views from",
+                       "calibration", "solve with the joint estimator (method joint or corners)");
+  }
+  const Eigen::Isometry3d& X = calibration.T_parent_camera;
+  const Eigen::Isometry3d& Y = calibration.pattern->pose;
+  const MeasurementNoise global = samples.noise ? *samples.noise : MeasurementNoise{};
+  std::vector<Matrix6d> out;
+  out.reserve(samples.samples.size());
+  for (const PoseSample& sample : samples.samples) {
+    const Matrix6d D = joint_residual(samples.rig, sample, X, Y).d_effector;
+    Matrix6d S;
+    if (const auto& model = calibration.residual_noise) {
+      const MeasurementNoise& stated = sample.noise ? *sample.noise : global;
+      S = model->camera_scale * stated.camera.as_pose_covariance() + model->camera +
+          D * (stated.robot.as_pose_covariance() + model->robot) * D.transpose();
+    } else {
+      const MeasurementNoise& noise = sample.noise ? *sample.noise : calibration.noise;
+      S = noise.camera.as_pose_covariance() + D * noise.robot.as_pose_covariance() * D.transpose();
+    }
+    out.push_back(0.5 * (S + S.transpose()));
+  }
+  return out;
 }
 
 }  // namespace handeye

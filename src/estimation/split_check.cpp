@@ -5,10 +5,13 @@
 #include <numeric>
 #include <random>
 
+#include <Eigen/Eigenvalues>
+
+#include "handeye_covariance/core/validation.h"
+
 namespace handeye {
 
-SplitCheck split_check(const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve, int splits,
-                       unsigned seed) {
+SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed) {
   const int n = static_cast<int>(samples.samples.size());
   if (n < 8) {
     throw HandEyeError(ErrorCode::TooFewMotions,
@@ -48,9 +51,127 @@ SplitCheck split_check(const SampleSet& samples, const std::function<Calibration
   check.splits = static_cast<int>(check.nees.size());
   if (check.splits > 0) {
     check.mean_nees = std::accumulate(check.nees.begin(), check.nees.end(), 0.0) / check.splits;
+    std::vector<double> sorted = check.nees;
+    std::sort(sorted.begin(), sorted.end());
+    const std::size_t cut = sorted.size() / 20;
+    check.trimmed_mean_nees =
+        std::accumulate(sorted.begin() + static_cast<long>(cut), sorted.end() - static_cast<long>(cut), 0.0) /
+        static_cast<double>(sorted.size() - 2 * cut);
     check.mean_nees_translation /= check.splits;
     check.mean_nees_rotation /= check.splits;
   }
+  return check;
+}
+
+const char* to_string(Honesty honesty) {
+  switch (honesty) {
+    case Honesty::Honest: return "honest";
+    case Honesty::Overconfident: return "overconfident";
+    case Honesty::Underconfident: return "underconfident";
+  }
+  return "honest";
+}
+
+SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, const std::vector<Matrix6d>& residual_covariances,
+                        std::mt19937_64& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  SampleSet out = samples;
+  const Eigen::Isometry3d& X = fitted.T_parent_camera;
+  const Eigen::Isometry3d& Y = fitted.pattern->pose;
+  for (std::size_t i = 0; i < out.samples.size(); ++i) {
+    PoseSample& s = out.samples[i];
+    // S = L L^T; a semi-definite S (a zero-noise axis) by its eigen root.
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(residual_covariances.at(i));
+    const Matrix6d root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    Vector6d z;
+    for (int k = 0; k < 6; ++k) z[k] = normal(rng);
+    const Vector6d eps = root * z;
+    const Eigen::Isometry3d predicted = samples.rig.predicted_view(s.T_base_effector, X, Y);
+    s.T_camera_pattern = se3::make_pose(so3::exp(eps.tail<3>()) * predicted.linear(), predicted.translation() + eps.head<3>());
+    s.corners.reset();
+  }
+  return out;
+}
+
+namespace {
+
+double quantile(std::vector<double> values, double p) {
+  std::sort(values.begin(), values.end());
+  const double at = p * static_cast<double>(values.size() - 1);
+  const std::size_t below = static_cast<std::size_t>(std::floor(at));
+  const std::size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (at - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
+std::string verdict_text(const HonestyCheck& c) {
+  const double sigma = std::sqrt(c.ratio);
+  switch (c.verdict) {
+    case Honesty::Overconfident:
+      return "overconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(sigma, 2) + "x too small";
+    case Honesty::Underconfident:
+      return "underconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(1.0 / sigma, 2) +
+             "x too large";
+    case Honesty::Honest: break;
+  }
+  return "honest";
+}
+
+}  // namespace
+
+HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
+                           const HonestyOptions& options) {
+  HonestyCheck check;
+  check.observed = split_check(samples, solve, options.splits, options.seed);
+  const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
+  SplitCheckReference& ref = check.reference;
+  ref.splits = std::min(options.splits, std::max(1, options.replicate_splits));
+  std::mt19937_64 rng(options.seed ^ 0x5eed5eedULL);
+  double within = 0.0;  // the mean over replicates of the NEES's variance across their splits
+  for (int r = 0; r < options.replicates; ++r) {
+    const SampleSet simulated = simulate_like(samples, fitted, S, rng);
+    const SplitCheck replicate = split_check(simulated, solve, ref.splits, options.seed);  // the session's own halves
+    if (replicate.splits == 0) {
+      ++ref.failed;
+      continue;
+    }
+    ref.means.push_back(replicate.trimmed_mean_nees);
+    // The spread across splits, of the middle 90% too (winsorised at its ends).
+    std::vector<double> sorted = replicate.nees;
+    std::sort(sorted.begin(), sorted.end());
+    const std::size_t cut = sorted.size() / 20;
+    double v = 0.0;
+    for (std::size_t k = 0; k < sorted.size(); ++k) {
+      const double nees = sorted[std::clamp(k, cut, sorted.size() - 1 - cut)];
+      v += (nees - replicate.trimmed_mean_nees) * (nees - replicate.trimmed_mean_nees);
+    }
+    within += replicate.splits > 1 ? v / (replicate.splits - 1) : 0.0;
+  }
+  ref.replicates = static_cast<int>(ref.means.size());
+  if (ref.replicates < 2 || check.observed.splits == 0) {
+    check.text = ref.replicates < 2 ? "no reference: fewer than 2 simulated sessions could be split"
+                                    : "no reference: no split of the session could be solved";
+    return check;
+  }
+  const double n = ref.replicates;
+  ref.mean = std::accumulate(ref.means.begin(), ref.means.end(), 0.0) / n;
+  within /= n;
+  double spread = 0.0;
+  for (double m : ref.means) spread += (m - ref.mean) * (m - ref.mean);
+  spread /= n - 1;
+  // Var(mean of m splits) = Var(U) + within / m, U the session's mean over all splits.
+  const double between = std::max(0.0, spread - within / ref.splits);
+  const double scale = spread > 0.0 ? std::sqrt((between + within / check.observed.splits) / spread) : 1.0;
+  std::vector<double> adjusted;
+  for (double m : ref.means) adjusted.push_back(ref.mean + scale * (m - ref.mean));
+  ref.low = quantile(adjusted, 0.05);
+  ref.high = quantile(adjusted, 0.95);
+  const double observed = check.observed.trimmed_mean_nees;
+  check.ratio = observed / ref.mean;
+  check.verdict = observed > ref.high   ? Honesty::Overconfident
+                  : observed < ref.low ? Honesty::Underconfident
+                                                       : Honesty::Honest;
+  check.inflation = check.verdict == Honesty::Overconfident ? check.ratio : 1.0;
+  check.text = verdict_text(check);
   return check;
 }
 

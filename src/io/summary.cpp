@@ -177,6 +177,25 @@ std::string split_check_summary(const SplitCheck& check) {
   return out;
 }
 
+std::string honesty_summary(const HonestyCheck& check) {
+  const SplitCheck& o = check.observed;
+  const SplitCheckReference& ref = check.reference;
+  std::string out = "  split-half check      " + std::to_string(o.splits) + " random splits into halves of " +
+                    std::to_string(o.half_size) + " samples";
+  if (o.failed > 0) out += " (" + std::to_string(o.failed) + " more could not be solved: " + o.first_failure + ")";
+  out += "\n";
+  if (o.splits == 0) return out + "    no split could be solved; the check says nothing\n";
+  out += "    mean NEES of X_a - X_b " + number_text(o.mean_nees, 3) + " (6 dof; translation " +
+         number_text(o.mean_nees_translation, 3) + ", rotation " + number_text(o.mean_nees_rotation, 3) +
+         "); of the middle 90% of splits " + number_text(o.trimmed_mean_nees, 3) + "\n";
+  if (ref.replicates == 0) return out + "    " + check.text + "\n";
+  out += "    an honest covariance on these poses and this noise (middle 90%): " + number_text(ref.mean, 3) + " (5-95%: " +
+         number_text(ref.low, 3) + " to " + number_text(ref.high, 3) + ", " + std::to_string(ref.replicates) +
+         " simulated sessions of " + std::to_string(ref.splits) + " splits)\n";
+  out += "    ratio " + number_text(check.ratio, 3) + ": " + check.text + "\n";
+  return out;
+}
+
 std::string report_summary(const CalibrationReport& report) {
   const auto row = [](const char* name, const Vector6d& sigma, const std::string& note) {
     char line[200];

@@ -187,6 +187,13 @@ SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int 
       seed);
 }
 
+HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
+                                               const HonestyOptions& options) const {
+  return handeye::honesty_check(
+      snapshot.samples, calibration, [this, &snapshot](const SampleSet& half) { return calibrate({snapshot.generation, half}); },
+      options);
+}
+
 SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {
   SuggestOptions options = settings_.suggest;
   if (!criterion.empty()) options.criterion = criterion_from_string(criterion);

@@ -78,7 +78,7 @@ CalibrationSession samples_session(const SampleSet& samples, const std::string& 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string input, output, noise_path, method = "joint", robust = "auto";
   bool keep_outliers = false;
-  int split_check = 0;
+  int split_check = 0, reference_sessions = 100;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
@@ -88,8 +88,11 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
       "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
       "robust", po::value(&robust),
       "joint: auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed; default), on, off")(
-      "split-check", po::value(&split_check)->implicit_value(40),
-      "samples: also solve N random halves (default 40) and print the mean NEES of their difference (honest: 6)")(
+      "split-check", po::value(&split_check)->implicit_value(200),
+      "samples: also solve N random halves (default 200) and compare the mean NEES of their difference with what an "
+      "honest covariance gives on these poses (a parametric bootstrap)")(
+      "reference-sessions", po::value(&reference_sessions),
+      "with --split-check: simulated sessions for the honest reference (default 100)")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
   po::variables_map vm;
@@ -110,7 +113,12 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
     const SessionSnapshot snapshot = session.snapshot();
     calibration = session.calibrate(snapshot);
     context = io::context_of(snapshot.samples);
-    if (split_check > 0) split_report = io::split_check_summary(session.split_check(snapshot, split_check));
+    if (split_check > 0) {
+      HonestyOptions honesty;
+      honesty.splits = split_check;
+      honesty.replicates = reference_sessions;
+      split_report = io::honesty_summary(session.honesty_check(snapshot, calibration, honesty));
+    }
   } else {
     if (split_check > 0) {
       throw HandEyeError(ErrorCode::MalformedFile, "--split-check applies to samples files", input,

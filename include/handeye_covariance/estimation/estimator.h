@@ -134,6 +134,17 @@ struct Calibration {
     bool at_bound = false; // the residuals do not support it: held at 0 (or its lowest value)
   };
   std::vector<NoiseComponent> noise_components;
+  /// Joint: the residual noise the covariance was computed with, for any view
+  /// (the samples' and new ones; joint_estimator.h residual_covariance):
+  ///   S = camera_scale Sigma_P + camera + D (Sigma_E + robot) D^T,
+  /// Sigma_P and Sigma_E the view's stated noise (its own, else the set's; zero
+  /// when none), D = d P_hat / d E at (X, Y). Absent (pairs): `noise` is S's.
+  struct ResidualNoise {
+    double camera_scale = 1.0;
+    Matrix6d camera = Matrix6d::Zero();  // camera frame, ROS order
+    Matrix6d robot = Matrix6d::Zero();   // base (or effector) frame, as E's perturbation
+  };
+  std::optional<ResidualNoise> residual_noise;
   /// Joint: the check of the residuals against the noise model and what followed.
   struct ResidualCheck {
     std::string test;        // e.g. "chi2 of the stated noise", "kurtosis of the Mahalanobis residuals"

@@ -103,6 +103,12 @@ struct JointResidual {
 JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Eigen::Isometry3d& X,
                              const Eigen::Isometry3d& Y);
 
+/// The residual covariance S_i of each sample of `samples` under `calibration`'s
+/// noise model (Calibration::residual_noise; `noise` for the pairs estimator), at
+/// its X and Y: what a view's residual e_i scatters with, about the prediction
+/// P_hat_i = X^-1 V_i Y. Every sample's, in order (the rejected too).
+std::vector<Matrix6d> residual_covariances(const SampleSet& samples, const Calibration& calibration);
+
 /// X with its covariance, Y (Calibration::pattern) with its covariance, and
 /// their cross block. method = Joint; both stage diagnostics hold the joint
 /// solve. Throws the degeneracy errors of solve(), InvalidNoise for a singular

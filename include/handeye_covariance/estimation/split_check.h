@@ -12,10 +12,12 @@
 #pragma once
 
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "handeye_covariance/estimation/estimator.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
 
@@ -24,6 +26,11 @@ struct SplitCheck {
   int failed = 0;           // splits where a half could not be solved (too few or degenerate samples)
   int half_size = 0;        // samples in the smaller half
   double mean_nees = 0.0;   // 6-dof, over the solved splits
+  /// The mean of the middle 90% of the splits' NEES (5% dropped at each end): what
+  /// the calibrated check compares, since a rare degenerate half (a noise number at
+  /// its bound) gives a NEES of thousands that would otherwise decide the mean. It
+  /// scales as the plain mean does: a covariance k times too small multiplies both by k.
+  double trimmed_mean_nees = 0.0;
   double mean_nees_translation = 0.0, mean_nees_rotation = 0.0;  // 3-dof blocks
   std::vector<double> nees;  // each split's
   /// Each solved split's d (ROS order, m and rad) and the 1 sigma per axis its
@@ -32,9 +39,77 @@ struct SplitCheck {
   std::string first_failure;  // the first half's error, when some failed
 };
 
+using SolveSamples = std::function<Calibration(const SampleSet&)>;
+
 /// `splits` random halves (seeded) of `samples`, each solved by `solve`.
 /// Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
-SplitCheck split_check(const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve, int splits,
-                       unsigned seed);
+SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed);
+
+// ---------------------------------------------------------------- calibrated to the session
+//
+// "Honest: 6" holds for large halves with a known noise. With 4-25 samples per
+// half and the noise estimated from them, an honest covariance's mean split-half
+// NEES is 6-7 with a long tail, and it depends on the poses: a reading of 8 may be
+// chance. The reference is what an honest covariance gives on this very session,
+// by a parametric bootstrap: sessions simulated at the session's own robot poses,
+// each view drawn about what the fitted X and Y predict with its own fitted
+// residual covariance S_i (joint_estimator.h, residual_covariances), each solved
+// and split exactly as the session (the same solve, the same halves).
+
+/// How many simulated sessions, and how many of the session's splits each solves.
+struct HonestyOptions {
+  int splits = 200;             // the session's random halves
+  int replicates = 100;         // simulated sessions
+  /// Each simulated session is split by the first this many of the session's
+  /// halves: its mean NEES has the same expectation as with all of them, and the
+  /// band is corrected for the extra spread of a mean over fewer splits.
+  int replicate_splits = 40;
+  unsigned seed = 1;
+};
+
+/// The reference distribution of the mean split-half NEES.
+struct SplitCheckReference {
+  int replicates = 0;           // simulated sessions whose check gave a mean
+  int failed = 0;               // simulated sessions whose splits all failed
+  int splits = 0;               // halves per simulated session
+  double mean = 0.0;            // of their trimmed means (SplitCheck): what an honest covariance averages here
+  /// The 5% and 95% quantiles of an honest session's mean over the session's own
+  /// number of splits: the replicates' means, their spread corrected from
+  /// `splits` to the session's (the within-session part of the variance of a mean
+  /// of m splits is v / m, v the NEES's variance across one session's splits).
+  double low = 0.0, high = 0.0;
+  std::vector<double> means;    // each replicate's trimmed mean NEES
+};
+
+enum class Honesty { Honest, Overconfident, Underconfident };
+const char* to_string(Honesty honesty);  // "honest" / "overconfident" / "underconfident"
+
+/// The session's split-half check against its reference, and what follows.
+struct HonestyCheck {
+  SplitCheck observed;
+  SplitCheckReference reference;
+  double ratio = 1.0;  // observed.trimmed_mean_nees / reference.mean: the covariance is this many times too small
+  /// Overconfident: above the reference's 95% quantile; underconfident: below its 5%.
+  Honesty verdict = Honesty::Honest;
+  /// What the covariance should be multiplied by to be honest here: the ratio when
+  /// overconfident, else 1 (an underconfident covariance is kept: it errs safe).
+  double inflation = 1.0;
+  /// A plain verdict: "honest", "overconfident x1.4: sigma is about 1.2x too small", ...
+  std::string text;
+};
+
+/// The split-half check of `samples` (as split_check) and its parametric-bootstrap
+/// reference from `fitted` (the calibration of all of `samples` by `solve`):
+/// options.replicates simulated sessions, each split by the session's own halves. Throws HandEyeError(TooFewMotions) for fewer than 8 samples,
+/// and InvalidNoise when `fitted` has no pattern pose (the pairs estimator).
+HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
+                           const HonestyOptions& options = {});
+
+/// The session simulated once at its own robot poses (the reference's replicate):
+/// each view P_i = exp(eps_i) P_hat_i, eps_i ~ N(0, S_i) (left perturbation, ROS
+/// order), P_hat_i what `fitted`'s X and Y predict. Each sample keeps its stated
+/// noise; its corners are dropped (they belong to the real view).
+SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, const std::vector<Matrix6d>& residual_covariances,
+                        std::mt19937_64& rng);
 
 }  // namespace handeye

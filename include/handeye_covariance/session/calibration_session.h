@@ -147,6 +147,11 @@ class CalibrationSession {
   /// The split-half check (split_check.h) of this session's calibration: `splits`
   /// random halves, each calibrated as calibrate() does.
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;
+  /// The split-half check against its parametric-bootstrap reference at this
+  /// session's own poses and fitted noise (split_check.h, honesty_check), from
+  /// `calibration` (calibrate()'s of the snapshot). Throws HandEyeError.
+  HonestyCheck honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
+                             const HonestyOptions& options = {}) const;
   /// Ranked next poses and the plan to the target. Throws HandEyeError (no
   /// estimate, every candidate refused, unknown criterion).
   SuggestResult suggest(const SessionSnapshot& snapshot, const SuggestRequest& request) const;
