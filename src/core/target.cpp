@@ -96,6 +96,27 @@ Eigen::Isometry3d target_face(const Target& target) {
   return se3::make_pose(target.markers.tags.front().T_pattern_tag.linear(), centre);
 }
 
+Eigen::Vector2d target_face_size(const Target& target) {
+  switch (target.kind) {
+    case TargetKind::Chessboard:
+      return Eigen::Vector2d(target.chessboard.columns - 1, target.chessboard.rows - 1) * target.chessboard.square;
+    case TargetKind::Charuco:
+      return Eigen::Vector2d(target.charuco.columns - 2, target.charuco.rows - 2) * target.charuco.square;
+    case TargetKind::Markers:
+      break;
+  }
+  // The markers' corners in the face's frame: their extent along its x and y.
+  const Eigen::Isometry3d face_inverse = target_face(target).inverse();
+  Eigen::Vector2d low = Eigen::Vector2d::Constant(INFINITY), high = -low;
+  for (const TagPlacement& tag : target.markers.tags) {
+    for (const Eigen::Vector3d& corner : tag.corners()) {
+      const Eigen::Vector2d p = (face_inverse * corner).head<2>();
+      low = low.cwiseMin(p), high = high.cwiseMax(p);
+    }
+  }
+  return target.markers.tags.empty() ? Eigen::Vector2d::Zero() : Eigen::Vector2d(high - low);
+}
+
 TagLayout aruco_grid_layout(const std::string& name, int columns, int rows, double marker, double separation,
                             int first_id) {
   TagLayout layout;

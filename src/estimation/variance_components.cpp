@@ -85,15 +85,16 @@ Evaluation evaluate(const VarianceComponentData& data, const VectorXd& theta, bo
   std::vector<int> diagonal_entries, other_entries;
   for (int k : entry_components) (data.entries[k].first == data.entries[k].second ? diagonal_entries : other_entries).push_back(k);
   Matrix6d sum_AA = Matrix6d::Zero(), sum_AQ = Matrix6d::Zero(), sum_B = Matrix6d::Zero();
-  Eigen::Matrix<double, 6, 12> rows_AA = Eigen::Matrix<double, 6, 12>::Zero(), rows_AQ = Eigen::Matrix<double, 6, 12>::Zero();
+  using Columns = Eigen::Matrix<double, 6, kMaxFactorColumns>;
+  Columns rows_AA = Columns::Zero(), rows_AQ = Columns::Zero();
   std::vector<double> pair_information(pairs.size(), 0.0), pair_average(pairs.size(), 0.0);
   Evaluation ev;
   double log_likelihood = 0.0;
   ev.score = VectorXd::Zero(K), ev.information = MatrixXd::Zero(K, K), ev.average_information = MatrixXd::Zero(K, K);
   // The factors are handled column by column (fixed 6-vectors), so that no
   // product runs through Eigen's dynamic-size kernels.
-  Eigen::Matrix<double, 6, 12> AF, QF;
-  Eigen::Matrix<double, 12, 12> Z, W;  // F^T A F, F^T Q F
+  Columns AF, QF;
+  Eigen::Matrix<double, kMaxFactorColumns, kMaxFactorColumns> Z, W;  // F^T A F, F^T Q F
   for (std::size_t i = 0; i < data.fixed.size(); ++i) {
     const ComponentFactors& F = data.factors[i];
     const int width = static_cast<int>(F.cols());
@@ -274,6 +275,34 @@ bool inverse_cholesky(const Matrix6d& S, Matrix6d& L_inverse) {
   if (!cholesky_columns<0>(S, L, reciprocal)) return false;
   inverse_rows<0>(L, reciprocal, L_inverse);
   return true;
+}
+
+ScoreTest score_test(const VarianceComponentData& data, const VectorXd& theta, int k) {
+  VectorXd at = theta;
+  at[k] = 0.0;
+  const Evaluation ev = evaluate(data, at);
+  ScoreTest out;
+  const double g = ev.score[k];
+  if (!std::isfinite(ev.log_likelihood) || !(g > 0.0)) return out;
+  // The others' information block, those with any (a number at a bound still counts).
+  std::vector<int> others;
+  for (int l = 0; l < static_cast<int>(theta.size()); ++l) {
+    if (l != k && ev.information(l, l) > 0.0) others.push_back(l);
+  }
+  double effective = ev.information(k, k);
+  if (!others.empty()) {
+    MatrixXd I_oo(others.size(), others.size());
+    VectorXd I_ok(others.size());
+    for (std::size_t a = 0; a < others.size(); ++a) {
+      I_ok[a] = ev.information(others[a], k);
+      for (std::size_t b = 0; b < others.size(); ++b) I_oo(a, b) = ev.information(others[a], others[b]);
+    }
+    effective -= I_ok.dot(I_oo.ldlt().solve(I_ok));
+  }
+  if (!(effective > 0.0)) return out;
+  out.statistic = g * g / effective;
+  out.step = g / effective;
+  return out;
 }
 
 void add_factor_component(VarianceComponentData& data, int rank) {

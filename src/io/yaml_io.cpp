@@ -400,6 +400,14 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
     set.rig.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
   }
   if (root["pattern_face"]) set.rig.T_pattern_face = read_pose(root["pattern_face"], top / "pattern_face");
+  if (const YAML::Node size = root["pattern_face_size"]) {
+    const auto wh = as_numbers<2>(size, top / "pattern_face_size", "the target's width and height, m");
+    set.rig.face_size = Eigen::Vector2d(wh[0], wh[1]);
+    if (!(set.rig.face_size.array() >= 0.0).all()) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the target's width and height must be lengths >= 0 (m)",
+                         (top / "pattern_face_size").str(), "give [width, height] in m, e.g. [0.189, 0.118]");
+    }
+  }
   set.noise = optional_noise(root, top, "effector", "pattern");
   const YAML::Node list = require_list(root, "samples", top);
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -440,6 +448,10 @@ std::string format_samples(const SampleSet& set) {
   }
   if (set.rig.T_pattern_face.matrix() != Eigen::Matrix4d::Identity()) {
     emit_keyed_pose(out, "pattern_face", set.rig.T_pattern_face);  // where new views look (Rig)
+  }
+  if (!set.rig.face_size.isZero(0.0)) {  // the target's size: the view-following noise's shape (Rig)
+    out << YAML::Key << "pattern_face_size" << YAML::Value << YAML::Flow << YAML::BeginSeq << set.rig.face_size.x()
+        << set.rig.face_size.y() << YAML::EndSeq;
   }
   if (set.noise) {
     out << YAML::Key << "noise" << YAML::Value;

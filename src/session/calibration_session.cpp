@@ -21,7 +21,11 @@ JointOptions::Robust robust_from_string(const std::string& name) {
 SessionSettings session_settings(const SessionConfig& config) {
   SessionSettings s;
   s.rig = config.rig;
-  if (!config.target_file.empty()) s.rig.T_pattern_face = target_face(io::read_target(expand_home(config.target_file)));
+  if (!config.target_file.empty()) {
+    const Target target = io::read_target(expand_home(config.target_file));
+    s.rig.T_pattern_face = target_face(target);
+    s.rig.face_size = target_face_size(target);
+  }
   s.sampler = config.sampler;
   if (!config.noise_config.empty()) s.noise = io::read_noise_file(expand_home(config.noise_config));
   s.reject_outliers = config.reject_outliers;
@@ -43,8 +47,9 @@ SessionSettings session_settings(const SessionConfig& config) {
 SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config) {
   SessionSettings s = session_settings(config);
   const Eigen::Isometry3d face = s.rig.T_pattern_face;
+  const Eigen::Vector2d face_size = s.rig.face_size;
   s.rig = samples.rig;
-  if (!config.target_file.empty()) s.rig.T_pattern_face = face;  // the configured target over the file's
+  if (!config.target_file.empty()) s.rig.T_pattern_face = face, s.rig.face_size = face_size;  // the configured target over the file's
   s.noise = samples.noise;
   s.session_file.clear();
   return s;

@@ -88,6 +88,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   rig.setup = setup;
   rig.frames = {"base", "effector", "camera", "pattern"};
   rig.T_pattern_face = target_face(target);  // where suggested views look (a board's frame is at its corner)
+  rig.face_size = target_face_size(target);   // the view-following noise's shape
   const images::ImageSession found = images::detect_images(inputs, camera, target, rig, progress);
   char line[256];
   for (const images::ImageReport& r : found.images) {

@@ -45,6 +45,10 @@ struct Rig {
   /// ChArUco board's frame is OpenCV's (a corner, z into the board). New views
   /// (next-best-pose candidates) look at the face, not at the frame's origin.
   Eigen::Isometry3d T_pattern_face = Eigen::Isometry3d::Identity();
+  /// The printed face's width and height (m) about T_pattern_face, over its
+  /// detected points (core/target.h target_face_size); zero when the target is not
+  /// known. The view-following noise model takes its shape from it (view_noise.h).
+  Eigen::Vector2d face_size = Eigen::Vector2d::Zero();
 
   bool eye_in_hand() const { return setup == Setup::EyeInHand; }
   /// X's parent frame: the effector (eye_in_hand) or the base (eye_to_hand).

@@ -64,4 +64,8 @@ Target make_target(const TagLayout& markers);
 /// the centroid of their centres, turned as the first marker.
 Eigen::Isometry3d target_face(const Target& target);
 
+/// The width and height (m) of the target's detected points about target_face:
+/// a chessboard's and a ChArUco board's inner corners, the markers' corners.
+Eigen::Vector2d target_face_size(const Target& target);
+
 }  // namespace handeye

@@ -134,15 +134,32 @@ struct Calibration {
     bool at_bound = false; // the residuals do not support it: held at 0 (or its lowest value)
   };
   std::vector<NoiseComponent> noise_components;
+  /// Joint, noise estimated: the noise models that were compared, by BIC (the
+  /// restricted log-likelihood, less half of log(6n - 12) per number), and which one
+  /// the covariance uses. A candidate whose score test at the chosen model promised
+  /// less than BIC's price of its one number is not fitted.
+  struct NoiseCandidate {
+    std::string name;             // e.g. "camera variances, robot rotation", "+ view-following"
+    int numbers = 0;              // its free noise numbers
+    double score = 0.0;           // the score test that decided whether to fit it (0 for the first)
+    bool fitted = false, chosen = false;
+    double log_likelihood = 0.0;  // restricted, up to a constant the candidates share (fitted only)
+    double bic = 0.0;             // -2 log_likelihood + numbers log(6n - 12) (fitted only)
+  };
+  std::vector<NoiseCandidate> noise_candidates;
   /// Joint: the residual noise the covariance was computed with, for any view
   /// (the samples' and new ones; joint_estimator.h residual_covariance):
-  ///   S = camera_scale Sigma_P + camera + D (Sigma_E + robot) D^T,
+  ///   S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T,
   /// Sigma_P and Sigma_E the view's stated noise (its own, else the set's; zero
   /// when none), D = d P_hat / d E at (X, Y). Absent (pairs): `noise` is S's.
   struct ResidualNoise {
     double camera_scale = 1.0;
     Matrix6d camera = Matrix6d::Zero();  // camera frame, ROS order
     Matrix6d robot = Matrix6d::Zero();   // base (or effector) frame, as E's perturbation
+    /// The view-following part, view_scale G(P) (core/view_noise.h: planar_view_covariance
+    /// of view_points at the view P); 0 when the model has none.
+    double view_scale = 0.0;
+    std::vector<Eigen::Vector3d> view_points;
   };
   std::optional<ResidualNoise> residual_noise;
   /// Joint: the check of the residuals against the noise model and what followed.

@@ -35,8 +35,11 @@ struct VarianceComponent {
   double lower = 0.0;
 };
 
-/// Every component's factor side by side: at most 12 columns (no heap).
-using ComponentFactors = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 12>;
+/// Every component's factor side by side: at most kMaxFactorColumns columns (no heap):
+/// a camera scale or a view's shape (6), the robot's translation and rotation (3 + 3),
+/// or the camera's translation and rotation (3 + 3).
+constexpr int kMaxFactorColumns = 18;
+using ComponentFactors = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxFactorColumns>;
 
 struct VarianceComponentData {
   std::vector<Matrix6d> fixed;     // S0_i
@@ -104,6 +107,19 @@ Matrix lower_triangular_inverse(const Matrix& L, bool unit_diagonal) {
   }
   return inverse;
 }
+
+/// The one-sided score test of component k at its lower bound, the others held at
+/// theta (theta_k is read as the bound): is the component worth fitting? With g_k
+/// the REML score and I the expected information, I_eff = I_kk - I_ko I_oo^-1 I_ok
+/// (what k adds beside the others), the statistic is g_k^2 / I_eff when g_k > 0 and
+/// 0 otherwise: to first order the rise of twice the log-likelihood a fit of k would
+/// bring (a half chi2(1) mixture when k adds nothing). `step` is g_k / I_eff, a
+/// Fisher step from the bound, a start for that fit.
+struct ScoreTest {
+  double statistic = 0.0;
+  double step = 0.0;
+};
+ScoreTest score_test(const VarianceComponentData& data, const Eigen::VectorXd& theta, int k);
 
 /// Adds a component to `data` (factor columns, or a shared covariance entry).
 void add_factor_component(VarianceComponentData& data, int rank);
