@@ -68,26 +68,33 @@ TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
   ASSERT_EQ(run("sim --output " + samples + " --omit-noise-block --samples 60 --seed 3").exit_code, 0);
   const CliRun r = run("solve --input " + samples + " --output " + result + " --split-check 40 --reference-sessions 30");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::size_t at = r.out.find("mean NEES of X_a - X_b ");
+  const std::string verdict = "  honesty check         honest (split-half NEES ";
+  const std::size_t at = r.out.find(verdict);
   ASSERT_NE(at, std::string::npos) << r.out;
-  const double nees = std::stod(r.out.substr(at + std::string("mean NEES of X_a - X_b ").size()));
+  const double nees = std::stod(r.out.substr(at + verdict.size()));
   EXPECT_GT(nees, 4.5) << r.out;
   EXPECT_LT(nees, 7.5) << r.out;
-  EXPECT_NE(r.out.find("40 random splits into halves of 30 samples"), std::string::npos) << r.out;
-  const std::string reference = "an honest covariance on these poses and this noise (middle 90%): ";
-  const std::size_t ref_at = r.out.find(reference);
-  ASSERT_NE(ref_at, std::string::npos) << r.out;
-  const double honest = std::stod(r.out.substr(ref_at + reference.size()));
+  const std::size_t against = r.out.find(" against ", at);
+  ASSERT_NE(against, std::string::npos) << r.out;
+  const double honest = std::stod(r.out.substr(against + 9));
   EXPECT_GT(honest, 5.0) << r.out;
   EXPECT_LT(honest, 7.5) << r.out;
-  EXPECT_NE(r.out.find("30 simulated sessions"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find(": honest\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("40 random splits into halves of 30 (middle 90%); reference: 30 simulated sessions"),
+            std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("OVERCONFIDENT"), std::string::npos) << r.out;
+  // The result file records the check.
+  const YAML::Node written = YAML::LoadFile(result);
+  EXPECT_EQ(written["honesty"]["verdict"].as<std::string>(), "honest");
+  EXPECT_EQ(written["honesty"]["splits"].as<int>(), 40);
+  EXPECT_DOUBLE_EQ(written["honesty"]["inflation"].as<double>(), 1.0);
+  EXPECT_FALSE(written["honesty"]["model_covariance"]);
 
   const std::string few = temp("split_few.yaml");
   ASSERT_EQ(run("sim --output " + few + " --samples 6").exit_code, 0);
-  const CliRun too_few = run("solve --input " + few + " --output " + temp("split_few_result.yaml") + " --split-check");
-  EXPECT_EQ(too_few.exit_code, 2);
-  EXPECT_NE(too_few.err.find("at least 8 samples"), std::string::npos) << too_few.err;
+  const CliRun too_few = run("solve --input " + few + " --output " + temp("split_few_result.yaml") + " --split-check 40");
+  EXPECT_EQ(too_few.exit_code, 0) << too_few.err;
+  EXPECT_NE(too_few.out.find("honesty check         not run: it needs 8 kept samples (two halves of 4), there are 6"),
+            std::string::npos) << too_few.out;
   const CliRun bad_mode = run("solve --input " + samples + " --output " + temp("split_bad.yaml") + " --robust sometimes");
   EXPECT_EQ(bad_mode.exit_code, 2);
   EXPECT_NE(bad_mode.err.find("unknown robust mode `sometimes`"), std::string::npos) << bad_mode.err;
@@ -280,7 +287,7 @@ TEST(Cli, NoiseMeasuresTheSimulatedNoiseAndSolveAcceptsIt) {
     EXPECT_NEAR(measured.camera.translation(axis, axis) / std::pow(0.3e-3, 2), 1.0, band) << axis;
     EXPECT_NEAR(measured.camera.rotation(axis, axis) / std::pow(0.04 * M_PI / 180, 2), 1.0, band) << axis;
   }
-  const CliRun solved = run("solve --input " + samples + " --noise " + noise + " --output " + result);
+  const CliRun solved = run("solve --input " + samples + " --noise " + noise + " --output " + result + " --split-check 0");
   ASSERT_EQ(solved.exit_code, 0) << solved.err;
   EXPECT_NE(solved.out.find("noise                 given"), std::string::npos) << solved.out;
 }

@@ -290,12 +290,12 @@ TEST(RealData, TheReportsOfTheRealSessions) {
     const CalibrationReport r = make_report(calibration, calibration.snapshot());
     const int n = static_cast<int>(session.samples.samples.size());
     EXPECT_EQ(r.leave_one_out_solved, n) << c.name;
-    EXPECT_GT(r.split.splits, 30) << c.name << ": " << r.split_problem;
+    EXPECT_GT(r.honesty.observed.splits, 30) << c.name << ": " << r.split_problem;
     int called_out = 0;
     for (const SampleFit& f : r.fits) called_out += f.sigmas > r.advice_sigma ? 1 : 0;
     EXPECT_LE(4 * called_out, n) << c.name;
     std::printf("[report, real %s, %d samples] threshold %.1f sigma, %d called out; split-half NEES %.2f\n%s", c.name, n,
-                r.advice_sigma, called_out, r.split.mean_nees, io::report_summary(r).c_str());
+                r.advice_sigma, called_out, r.honesty.observed.mean_nees, io::report_summary(r).c_str());
   }
 }
 

@@ -1607,12 +1607,8 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
 }
 
 std::vector<Matrix6d> residual_covariances(const SampleSet& samples, const Calibration& calibration) {
-  if (!calibration.pattern) {
-    throw HandEyeError(ErrorCode::InvalidNoise, "the calibration has no pattern pose to predict the views from",
-                       "calibration", "solve with the joint estimator (method joint or corners)");
-  }
   const Eigen::Isometry3d& X = calibration.T_parent_camera;
-  const Eigen::Isometry3d& Y = calibration.pattern->pose;
+  const Eigen::Isometry3d Y = calibration.pattern ? calibration.pattern->pose : pattern_pose(samples, X);
   const MeasurementNoise global = samples.noise ? *samples.noise : MeasurementNoise{};
   std::vector<Matrix6d> out;
   out.reserve(samples.samples.size());

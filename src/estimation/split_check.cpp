@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/estimation/noise_estimation.h"
 
 namespace handeye {
 
@@ -72,12 +73,38 @@ const char* to_string(Honesty honesty) {
   return "honest";
 }
 
+void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
+  Calibration::Honesty h;
+  h.splits = check.observed.splits;
+  h.half_size = check.observed.half_size;
+  h.split_half_nees = check.observed.trimmed_mean_nees;
+  h.replicates = check.reference.replicates;
+  h.reference_mean = check.reference.mean, h.reference_low = check.reference.low, h.reference_high = check.reference.high;
+  h.ratio = check.ratio;
+  h.verdict = check.reference.replicates > 0 ? to_string(check.verdict) : "not run";
+  h.text = check.text;
+  h.model_pose_covariance = c.pose_covariance;
+  if (inflate && check.verdict == Honesty::Overconfident && check.inflation > 1.0) {
+    const double k = check.inflation;
+    h.inflation = k;
+    c.pose_covariance *= k;
+    c.rotation_covariance *= k;
+    c.translation_covariance *= k;
+    c.cross_covariance *= k;
+    if (c.pattern) c.pattern->covariance *= k;
+    c.warnings.insert(c.warnings.begin(),
+                      "the split-half check says the noise model is " + check.text + "; the covariance is the model's x" +
+                          number_text(k, 3) + " (the model's alone: --no-inflation)");
+  }
+  c.honesty = h;
+}
+
 SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, const std::vector<Matrix6d>& residual_covariances,
                         std::mt19937_64& rng) {
   std::normal_distribution<double> normal(0.0, 1.0);
   SampleSet out = samples;
   const Eigen::Isometry3d& X = fitted.T_parent_camera;
-  const Eigen::Isometry3d& Y = fitted.pattern->pose;
+  const Eigen::Isometry3d Y = fitted.pattern ? fitted.pattern->pose : pattern_pose(samples, X);
   for (std::size_t i = 0; i < out.samples.size(); ++i) {
     PoseSample& s = out.samples[i];
     // S = L L^T; a semi-definite S (a zero-noise axis) by its eigen root.
@@ -127,7 +154,11 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
   ref.splits = std::min(options.splits, std::max(1, options.replicate_splits));
   std::mt19937_64 rng(options.seed ^ 0x5eed5eedULL);
   double within = 0.0;  // the mean over replicates of the NEES's variance across their splits
-  for (int r = 0; r < options.replicates; ++r) {
+  const int n = static_cast<int>(samples.samples.size());
+  const int replicates = n <= options.full_replicates_up_to
+                             ? options.replicates
+                             : std::max(std::min(20, options.replicates), options.replicates * options.full_replicates_up_to / n);
+  for (int r = 0; r < replicates; ++r) {
     const SampleSet simulated = simulate_like(samples, fitted, S, rng);
     const SplitCheck replicate = split_check(simulated, solve, ref.splits, options.seed);  // the session's own halves
     if (replicate.splits == 0) {
@@ -152,12 +183,12 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
                                     : "no reference: no split of the session could be solved";
     return check;
   }
-  const double n = ref.replicates;
-  ref.mean = std::accumulate(ref.means.begin(), ref.means.end(), 0.0) / n;
-  within /= n;
+  const double count = ref.replicates;
+  ref.mean = std::accumulate(ref.means.begin(), ref.means.end(), 0.0) / count;
+  within /= count;
   double spread = 0.0;
   for (double m : ref.means) spread += (m - ref.mean) * (m - ref.mean);
-  spread /= n - 1;
+  spread /= count - 1;
   // Var(mean of m splits) = Var(U) + within / m, U the session's mean over all splits.
   const double between = std::max(0.0, spread - within / ref.splits);
   const double scale = spread > 0.0 ? std::sqrt((between + within / check.observed.splits) / spread) : 1.0;

@@ -78,6 +78,13 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
   const std::string parent = name_or(context.parent, context.setup == Setup::EyeToHand ? "base" : "parent");
   const std::string child = name_or(context.child, "camera");
   std::string out;
+  if (c.honesty && c.honesty->inflation > 1.0) {  // first: what the covariance below is
+    const Calibration::Honesty& h = *c.honesty;
+    out += line("OVERCONFIDENT noise model on this session: split-half NEES %s against %s for an honest covariance on "
+                "these poses; the covariances below are the model's x%s (the model's alone: --no-inflation)",
+                number_text(h.split_half_nees, 3).c_str(), number_text(h.reference_mean, 3).c_str(),
+                number_text(h.inflation, 3).c_str());
+  }
   out += line("Hand-eye calibration%s: X = T_%s_%s (maps %s points into %s)",
               context.setup ? (std::string(" (") + to_string(*context.setup) + ")").c_str() : "",
               parent.c_str(), child.c_str(), child.c_str(), parent.c_str());
@@ -141,6 +148,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                : line("  covariance            inverse information x%.3f (X), x%.3f (pattern)", c.covariance_inflation,
                       c.pattern_covariance_inflation);
   }
+  if (c.honesty) out += honesty_lines(*c.honesty);
   if (c.method == Method::Joint || c.method == Method::Corners) {
     out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,
                 to_string(c.rotation_stage.stop_reason), c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof),
@@ -157,42 +165,14 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
   return out;
 }
 
-std::string split_check_summary(const SplitCheck& check) {
-  std::string out = "  split-half check      " + std::to_string(check.splits) + " random splits into halves of " +
-                    std::to_string(check.half_size) + " samples";
-  if (check.failed > 0) out += " (" + std::to_string(check.failed) + " more could not be solved: " + check.first_failure + ")";
-  out += "\n";
-  if (check.splits == 0) return out + "    no split could be solved; the check says nothing\n";
-  out += "    mean NEES of X_a - X_b " + number_text(check.mean_nees, 3) + " (6 dof; translation " +
-         number_text(check.mean_nees_translation, 3) + ", rotation " + number_text(check.mean_nees_rotation, 3) +
-         "; honest: 6, 3, 3)\n";
-  if (check.mean_nees > 7.5) {
-    out += "    the covariance is overconfident for sessions of this kind: try --robust on, or look for a bad sample or a "
-           "systematic error (camera intrinsics, robot kinematics)\n";
-  } else if (check.mean_nees < 5.0) {
-    out += "    the covariance is cautious for sessions of this kind (the stated noise may be too large)\n";
-  } else {
-    out += "    consistent with an honest covariance\n";
-  }
-  return out;
-}
-
-std::string honesty_summary(const HonestyCheck& check) {
-  const SplitCheck& o = check.observed;
-  const SplitCheckReference& ref = check.reference;
-  std::string out = "  split-half check      " + std::to_string(o.splits) + " random splits into halves of " +
-                    std::to_string(o.half_size) + " samples";
-  if (o.failed > 0) out += " (" + std::to_string(o.failed) + " more could not be solved: " + o.first_failure + ")";
-  out += "\n";
-  if (o.splits == 0) return out + "    no split could be solved; the check says nothing\n";
-  out += "    mean NEES of X_a - X_b " + number_text(o.mean_nees, 3) + " (6 dof; translation " +
-         number_text(o.mean_nees_translation, 3) + ", rotation " + number_text(o.mean_nees_rotation, 3) +
-         "); of the middle 90% of splits " + number_text(o.trimmed_mean_nees, 3) + "\n";
-  if (ref.replicates == 0) return out + "    " + check.text + "\n";
-  out += "    an honest covariance on these poses and this noise (middle 90%): " + number_text(ref.mean, 3) + " (5-95%: " +
-         number_text(ref.low, 3) + " to " + number_text(ref.high, 3) + ", " + std::to_string(ref.replicates) +
-         " simulated sessions of " + std::to_string(ref.splits) + " splits)\n";
-  out += "    ratio " + number_text(check.ratio, 3) + ": " + check.text + "\n";
+std::string honesty_lines(const Calibration::Honesty& h) {
+  if (h.verdict == "not run") return "  honesty check         not run: " + h.text + "\n";
+  std::string out = "  honesty check         " + h.text + " (split-half NEES " + number_text(h.split_half_nees, 3) +
+                    " against " + number_text(h.reference_mean, 3) + " for an honest covariance on these poses; ratio " +
+                    number_text(h.ratio, 3) + ")\n";
+  out += "                        " + std::to_string(h.splits) + " random splits into halves of " + std::to_string(h.half_size) +
+         " (middle 90%); reference: " + std::to_string(h.replicates) + " simulated sessions at the same robot poses, 5-95% " +
+         number_text(h.reference_low, 3) + " to " + number_text(h.reference_high, 3) + "\n";
   return out;
 }
 
@@ -209,10 +189,11 @@ std::string report_summary(const CalibrationReport& report) {
   out += row("leave-one-out", report.leave_one_out_sigma,
              "   (" + std::to_string(report.leave_one_out_solved) + " solves" +
                  (report.leave_one_out_failed ? ", " + std::to_string(report.leave_one_out_failed) + " failed" : "") + ")");
-  if (report.split.splits > 0) {
+  if (report.honesty.observed.splits > 0) {
+    const HonestyCheck& h = report.honesty;
     out += row("split-half", report.split_half_sigma,
-               "   (" + std::to_string(report.split.splits) + " splits, NEES " + number_text(report.split.mean_nees, 3) +
-                   "; honest 6)");
+               "   (" + std::to_string(h.observed.splits) + " splits, NEES " + number_text(h.observed.trimmed_mean_nees, 3) +
+                   (h.reference.replicates > 0 ? "; honest here " + number_text(h.reference.mean, 3) + ": " + h.text : "") + ")");
   } else {
     out += "    split-half      " + report.split_problem + "\n";
   }

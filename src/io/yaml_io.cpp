@@ -698,11 +698,21 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   out << YAML::Key << "leave_one_out_failed" << YAML::Value << report.leave_one_out_failed;
   out << YAML::Key << "split_half_sigma" << YAML::Value;
   emit_list(out, human(report.split_half_sigma));
-  out << YAML::Key << "split_half_splits" << YAML::Value << report.split.splits;
-  out << YAML::Key << "split_half_size" << YAML::Value << report.split.half_size;
-  out << YAML::Key << "split_half_nees" << YAML::Value << report.split.mean_nees;
-  out << YAML::Key << "split_half_nees_translation" << YAML::Value << report.split.mean_nees_translation;
-  out << YAML::Key << "split_half_nees_rotation" << YAML::Value << report.split.mean_nees_rotation;
+  out << YAML::Key << "split_half_splits" << YAML::Value << report.honesty.observed.splits;
+  out << YAML::Key << "split_half_size" << YAML::Value << report.honesty.observed.half_size;
+  out << YAML::Key << "split_half_nees" << YAML::Value << report.honesty.observed.mean_nees;
+  out << YAML::Key << "split_half_nees_translation" << YAML::Value << report.honesty.observed.mean_nees_translation;
+  out << YAML::Key << "split_half_nees_rotation" << YAML::Value << report.honesty.observed.mean_nees_rotation;
+  // The calibrated check: the middle 90% of the splits against an honest covariance on these poses.
+  const HonestyCheck& h = report.honesty;
+  out << YAML::Key << "split_half_nees_middle" << YAML::Value << h.observed.trimmed_mean_nees;
+  out << YAML::Key << "honest_nees" << YAML::Value << h.reference.mean;
+  out << YAML::Key << "honest_nees_band" << YAML::Value << YAML::Flow << YAML::BeginSeq << h.reference.low << h.reference.high
+      << YAML::EndSeq;
+  out << YAML::Key << "honest_sessions" << YAML::Value << h.reference.replicates;
+  out << YAML::Key << "honesty_ratio" << YAML::Value << h.ratio;
+  out << YAML::Key << "honesty" << YAML::Value << (h.reference.replicates > 0 ? to_string(h.verdict) : "not run");
+  out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
   if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
   out << YAML::EndMap;
 
@@ -790,7 +800,59 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     }
     out << YAML::EndSeq;
   }
+  if (!calibration.noise_candidates.empty()) {  // joint: the noise models compared by BIC
+    out << YAML::Key << "candidates" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::NoiseCandidate& c : calibration.noise_candidates) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "numbers"
+          << YAML::Value << c.numbers << YAML::Key << "score" << YAML::Value << c.score << YAML::Key << "fitted" << YAML::Value
+          << c.fitted << YAML::Key << "chosen" << YAML::Value << c.chosen;
+      if (c.fitted) {
+        out << YAML::Key << "log_likelihood" << YAML::Value << c.log_likelihood << YAML::Key << "bic" << YAML::Value << c.bic;
+      }
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (const auto& m = calibration.residual_noise) {
+    // The residual covariance of any view (joint_estimator.h residual_covariances):
+    // S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T.
+    out << YAML::Key << "residual_model" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "camera_scale" << YAML::Value << m->camera_scale;
+    const auto camera = to_row_major_6x6(m->camera), robot = to_row_major_6x6(m->robot);
+    out << YAML::Key << "camera" << YAML::Value;
+    emit_numbers(out, camera.data(), camera.size());
+    out << YAML::Key << "robot" << YAML::Value;
+    emit_numbers(out, robot.data(), robot.size());
+    out << YAML::Key << "view_scale" << YAML::Value << m->view_scale;
+    if (!m->view_points.empty()) {
+      std::vector<double> points;
+      for (const Eigen::Vector3d& p : m->view_points) points.insert(points.end(), {p.x(), p.y(), p.z()});
+      out << YAML::Key << "view_points" << YAML::Value;
+      emit_numbers(out, points.data(), points.size());
+    }
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
+  if (const auto& h = calibration.honesty) {  // the calibrated split-half check (split_check.h)
+    out << YAML::Key << "honesty" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "verdict" << YAML::Value << h->verdict;
+    out << YAML::Key << "text" << YAML::Value << h->text;
+    if (h->verdict != "not run") {
+      out << YAML::Key << "splits" << YAML::Value << h->splits << YAML::Key << "half_size" << YAML::Value << h->half_size;
+      out << YAML::Key << "split_half_nees" << YAML::Value << h->split_half_nees;
+      out << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sessions"
+          << YAML::Value << h->replicates << YAML::Key << "mean" << YAML::Value << h->reference_mean << YAML::Key << "low"
+          << YAML::Value << h->reference_low << YAML::Key << "high" << YAML::Value << h->reference_high << YAML::EndMap;
+      out << YAML::Key << "ratio" << YAML::Value << h->ratio;
+      out << YAML::Key << "inflation" << YAML::Value << h->inflation;
+      if (h->inflation > 1.0) {  // X's covariance as the noise model gave it; the one above is inflated
+        const auto model = to_row_major_6x6(h->model_pose_covariance);
+        out << YAML::Key << "model_covariance" << YAML::Value;
+        emit_numbers(out, model.data(), model.size());
+      }
+    }
+    out << YAML::EndMap;
+  }
   if (calibration.method == Method::Joint) {  // which tests ran on the residuals, and what they chose
     out << YAML::Key << "residual_checks" << YAML::Value << YAML::BeginSeq;
     for (const Calibration::ResidualCheck& c : calibration.residual_checks) {

@@ -18,6 +18,7 @@ namespace {
 
 int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string bag_path, config_path, output, samples_out, target, image_topic, camera_info_topic;
+  HonestyArgs honesty;
   po::options_description options("bag: calibrate from a rosbag, without a roscore");
   options.add_options()("help,h", "show this help")(
       "bag,b", po::value(&bag_path)->required(), "the recorded bag (/tf, /tf_static and the detections, or images)")(
@@ -29,6 +30,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
                                                           "beside the image topic")(
       "output,o", po::value(&output), "result file; default: <bag stem>_result.yaml in the current directory")(
       "samples-out", po::value(&samples_out), "also write the samples taken (the samples file format)");
+  add_honesty_options(options, honesty);
   po::variables_map vm;
   if (!parse("bag", "--bag FILE [--config YAML] [--target FILE] [--output FILE] [--samples-out FILE]", options, args, vm,
              out)) {
@@ -42,13 +44,18 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (!image_topic.empty()) config.image_topic = image_topic;
   if (!camera_info_topic.empty()) config.camera_info_topic = camera_info_topic;
   SessionSettings settings = session_settings(config);
+  // The config's honesty keys, unless the command line sets them.
+  if (vm.count("split-check")) settings.honesty.splits = honesty.options.splits;
+  if (vm.count("reference-sessions")) settings.honesty.replicates = honesty.options.replicates;
+  if (honesty.no_inflation) settings.inflate_when_overconfident = false;
+  HonestyArgs{settings.honesty, !settings.inflate_when_overconfident}.apply(settings);  // checks the values
   settings.session_file.clear();  // the node's session file is the node's
   settings.refine_corners = corner_refiner();  // method corners
   CalibrationSession session(settings);
   ProgressBar progress(err, "reading the bag", ::isatty(STDERR_FILENO) != 0);
   const BagReplay replay = replay_bag(bag_path, config, session, [&](double f) { progress(f); });
   const SessionSnapshot snapshot = session.snapshot();
-  const Calibration calibration = session.calibrate(snapshot);  // before writing anything
+  const Calibration calibration = session.calibrate_checked(snapshot);  // before writing anything
 
   out << "Read " << bag_path << " (" << number_text(replay.duration, 4) << " s):";
   for (const auto& [topic, count] : replay.messages) out << " " << topic << " " << count << ",";

@@ -383,7 +383,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   }
   Calibration c;
   try {
-    c = session_.calibrate(snapshot);  // on the snapshot: no lock, no wait behind the worker
+    c = session_.calibrate_checked(snapshot);  // on the snapshot: no lock, no wait behind the worker
   } catch (const HandEyeError& e) {
     res.success = false;
     res.message = e.what();
@@ -415,6 +415,15 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     const std::array<double, 36> cross = to_row_major_6x6(c.cross_covariance);
     std::copy(cross.begin(), cross.end(), res.cross_covariance.begin());
   }
+  if (c.honesty) {
+    const Calibration::Honesty& h = *c.honesty;
+    res.honesty = h.verdict;
+    res.honesty_text = h.text;
+    res.split_half_nees = h.split_half_nees;
+    res.honest_nees = h.reference_mean;
+    res.honest_nees_band = {h.reference_low, h.reference_high};
+    res.covariance_inflation = h.inflation;
+  }
   res.warnings = c.warnings;
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
@@ -424,6 +433,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                 std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
                 number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+  if (c.honesty && c.honesty->verdict != "not run") res.message += "; " + c.honesty->text;
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);
   if (c.pattern) pattern_pub_.publish(res.pattern);

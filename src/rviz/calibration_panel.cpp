@@ -352,6 +352,19 @@ void CalibrationPanel::calibrate() {
                        .arg(QString::fromStdString(r.noise_origin).replace('_', ' ').toHtmlEscaped(),
                             QString::fromStdString(r.calibration_file).toHtmlEscaped());
     if (!r.rejected_samples.empty()) text += QString("; %1 sample(s) rejected").arg(r.rejected_samples.size());
+    if (r.honesty == "not run") {
+      text += "<br>honesty check not run: " + QString::fromStdString(r.honesty_text).toHtmlEscaped();
+    } else if (!r.honesty.empty()) {
+      // The verdict first, in words; then the figures it rests on.
+      text += QString("<br><b>%1</b>: split-half NEES %2 against %3 (5-95%: %4 to %5) for an honest covariance here%6")
+                  .arg(QString::fromStdString(r.honesty_text).toHtmlEscaped())
+                  .arg(r.split_half_nees, 0, 'f', 2)
+                  .arg(r.honest_nees, 0, 'f', 2)
+                  .arg(r.honest_nees_band[0], 0, 'f', 2)
+                  .arg(r.honest_nees_band[1], 0, 'f', 2)
+                  .arg(r.covariance_inflation > 1.0 ? QString("; the covariance is the model's x%1").arg(r.covariance_inflation, 0, 'f', 2)
+                                                    : QString());
+    }
     for (const std::string& w : r.warnings) text += "<br>warning: " + QString::fromStdString(w).toHtmlEscaped();
     return text;
   });

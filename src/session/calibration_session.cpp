@@ -31,6 +31,15 @@ SessionSettings session_settings(const SessionConfig& config) {
   s.reject_outliers = config.reject_outliers;
   s.method = method_from_string(config.method);
   s.robust = robust_from_string(config.robust);
+  if (config.honesty_splits < 0 || config.honesty_sessions < 2) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "honesty_splits must be >= 0 and honesty_sessions >= 2, got " + std::to_string(config.honesty_splits) +
+                           " and " + std::to_string(config.honesty_sessions),
+                       "honesty_splits", "use e.g. honesty_splits: 200, honesty_sessions: 100 (honesty_splits: 0 turns the check off)");
+  }
+  s.honesty.splits = config.honesty_splits;
+  s.honesty.replicates = config.honesty_sessions;
+  s.inflate_when_overconfident = config.inflate_when_overconfident;
   s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
   s.suggest.working_distance = config.working_distance;
   s.suggest.candidates = config.suggest_candidates;
@@ -184,6 +193,34 @@ Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const
   // The joint estimate first: it rejects the outliers and starts the corners.
   const Calibration pose_level = solve_samples(snapshot.samples, settings_.reject_outliers, Method::Joint, joint);
   return settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
+}
+
+Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapshot) const {
+  Calibration c = calibrate(snapshot);
+  const auto not_run = [&c](const std::string& why) {
+    Calibration::Honesty h;
+    h.verdict = "not run";
+    h.text = why;
+    h.model_pose_covariance = c.pose_covariance;
+    c.honesty = h;
+  };
+  if (settings_.honesty.splits <= 0) {
+    not_run("the check is off (honesty_splits: 0)");
+    return c;
+  }
+  if (settings_.method == Method::Corners) {
+    not_run("method corners: the check solves simulated sessions at the pose level; run it on the joint estimate");
+    return c;
+  }
+  const SessionSnapshot kept{snapshot.generation, without_rejected(snapshot.samples, c)};
+  if (kept.samples.samples.size() < 8) {
+    not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
+    return c;
+  }
+  // The fit the reference simulates from is the kept samples' own (without the rejected).
+  const Calibration fitted = c.rejected.empty() ? c : calibrate(kept);
+  record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
+  return c;
 }
 
 SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {

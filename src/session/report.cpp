@@ -66,22 +66,24 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& kept, 
     r.split_problem = "left out (splits: 0)";
     return;
   }
+  HonestyOptions honesty = session.settings().honesty;
+  honesty.splits = options.splits;
+  honesty.replicates = options.reference_sessions;
+  honesty.seed = options.seed;
   try {
-    r.split = session.split_check(kept, options.splits, options.seed);
+    // The reference simulates from the calibration's X, Y and noise model (an
+    // inflation, when the calibration carries one, does not enter it).
+    r.honesty = session.honesty_check(kept, r.calibration, honesty);
   } catch (const HandEyeError& e) {
     r.split_problem = e.what();
     return;
   }
-  if (r.split.splits == 0) {
-    r.split_problem = "no split could be solved: " + r.split.first_failure;
-    return;
+  // The calibration records the verdict unless its /calibrate ran the check already
+  // (the same seed and splits: the same figures).
+  if (!r.calibration.honesty || r.calibration.honesty->verdict == "not run") {
+    record_honesty(r.calibration, r.honesty, session.settings().inflate_when_overconfident);
   }
-  Vector6d mean_square = Vector6d::Zero();
-  for (std::size_t s = 0; s < r.split.differences.size(); ++s) {
-    const Vector6d z = r.split.differences[s].cwiseQuotient(r.split.difference_sigmas[s].cwiseMax(1e-300));
-    mean_square += z.cwiseAbs2() / static_cast<double>(r.split.differences.size());
-  }
-  r.split_half_sigma = r.predicted_sigma.cwiseProduct(mean_square.cwiseSqrt());
+  if (r.honesty.observed.splits == 0) r.split_problem = "no split could be solved: " + r.honesty.observed.first_failure;
 }
 
 void rotation_axes(const SampleSet& kept, const ReportOptions& options, CalibrationReport& r) {
@@ -147,10 +149,20 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
                        "robot kinematics, a loose mount) or calibrate with robust: on");
     }
   }
-  if (r.split.splits > 0 && r.split.mean_nees > options.nees_advice) {
-    advice.push_back("split-half NEES " + number_text(r.split.mean_nees, 3) +
-                     " (honest: 6): the halves disagree more than their covariances say; see the axes above, or look for a "
-                     "bad sample or a systematic error");
+  const HonestyCheck& h = r.honesty;
+  if (h.reference.replicates > 0 && h.verdict != Honesty::Honest) {
+    const std::string figures = "split-half NEES " + number_text(h.observed.trimmed_mean_nees, 3) + " against " +
+                                number_text(h.reference.mean, 3) + " (5-95% " + number_text(h.reference.low, 3) + " to " +
+                                number_text(h.reference.high, 3) + ") for an honest covariance on these poses";
+    if (h.verdict == Honesty::Overconfident) {
+      const bool inflated = r.calibration.honesty && r.calibration.honesty->inflation > 1.0;
+      advice.push_back("the covariance is " + h.text + " (" + figures + "): the noise model does not explain this session" +
+                       (inflated ? "; the calibration's covariance is inflated by that factor" : "") +
+                       "; look for a systematic error (camera intrinsics, robot kinematics, a loose mount)");
+    } else {
+      advice.push_back("the covariance is " + h.text + " (" + figures + "): it errs on the safe side; the stated noise may "
+                       "be too large");
+    }
   }
   if (!r.split_problem.empty() && options.splits > 0) {
     advice.push_back("no split-half check: " + r.split_problem);
@@ -237,10 +249,21 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
   r.calibration = std::move(calibration);
   r.fits = sample_fits(snapshot.samples, r.calibration);
   r.advice_sigma = advice_threshold(r, options);
-  r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   const SessionSnapshot kept{snapshot.generation, without_rejected(snapshot.samples, r.calibration)};
-  leave_one_out(session, kept, r);
+  // The split-half check first: it may inflate the calibration's covariance, the one predicted below.
   split_half(session, kept, options, r);
+  r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (r.honesty.observed.splits > 0) {  // the splits' per-axis spread against the predicted sigma
+    Vector6d mean_square = Vector6d::Zero();
+    for (std::size_t s = 0; s < r.honesty.observed.differences.size(); ++s) {
+      const Vector6d z = r.honesty.observed.differences[s].cwiseQuotient(r.honesty.observed.difference_sigmas[s].cwiseMax(1e-300));
+      mean_square += z.cwiseAbs2() / static_cast<double>(r.honesty.observed.differences.size());
+    }
+    // The halves' covariances are the model's: scaled as the calibration's was, when inflated.
+    const double inflation = r.calibration.honesty ? r.calibration.honesty->inflation : 1.0;
+    r.split_half_sigma = r.predicted_sigma.cwiseProduct(mean_square.cwiseSqrt()) / std::sqrt(inflation);
+  }
+  leave_one_out(session, kept, r);
   rotation_axes(kept.samples, options, r);
   r.working_distance = session.settings().suggest.working_distance;
   r.object_sigma = object_sigma({r.calibration.T_parent_camera, r.calibration.pose_covariance}, r.working_distance);

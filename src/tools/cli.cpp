@@ -64,8 +64,9 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
 /// method and robust mode, the node's other settings from `config`.
 CalibrationSession samples_session(const SampleSet& samples, const std::string& input, const SessionConfig& config,
                                    const std::string& noise_path, bool keep_outliers, const std::string& method,
-                                   const std::string& robust) {
+                                   const std::string& robust, const HonestyArgs& honesty = {}) {
   SessionSettings settings = session_settings(samples, config);
+  honesty.apply(settings);
   if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
   settings.reject_outliers = !keep_outliers;
   settings.method = method_from_string(method);
@@ -78,7 +79,7 @@ CalibrationSession samples_session(const SampleSet& samples, const std::string& 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string input, output, noise_path, method = "joint", robust = "auto";
   bool keep_outliers = false;
-  int split_check = 0, reference_sessions = 100;
+  HonestyArgs honesty;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
@@ -88,15 +89,15 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
       "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
       "robust", po::value(&robust),
       "joint: auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed; default), on, off")(
-      "split-check", po::value(&split_check)->implicit_value(200),
-      "samples: also solve N random halves (default 200) and compare the mean NEES of their difference with what an "
-      "honest covariance gives on these poses (a parametric bootstrap)")(
-      "reference-sessions", po::value(&reference_sessions),
-      "with --split-check: simulated sessions for the honest reference (default 100)")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
+  add_honesty_options(options, honesty);
   po::variables_map vm;
-  if (!parse("solve", "--input FILE [--noise FILE] [--output FILE] [--split-check [N]]", options, args, vm, out)) return kOk;
+  if (!parse("solve", "--input FILE [--noise FILE] [--output FILE] [--split-check N] [--no-inflation]", options, args, vm,
+             out)) {
+    return kOk;
+  }
+
   if (output.empty()) output = default_result_path(input);
 
   io::Input data = io::read_input(input);
@@ -106,21 +107,15 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   }
   Calibration calibration;
   io::ResultContext context;
-  std::string split_report;
   if (const SampleSet* samples = std::get_if<SampleSet>(&data)) {
     // Samples go through the session the node and the bag replay use.
-    const CalibrationSession session = samples_session(*samples, input, {}, noise_path, keep_outliers, method, robust);
+    const CalibrationSession session =
+        samples_session(*samples, input, {}, noise_path, keep_outliers, method, robust, honesty);
     const SessionSnapshot snapshot = session.snapshot();
-    calibration = session.calibrate(snapshot);
+    calibration = session.calibrate_checked(snapshot);
     context = io::context_of(snapshot.samples);
-    if (split_check > 0) {
-      HonestyOptions honesty;
-      honesty.splits = split_check;
-      honesty.replicates = reference_sessions;
-      split_report = io::honesty_summary(session.honesty_check(snapshot, calibration, honesty));
-    }
   } else {
-    if (split_check > 0) {
+    if (vm.count("split-check") && honesty.options.splits > 0) {
       throw HandEyeError(ErrorCode::MalformedFile, "--split-check applies to samples files", input,
                          "record absolute poses (a samples file): motion pairs cannot be split into independent halves");
     }
@@ -129,7 +124,6 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   }
   io::write_file_atomically(output, io::format_result(calibration, context));
   out << io::human_summary(calibration, context);
-  out << split_report;
   out << "  result written to     " << output << "\n";
   (void)err;
   return kOk;
@@ -151,15 +145,18 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
       "keep-outliers", po::bool_switch(&keep_outliers), "do not reject wrong detections (they are by default)")(
       "method", po::value(&method), "joint (default) or pairs")(
       "robust", po::value(&robust), "auto (default), on or off: as for solve")(
-      "splits", po::value(&report_options.splits), "random halves for the split-half check (default 40; 0: leave it out)")(
+      "splits", po::value(&report_options.splits), "random halves for the split-half check (default 200; 0: leave it out)")(
+      "reference-sessions", po::value(&report_options.reference_sessions),
+      "simulated honest sessions the split-half check is judged against (default 100)")(
       "working-distance", po::value(&working_distance),
       ("m along the optical axis for the object's 1 sigma (default " + number_text(working_distance) + ")").c_str())(
       "target-mm", po::value(&target_mm),
       ("the object 1 sigma wanted (default " + number_text(target_mm) + ")").c_str());
   po::variables_map vm;
   if (!parse("report", "--input FILE [--output DIR] [--noise FILE] [--splits N]", options, args, vm, out)) return kOk;
-  if (!(working_distance > 0.0) || !(target_mm > 0.0) || report_options.splits < 0) {
-    throw HandEyeError(ErrorCode::MalformedFile, "--working-distance and --target-mm must be > 0, --splits >= 0",
+  if (!(working_distance > 0.0) || !(target_mm > 0.0) || report_options.splits < 0 || report_options.reference_sessions < 2) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "--working-distance and --target-mm must be > 0, --splits >= 0, --reference-sessions >= 2",
                        "options", "give positive values");
   }
   if (output.empty()) output = std::filesystem::path(input).stem().string() + "_report";

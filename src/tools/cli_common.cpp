@@ -79,6 +79,26 @@ Setup SimArgs::checked_setup() const {
   return setup;
 }
 
+void add_honesty_options(po::options_description& options, HonestyArgs& a) {
+  options.add_options()(
+      "split-check", po::value(&a.options.splits),
+      "the honesty check: solve N random halves (default 200; 0: no check) and compare the NEES of their difference "
+      "with what an honest covariance gives on these poses (a parametric bootstrap); from 8 samples")(
+      "reference-sessions", po::value(&a.options.replicates), "the honesty check's simulated honest sessions (default 100)")(
+      "no-inflation", po::bool_switch(&a.no_inflation),
+      "keep the noise model's covariance even when the honesty check finds it overconfident (by default it is "
+      "inflated by the measured factor)");
+}
+
+void HonestyArgs::apply(SessionSettings& settings) const {
+  if (options.splits < 0 || options.replicates < 2) {
+    throw HandEyeError(ErrorCode::MalformedFile, "--split-check must be >= 0 and --reference-sessions >= 2", "--split-check",
+                       "e.g. --split-check 200 --reference-sessions 100, or --split-check 0 for no check");
+  }
+  settings.honesty = options;
+  settings.inflate_when_overconfident = !no_inflation;
+}
+
 void add_sim_options(po::options_description& options, SimArgs& a) {
   options.add_options()("help,h", "show this help")(
       "output,o", po::value(&a.output)->required(), "samples file to write (YAML), or a rosbag (.bag)")(

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
 namespace cli {
@@ -62,6 +63,16 @@ class ProgressBar {
   bool enabled_;
   int last_ = -1;
 };
+
+/// The honesty check's options of every command that calibrates (solve, images,
+/// bag): --split-check N (0: none), --reference-sessions N, --no-inflation.
+struct HonestyArgs {
+  HonestyOptions options;
+  bool no_inflation = false;
+  /// Into a session's settings, after checking the values (HandEyeError naming the option).
+  void apply(SessionSettings& settings) const;
+};
+void add_honesty_options(po::options_description& options, HonestyArgs& args);
 
 /// The options of `sim` common to a samples file and a bag.
 struct SimArgs {

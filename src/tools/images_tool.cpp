@@ -25,6 +25,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string method = "joint";
   bool refine_intrinsics = false;
   std::string target_error = "estimate";
+  HonestyArgs honesty;
   po::options_description options("images: calibrate from a folder of images and one robot pose per image");
   options.add_options()("help,h", "show this help")(
       "images", po::value(&images_dir)->required(), "folder of .png/.jpg images (sorted by name)")(
@@ -48,6 +49,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
       "output,o", po::value(&output), "result file (YAML); default: <images folder>_result.yaml here")(
       "samples-out", po::value(&samples_out), "also write the samples (each detection with its covariance) for "
                                               "`handeye solve`");
+  add_honesty_options(options, honesty);
   po::variables_map vm;
   if (!parse("images", "--images DIR --poses DIR_OR_CSV --camera FILE --target FILE --setup eye_in_hand|eye_to_hand",
              options, args, vm, out)) {
@@ -113,6 +115,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   }
   SessionSettings settings = session_settings(found.samples);
   settings.robust = robust_from_string(robust);
+  honesty.apply(settings);
   if (method == "corners") {
     CornerOptions corner_options;
     corner_options.refine_intrinsics = refine_intrinsics;
@@ -126,7 +129,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   CalibrationSession session(settings);
   session.replace(found.samples.samples, "images in " + images_dir);
   const SessionSnapshot snapshot = session.snapshot();
-  const Calibration calibration = session.calibrate(snapshot);
+  const Calibration calibration = session.calibrate_checked(snapshot);
   if (calibration.corner_fit) {
     for (const Calibration::CornerFit::Image& image : calibration.corner_fit->images) {
       std::snprintf(line, sizeof line, "  %-28s %3d corners, reprojection RMS %.3f px (corner fit)\n", image.name.c_str(),

@@ -31,9 +31,10 @@ struct CalibrationReport {
   int leave_one_out_solved = 0, leave_one_out_failed = 0;
   Vector6d leave_one_out_sigma = Vector6d::Zero();
 
-  /// The split-half check; split_half_sigma is zero when it was left out or could
-  /// not run (split_problem says why).
-  SplitCheck split;
+  /// The split-half check against its reference at this session's poses and noise
+  /// (split_check.h; honesty.observed is the session's own splits);
+  /// split_half_sigma is zero when it was left out or could not run (split_problem says why).
+  HonestyCheck honesty;
   Vector6d split_half_sigma = Vector6d::Zero();
   std::string split_problem;
 

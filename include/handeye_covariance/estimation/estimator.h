@@ -186,6 +186,23 @@ struct Calibration {
   };
   std::vector<Rejected> rejected;
 
+  /// The split-half check calibrated to the session (split_check.h, honesty_check),
+  /// when it ran. Overconfident beyond its band, the covariances above (X's, Y's,
+  /// their cross block) are the model's times `inflation`, and the model's own X
+  /// covariance is kept beside them; otherwise inflation is 1.
+  struct Honesty {
+    int splits = 0, half_size = 0;   // the session's random halves, of this many samples
+    double split_half_nees = 0.0;    // the middle 90% of the splits' mean NEES of X_a - X_b
+    int replicates = 0;              // simulated honest sessions of the reference
+    double reference_mean = 0.0, reference_low = 0.0, reference_high = 0.0;  // their mean, 5% and 95%
+    double ratio = 1.0;              // split_half_nees / reference_mean
+    std::string verdict;             // "honest", "overconfident", "underconfident", or "not run"
+    std::string text;                // the plain verdict, e.g. "overconfident x1.6: sigma is about 1.3x too small"
+    double inflation = 1.0;          // applied to the covariances
+    Matrix6d model_pose_covariance = Matrix6d::Zero();  // X's, as the noise model gave it
+  };
+  std::optional<Honesty> honesty;
+
   /// Corners: the fit of every image's corners (corners/corner_calibration.h).
   struct CornerFit {
     double pixel_sigma = 0.0;  // px, estimated from the residuals (or given)

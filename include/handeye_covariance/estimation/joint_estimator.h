@@ -106,7 +106,8 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Eig
 /// The residual covariance S_i of each sample of `samples` under `calibration`'s
 /// noise model (Calibration::residual_noise; `noise` for the pairs estimator), at
 /// its X and Y: what a view's residual e_i scatters with, about the prediction
-/// P_hat_i = X^-1 V_i Y. Every sample's, in order (the rejected too).
+/// P_hat_i = X^-1 V_i Y (Y the mean of the loops, noise_estimation.h pattern_pose,
+/// for the pairs estimator). Every sample's, in order (the rejected too).
 std::vector<Matrix6d> residual_covariances(const SampleSet& samples, const Calibration& calibration);
 
 /// X with its covariance, Y (Calibration::pattern) with its covariance, and

@@ -59,7 +59,11 @@ SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int 
 /// How many simulated sessions, and how many of the session's splits each solves.
 struct HonestyOptions {
   int splits = 200;             // the session's random halves
-  int replicates = 100;         // simulated sessions
+  /// Simulated sessions; beyond `full_replicates_up_to` samples, fewer, in proportion
+  /// (at least 20), so that a long session's check costs about what one of that
+  /// size does: its halves are large, and the reference narrow.
+  int replicates = 100;
+  int full_replicates_up_to = 60;
   /// Each simulated session is split by the first this many of the session's
   /// halves: its mean NEES has the same expectation as with all of them, and the
   /// band is corrected for the extra spread of a mean over fewer splits.
@@ -100,15 +104,21 @@ struct HonestyCheck {
 
 /// The split-half check of `samples` (as split_check) and its parametric-bootstrap
 /// reference from `fitted` (the calibration of all of `samples` by `solve`):
-/// options.replicates simulated sessions, each split by the session's own halves. Throws HandEyeError(TooFewMotions) for fewer than 8 samples,
-/// and InvalidNoise when `fitted` has no pattern pose (the pairs estimator).
+/// options.replicates simulated sessions, each split by the session's own halves.
+/// Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options = {});
 
+/// What `check` says, recorded in `calibration` (Calibration::honesty); with
+/// `inflate`, an overconfident verdict multiplies X's, Y's and their cross
+/// covariance by check.inflation (the model's X covariance is kept in the record).
+void record_honesty(Calibration& calibration, const HonestyCheck& check, bool inflate);
+
 /// The session simulated once at its own robot poses (the reference's replicate):
 /// each view P_i = exp(eps_i) P_hat_i, eps_i ~ N(0, S_i) (left perturbation, ROS
-/// order), P_hat_i what `fitted`'s X and Y predict. Each sample keeps its stated
-/// noise; its corners are dropped (they belong to the real view).
+/// order), P_hat_i what `fitted`'s X and Y predict (Y the loops' mean when it has
+/// none). Each sample keeps its stated noise; its corners are dropped (they belong
+/// to the real view).
 SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, const std::vector<Matrix6d>& residual_covariances,
                         std::mt19937_64& rng);
 

@@ -17,9 +17,9 @@ std::string human_summary(const Calibration& calibration, const ResultContext& c
 
 /// The split-half check's lines: the mean NEES of the halves' difference and
 /// what it means (honest about 6; above 7.5 overconfident; below 5 cautious).
-std::string split_check_summary(const SplitCheck& check);
-/// The split-half check with its reference at the session's own poses and noise, and the verdict.
-std::string honesty_summary(const HonestyCheck& check);
+/// The calibrated honesty check's lines (Calibration::honesty): the verdict, the
+/// session's split-half NEES against its reference, the band.
+std::string honesty_lines(const Calibration::Honesty& honesty);
 
 /// The report's lines: 1 sigma per axis as predicted, by leave-one-out and by
 /// split-half (mm, degrees), then the advice.

@@ -42,6 +42,10 @@ struct SessionSettings {
   /// corner_refiner); without it a session refuses method corners.
   CornerRefiner refine_corners;
   JointOptions::Robust robust = JointOptions::Robust::Auto;  // the joint estimator's robust mode
+  /// The calibrated honesty check of calibrate_checked (splits 0: none), and
+  /// whether an overconfident verdict inflates the covariance.
+  HonestyOptions honesty;
+  bool inflate_when_overconfident = true;
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
   /// suggest.seed + the number of samples, so each new sample brings fresh ones.
@@ -144,6 +148,12 @@ class CalibrationSession {
   /// X with its covariance, outliers rejected when configured; method corners
   /// refines the joint estimate from the kept samples' corners. Throws HandEyeError.
   Calibration calibrate(const SessionSnapshot& snapshot) const;
+  /// calibrate(), then the calibrated honesty check on the kept samples
+  /// (Calibration::honesty; split_check.h), the covariance inflated when it is
+  /// overconfident and the settings say so. The check needs 8 kept samples and a
+  /// pose-level method; otherwise the record says why it did not run. Seconds of
+  /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
+  Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
   /// The split-half check (split_check.h) of this session's calibration: `splits`
   /// random halves, each calibrated as calibrate() does.
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;

@@ -32,6 +32,12 @@ struct SessionConfig {
   bool reject_outliers = true;  // outliers.h: consensus + residual gating before the covariance
   std::string method = "joint";  // joint (X and the pattern pose from the poses) | pairs (the paper's AX = XB)
   std::string robust = "auto";   // joint: Huber + sandwich when the residuals are heavy-tailed (auto) | on | off
+  // The calibrated honesty check (split_check.h) on /calibrate and /save_calibration:
+  // random halves, simulated honest sessions, and whether an overconfident
+  // verdict inflates the covariance (the default) or is only reported.
+  int honesty_splits = 200;    // 0: no check
+  int honesty_sessions = 100;
+  bool inflate_when_overconfident = true;
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
@@ -77,6 +83,9 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("reject_outliers", c.reject_outliers, 1.0);
   visit("method", c.method, 1.0);
   visit("robust", c.robust, 1.0);
+  visit("honesty_splits", c.honesty_splits, 1.0);
+  visit("honesty_sessions", c.honesty_sessions, 1.0);
+  visit("inflate_when_overconfident", c.inflate_when_overconfident, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
   visit("reach_translation_mm", c.reach_translation, mm);
