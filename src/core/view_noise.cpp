@@ -23,15 +23,16 @@ std::vector<Eigen::Vector3d> view_points(const Rig& rig) {
 Matrix6d planar_view_information(const Eigen::Isometry3d& T_camera_pattern, const std::vector<Eigen::Vector3d>& points) {
   Matrix6d information = Matrix6d::Zero();
   for (const Eigen::Vector3d& q : points) {
-    const Eigen::Vector3d p = T_camera_pattern * q;
+    const Eigen::Vector3d r = T_camera_pattern.linear() * q;  // the point about the camera, before the translation
+    const Eigen::Vector3d p = r + T_camera_pattern.translation();
     if (!(p.z() > 0.0)) return Matrix6d::Zero();
-    // u = (x/z, y/z): du = a . dp, b . dp with a = (1, 0, -x/z) / z, b = (0, 1, -y/z) / z,
-    // and p moves by dt + xi_R x p under the left perturbation, so each row of J is
-    // (a, p x a) (a . (xi x p) = (p x a) . xi).
+    // u = (x/z, y/z): du = a . dp, b . dp with a = (1, 0, -x/z) / z, b = (0, 1, -y/z) / z.
+    // Under the left perturbation R = exp(xi) R_hat, t = t_hat + dt the point moves by
+    // dt + xi x (R q), so each row of J is (a, r x a) (a . (xi x r) = (r x a) . xi).
     const double w = 1.0 / p.z();
     for (const Eigen::Vector3d& a : {Eigen::Vector3d(w, 0.0, -p.x() * w * w), Eigen::Vector3d(0.0, w, -p.y() * w * w)}) {
       Vector6d row;
-      row << a, p.cross(a);
+      row << a, r.cross(a);
       information.noalias() += row * row.transpose();
     }
   }
@@ -42,7 +43,7 @@ Matrix6d planar_view_covariance(const Eigen::Isometry3d& T_camera_pattern, const
   const Matrix6d information = planar_view_information(T_camera_pattern, points);
   if (information.isZero(0.0)) return Matrix6d::Zero();
   const Eigen::LDLT<Matrix6d> ldlt(information);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12 * information.diagonal().maxCoeff()).all()) {
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-9 * information.diagonal().maxCoeff()).all()) {
     return Matrix6d::Zero();
   }
   const Matrix6d covariance = ldlt.solve(Matrix6d::Identity());

@@ -31,7 +31,14 @@
 //     one for translation and one for rotation), and the robot's rotation noise
 //     from nu >= 6, told from the camera's by the lever arms D_i that change from
 //     pose to pose. An isotropic robot translation noise is isotropic in every
-//     frame, so it is the camera's under another name: it is not fitted;
+//     frame, so it is the camera's under another name: it is not fitted.
+//     From nu >= 12 a second model is a candidate: the same numbers and a view's
+//     shape, v G_i, G_i the planar target's pose covariance at view i for unit
+//     image noise (view_noise.h; the depth of a far view is known far worse than a
+//     near one's). The one with the better BIC (the restricted log-likelihood
+//     less log(6n - 12) / 2 per number) is used (Calibration::noise_candidates); the
+//     second is fitted only when a one-pass screen (a score bound, and the shape
+//     alone at its own solution) says it may win;
 //   - noise given, and the residuals pass chi2 at 99.9%: nothing;
 //   - noise given, and they fail: the missing part, c and R (C when no camera
 //     noise was stated). A warning says so.
@@ -46,7 +53,8 @@
 // numbers inflate tenfold is dropped as not separable. A noise estimated from
 // few residuals is itself uncertain: X's covariance is multiplied by 1 / (1 - q_x),
 // q_x the second-order excess of the NEES of X over the noise estimate's error (its
-// spread and the bias of Sigma_X(theta_hat); noise_pass), exactly 2 / nu
+// spread and the bias of Sigma_X(theta_hat); noise_pass; numbers within 1 sigma of
+// their bound left out, as the expansion overstates them), exactly 2 / nu
 // for one scale from nu dof, so the NEES of X stays about 6; Y's by its own
 // 1 / (1 - q_y), the same figure for Y, and the X-Y block by their geometric mean
 // (one factor for both left Y's NEES at 6.50, above its F bound 6.43).
@@ -80,6 +88,10 @@ struct JointOptions {
   int per_axis_noise_min_dof = 12;
   /// Robot noise estimated (no noise given) from this many samples' worth of residuals.
   int robot_noise_min_dof = 6;
+  /// No noise given: the view-following noise (each view's planar-target shape,
+  /// view_noise.h) is a candidate beside the homogeneous model, from per_axis_noise_min_dof
+  /// on (false: the homogeneous model alone, for comparisons).
+  bool view_following = true;
   /// The stated noise is refused beyond this many sigma of chi2 (about the 99.9% quantile) ...
   double chi2_test_z = 3.09;
   /// ... and then its missing part is estimated (false: only a warning, the
