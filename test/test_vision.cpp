@@ -490,10 +490,47 @@ TEST(Chessboard, FindsTheBoardInItsFrameAndRefusesBadTargets) {
       EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     }
   };
-  refused({8, 6, 0.02}, "turned by 180 degrees");
   refused({2, 5, 0.02}, "at least 3 x 3");
   refused({9, 6, -0.02}, "positive length");
+  // A board that looks the same turned by 180 degrees is read (its pose is one of
+  // two candidates, decided from the robot's motion: test_symmetric); a square one
+  // (four candidates) is not.
+  refused({7, 7, 0.02}, "turned by 90 degrees");
+  EXPECT_NO_THROW(check_chessboard({8, 6, 0.02}, "target.yaml"));
+  EXPECT_NO_THROW(check_chessboard({9, 7, 0.02}, "target.yaml"));
   EXPECT_NO_THROW(check_chessboard(board, "target.yaml"));
+}
+
+// A symmetric board (9 x 7 inner corners) turned in its plane by 0, 90, 180 and 270
+// degrees: found every time, its pose one of the two candidates, the truth or the
+// truth turned by half_turn about the board's centre (chessboard.h).
+TEST(Chessboard, ASymmetricBoardsPoseIsOneOfItsTwoCandidates) {
+  CameraModel camera;
+  camera.K << 607.6, 0, 323.5, 0, 607.6, 243.3, 0, 0, 1;
+  camera.width = 640, camera.height = 480;
+  const ChessboardTarget board{9, 7, 0.0236};
+  const Eigen::Isometry3d F = half_turn(make_target(board));
+  ASSERT_FALSE(F.isApprox(Eigen::Isometry3d::Identity()));
+  for (double roll : {0.0, M_PI / 2, M_PI, 3 * M_PI / 2}) {
+    const Eigen::Vector3d centre(0.5 * (board.columns - 1) * board.square, 0.5 * (board.rows - 1) * board.square, 0.0);
+    const Eigen::Isometry3d truth =
+        se3::make_pose(so3::exp(Eigen::Vector3d(0.25, -0.2, 0.1)), Eigen::Vector3d(0.01, -0.01, 0.42)) *
+        se3::make_pose(so3::exp(Eigen::Vector3d(0.0, 0.0, roll)), Eigen::Vector3d::Zero()) *
+        se3::make_pose(Eigen::Matrix3d::Identity(), -centre);
+    const TargetObservation found = detect_chessboard(render_chessboard(board, camera, truth), board);
+    ASSERT_TRUE(found.points) << found.refusal;
+    PixelNoise noise;
+    const PatternPoseResult pose = estimate_pose(camera, *found.points, noise);
+    ASSERT_TRUE(pose.pose) << pose.refusal;
+    const Vector6d as_is = test::pose_perturbation(pose.pose->T_camera_pattern, truth),
+                   turned = test::pose_perturbation(pose.pose->T_camera_pattern, truth * F);
+    const Vector6d& error = as_is.norm() < turned.norm() ? as_is : turned;
+    std::printf("symmetric chessboard 9 x 7 (in-plane turn %.0f deg): the %s candidate, error %.3f mm / %.4f deg\n",
+                roll * 180 / M_PI, as_is.norm() < turned.norm() ? "true" : "turned", error.head<3>().norm() * 1e3,
+                error.tail<3>().norm() * 180 / M_PI);
+    EXPECT_LT(error.head<3>().norm(), 1e-3);
+    EXPECT_LT(error.tail<3>().norm(), 0.3 * M_PI / 180.0);
+  }
 }
 
 TEST(PatternPose, EdgeFitCovarianceOfASquare) {

@@ -96,6 +96,23 @@ Eigen::Isometry3d target_face(const Target& target) {
   return se3::make_pose(target.markers.tags.front().T_pattern_tag.linear(), centre);
 }
 
+bool is_half_turn_symmetric(const Target& target) {
+  return target.kind == TargetKind::Chessboard && (target.chessboard.columns + target.chessboard.rows) % 2 == 0;
+}
+
+Eigen::Isometry3d face_half_turn(const Target& target) {
+  // T_pattern_face Rz(pi) T_pattern_face^-1, its rotation built exactly: a turn by pi
+  // about the unit normal n is 2 n n^T - I (no sin(pi) residue), and F F = I.
+  const Eigen::Isometry3d face = target_face(target);
+  const Eigen::Vector3d normal = face.linear().col(2).normalized(), centre = face.translation();
+  const Eigen::Matrix3d R = 2.0 * normal * normal.transpose() - Eigen::Matrix3d::Identity();
+  return se3::make_pose(R, centre - R * centre);
+}
+
+Eigen::Isometry3d half_turn(const Target& target) {
+  return is_half_turn_symmetric(target) ? face_half_turn(target) : Eigen::Isometry3d::Identity();
+}
+
 Eigen::Vector2d target_face_size(const Target& target) {
   switch (target.kind) {
     case TargetKind::Chessboard:

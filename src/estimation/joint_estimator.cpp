@@ -1418,7 +1418,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     result.noise_candidates.push_back({describe(fitted.free), static_cast<int>(fitted.free.size()), 0.0, true, true,
                                        fitted_log_likelihood, fitted_bic});
     std::vector<Free> candidates;
-    if (options.view_following && homogeneous && dof >= options.per_axis_noise_min_dof &&
+    if (options.view_following && homogeneous && dof >= options.view_following_min_dof &&
         problem.set_view_shapes(view_points(samples.rig))) {
       candidates.push_back({Kind::ViewShape, 0, 0, {"view-following image noise", 0.0}});
     }

@@ -22,11 +22,16 @@ void check_chessboard(const ChessboardTarget& t, const std::string& where) {
     throw HandEyeError(ErrorCode::InvalidLayout, "the square size must be a positive length in m", where,
                        "measure one printed square's edge, e.g. square: 0.0236");
   }
-  if (t.columns % 2 == t.rows % 2) {
+  // A symmetric board (columns + rows even) is read: its pose is one of two
+  // candidates, decided from the robot's motion (estimation/symmetric_views.h). A
+  // square one also looks the same turned by 90 degrees (its rows become its
+  // columns): four candidates, which neither its colours nor a half turn tell apart.
+  if (t.columns == t.rows) {
     throw HandEyeError(ErrorCode::InvalidLayout,
                        "a board of " + std::to_string(t.columns) + " x " + std::to_string(t.rows) +
-                           " inner corners looks the same turned by 180 degrees, so its pose is ambiguous",
-                       where, "use a board with one even and one odd number of inner corners (e.g. 9 x 6), or ChArUco");
+                           " inner corners looks the same turned by 90 degrees, so its pose is ambiguous",
+                       where, "use a board with different numbers of inner corners along its two sides (e.g. 9 x 6), "
+                              "or ChArUco");
   }
 }
 
@@ -55,6 +60,10 @@ double gray_at(const cv::Mat& gray, const cv::Point2f& p) {
 /// its diagonal neighbour is white (the one outside it is white too, but may be
 /// out of the image), the next square along the row black; a list that starts
 /// at the other end of the board sees them the other way round and is reversed.
+/// A symmetric board (columns + rows even, core/target.h is_half_turn_symmetric)
+/// has the same colours at both ends: the two orders cannot be told apart, and
+/// whichever OpenCV gave is kept. Its pose is then one of two candidates, P and
+/// P * half_turn(target), decided later from the robot's motion.
 void put_in_opencv_frame(const cv::Mat& gray, const ChessboardTarget& t, std::vector<cv::Point2f>& corners) {
   const std::size_t columns = static_cast<std::size_t>(t.columns);
   const cv::Point2f along_row = corners[1] - corners[0], down = corners[columns] - corners[0];
@@ -63,6 +72,7 @@ void put_in_opencv_frame(const cv::Mat& gray, const ChessboardTarget& t, std::ve
       std::reverse(corners.begin() + r * t.columns, corners.begin() + (r + 1) * t.columns);
     }
   }
+  if (is_half_turn_symmetric(make_target(t))) return;
   const double first_square = gray_at(gray, 0.5f * (corners[0] + corners[columns + 1]));
   const double next_square = gray_at(gray, 0.5f * (corners[1] + corners[columns + 2]));
   if (first_square < next_square) std::reverse(corners.begin(), corners.end());

@@ -64,6 +64,29 @@ Target make_target(const TagLayout& markers);
 /// the centroid of their centres, turned as the first marker.
 Eigen::Isometry3d target_face(const Target& target);
 
+/// The target looks the same turned by 180 degrees about its face's normal through
+/// the face's centre: a chessboard whose inner-corner counts columns + rows are
+/// even (both odd or both even, e.g. 9 x 7 or 8 x 6), whose squares' colours the
+/// turn maps onto themselves. Its detected pose is then one of two candidates, P and
+/// P * half_turn(target), told apart only by the robot's motion
+/// (estimation/symmetric_views.h). ChArUco, ArUco and AprilTag boards are not: the
+/// turn moves each marker to where another id (or none) is printed, so the
+/// markers' ids tell the turn apart.
+bool is_half_turn_symmetric(const Target& target);
+
+/// F = T_pattern_pattern': the pose of the pattern frame turned by pi about the
+/// face's normal through the face's centre (target_face) in the original frame, so
+/// the other candidate of a detected T_camera_pattern P is P * F (F = F^-1). For
+/// OpenCV's chessboard frame: the turn about z through ((columns - 1) s / 2,
+/// (rows - 1) s / 2, 0). The identity when the target is not symmetric
+/// (is_half_turn_symmetric): its pose has one candidate.
+Eigen::Isometry3d half_turn(const Target& target);
+
+/// The same turn about the face whatever the target (a tag, a ChArUco board): what
+/// half_turn gives for a symmetric one. For tests that plant the ambiguity on
+/// sessions of targets that do not have it.
+Eigen::Isometry3d face_half_turn(const Target& target);
+
 /// The width and height (m) of the target's detected points about target_face:
 /// a chessboard's and a ChArUco board's inner corners, the markers' corners.
 Eigen::Vector2d target_face_size(const Target& target);

@@ -89,9 +89,11 @@ struct JointOptions {
   /// Robot noise estimated (no noise given) from this many samples' worth of residuals.
   int robot_noise_min_dof = 6;
   /// No noise given: the view-following noise (each view's planar-target shape,
-  /// view_noise.h) is a candidate beside the homogeneous model, from per_axis_noise_min_dof
-  /// on (false: the homogeneous model alone, for comparisons).
+  /// view_noise.h) is a candidate beside the homogeneous model, from this many
+  /// samples' worth of residuals on (view_following false: the homogeneous model
+  /// alone, for comparisons).
   bool view_following = true;
+  int view_following_min_dof = 12;
   /// The stated noise is refused beyond this many sigma of chi2 (about the 99.9% quantile) ...
   double chi2_test_z = 3.09;
   /// ... and then its missing part is estimated (false: only a warning, the

@@ -6,8 +6,13 @@
 // inner corner OpenCV reports, which is the corner whose outer diagonal square is
 // white (the board's colours fix it); x along the board's `columns` corners, y
 // along its `rows`, z into the board (away from a camera that sees it).
-// A board whose numbers of inner corners are both even or both odd looks the same
-// turned by 180 degrees: its pose is ambiguous, and it is refused.
+// A board whose numbers of inner corners are both even or both odd (e.g. 9 x 7)
+// looks the same turned by 180 degrees about its centre (core/target.h
+// is_half_turn_symmetric): the colours cannot tell its two ends apart, so the
+// corner order OpenCV gave is kept and the pose is one of two candidates, P or
+// P * half_turn(target), decided later from the robot's motion
+// (estimation/symmetric_views.h, decide_half_turns). A square board (as many
+// corners each way) also looks the same turned by 90 degrees, and is refused.
 // Detection: OpenCV's classic detector (the sector-based one when it fails), the
 // origin checked by the colours, then cornerSubPix on every corner.
 // Corner noise: each corner independent, the same sigma in x and y (cornerSubPix
@@ -26,7 +31,8 @@
 namespace handeye {
 
 /// Throws HandEyeError(InvalidLayout) for fewer than 3 corners either way, a
-/// square that is not a positive length, or an ambiguous (symmetric) board.
+/// square that is not a positive length, or a square board (as many corners each
+/// way: four candidate poses). A board symmetric by a half turn is accepted (above).
 void check_chessboard(const ChessboardTarget& target, const std::string& where);
 
 /// The inner corners in the pattern frame, in OpenCV's order (row by row).
