@@ -369,6 +369,17 @@ TEST(HalfTurn, RealSessionsWithPlantedTurnsAreDecidedBack) {
     };
     const double worst = in_sigmas(from_decided, same_reading), turn_alone = in_sigmas(same_reading, original);
     EXPECT_LT(worst, 1e-6) << c.name;
+    // The session's path (handeye solve, images, bag, the node): a samples set of a
+    // symmetric target is decided the same, the turned views listed, X the same.
+    SampleSet symmetric = with_turns;
+    symmetric.rig.symmetric_face = true;
+    const Calibration via_session = calibrate_in_a_session(symmetric);
+    std::vector<bool> session_turned(static_cast<std::size_t>(n), false);
+    for (int i : via_session.turned) session_turned[static_cast<std::size_t>(i)] = true;
+    EXPECT_EQ(session_turned, d.turned) << c.name;
+    EXPECT_LT(in_sigmas(via_session, same_reading), 1e-6) << c.name;
+    EXPECT_NE(via_session.warnings.back().find(std::to_string(d.turned_count) + " of " + std::to_string(n) + " views turned"),
+              std::string::npos) << via_session.warnings.back();
     // A global turn moves Y, and X only within the estimator's own tolerance (its
     // noise rounds stop once a step would move X by under 0.1 sigma).
     EXPECT_LT(turn_alone, 0.1) << c.name;

@@ -63,6 +63,19 @@ TEST(YamlIo, SamplesRoundTripExactly) {
   ASSERT_TRUE(back.samples[4].noise.has_value());
   EXPECT_EQ(back.samples[4].noise->camera.as_pose_covariance(), with_cross.camera.as_pose_covariance());
   EXPECT_FALSE(back.samples[4].noise->robot.has_cross_block());
+  // The target's geometry the session needs (Rig): its face, its size (the
+  // view-following noise) and whether it looks the same turned by 180 degrees.
+  EXPECT_FALSE(back.rig.symmetric_face);
+  EXPECT_TRUE(back.rig.face_size.isZero(0.0));
+  set_target(s.samples.rig, io::parse_target("{type: chessboard, inner_corners: [9, 7], square: 0.025}", "memory"));
+  const SampleSet symmetric = io::parse_samples(io::format_samples(s.samples), "memory");
+  EXPECT_TRUE(symmetric.rig.symmetric_face);
+  EXPECT_TRUE(symmetric.rig.face_size.isApprox(Eigen::Vector2d(0.2, 0.15), 1e-15));
+  expect_same_pose(symmetric.rig.T_pattern_face, s.samples.rig.T_pattern_face);
+  const Eigen::Isometry3d F = symmetric.rig.face_half_turn();
+  EXPECT_LT((F * F).matrix().cwiseAbs().maxCoeff() - 1.0, 1e-15);  // a half turn: F F = I
+  EXPECT_TRUE((F * Eigen::Vector3d(0.1, 0.075, 0.0)).isApprox(Eigen::Vector3d(0.1, 0.075, 0.0)));  // about the face's centre
+  EXPECT_THROW(io::parse_samples("{setup: eye_in_hand, pattern_symmetric: maybe, samples: []}", "memory"), HandEyeError);
 }
 
 // A sample's corners (method corners) survive the session file: camera, points,

@@ -2,6 +2,23 @@
 
 namespace handeye {
 
+SampleSet with_default_noise(SampleSet samples) {
+  if (samples.noise) return samples;
+  Matrix6d mean_camera = Matrix6d::Zero();
+  int with_noise = 0;
+  for (const PoseSample& sample : samples.samples) {
+    if (!sample.noise) continue;
+    mean_camera += sample.noise->camera.as_pose_covariance();
+    ++with_noise;
+  }
+  if (with_noise > 0) {
+    MeasurementNoise fallback;
+    fallback.camera = PoseNoise::from_pose_covariance(mean_camera / with_noise);
+    samples.noise = fallback;
+  }
+  return samples;
+}
+
 MotionPair motion_between(const Rig& rig, const PoseSample& from, const PoseSample& to) {
   MotionPair motion;
   motion.A = rig.robot_motion(from.T_base_effector, to.T_base_effector);

@@ -17,6 +17,14 @@ Setup setup_from_string(const std::string& name, const std::string& where) {
 
 Setup setup_from_eye_on_hand(bool eye_on_hand) { return eye_on_hand ? Setup::EyeInHand : Setup::EyeToHand; }
 
+Isometry3d Rig::face_half_turn() const {
+  // T_pattern_face Rz(pi) T_pattern_face^-1, its rotation built exactly: a turn by pi
+  // about the unit normal n is 2 n n^T - I (no sin(pi) residue), and F F = I.
+  const Eigen::Vector3d normal = T_pattern_face.linear().col(2).normalized(), centre = T_pattern_face.translation();
+  const Eigen::Matrix3d R = 2.0 * normal * normal.transpose() - Eigen::Matrix3d::Identity();
+  return se3::make_pose(R, centre - R * centre);
+}
+
 Isometry3d Rig::robot_link(const Isometry3d& E) const { return eye_in_hand() ? E.inverse() : E; }
 
 Matrix6d Rig::robot_link_jacobian(const Isometry3d& E) const {

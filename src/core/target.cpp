@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/rig.h"
 
 namespace handeye {
 namespace {
@@ -101,12 +102,15 @@ bool is_half_turn_symmetric(const Target& target) {
 }
 
 Eigen::Isometry3d face_half_turn(const Target& target) {
-  // T_pattern_face Rz(pi) T_pattern_face^-1, its rotation built exactly: a turn by pi
-  // about the unit normal n is 2 n n^T - I (no sin(pi) residue), and F F = I.
-  const Eigen::Isometry3d face = target_face(target);
-  const Eigen::Vector3d normal = face.linear().col(2).normalized(), centre = face.translation();
-  const Eigen::Matrix3d R = 2.0 * normal * normal.transpose() - Eigen::Matrix3d::Identity();
-  return se3::make_pose(R, centre - R * centre);
+  Rig rig;
+  rig.T_pattern_face = target_face(target);
+  return rig.face_half_turn();
+}
+
+void set_target(Rig& rig, const Target& target) {
+  rig.T_pattern_face = target_face(target);
+  rig.face_size = target_face_size(target);
+  rig.symmetric_face = is_half_turn_symmetric(target);
 }
 
 Eigen::Isometry3d half_turn(const Target& target) {

@@ -217,30 +217,21 @@ PoseSample candidate(const PoseSample& sample, const Isometry3d& F, bool turned,
   return out;
 }
 
-/// The set as a session solves it (session/calibration_session.cpp, sample_set):
-/// detections with their own covariance and no global block get the mean of the
-/// camera covariances as the block, which samples without one take.
-SampleSet as_solved(const SampleSet& samples) {
-  if (samples.noise) return samples;
-  Matrix6d mean = Matrix6d::Zero();
-  int with_noise = 0;
-  for (const PoseSample& s : samples.samples) {
-    if (!s.noise) continue;
-    mean += s.noise->camera.as_pose_covariance();
-    ++with_noise;
-  }
-  if (with_noise == 0) return samples;
-  SampleSet out = samples;
-  out.noise = MeasurementNoise{};
-  out.noise->camera = PoseNoise::from_pose_covariance(mean / with_noise);
-  return out;
-}
+}  // namespace
 
-SampleSet labelled(const SampleSet& samples, const Isometry3d& F, const std::vector<bool>& turned) {
+SampleSet apply_half_turns(const SampleSet& samples, const Isometry3d& F, const std::vector<bool>& turned) {
+  if (turned.size() != samples.samples.size()) {
+    throw HandEyeError(ErrorCode::WrongLength,
+                       "one turn label per sample is needed: " + std::to_string(turned.size()) + " for " +
+                           std::to_string(samples.samples.size()) + " samples",
+                       "turned", "give a label for every sample");
+  }
   SampleSet out = samples;
   for (std::size_t i = 0; i < out.samples.size(); ++i) out.samples[i] = candidate(samples.samples[i], F, turned[i], samples.noise);
   return out;
 }
+
+namespace {
 
 SampleSet subset(const SampleSet& samples, const std::vector<int>& which) {
   SampleSet out = samples;
@@ -377,10 +368,10 @@ TurnDecision refine_half_turns(const SampleSet& given, const Isometry3d& F, cons
   }
   if (is_identity(F)) return unchanged(given);
   check_input(given, F);
-  const SampleSet samples = as_solved(given);
+  const SampleSet samples = with_default_noise(given);
   const PairTable table = pair_table(samples, F, o);
   std::vector<bool> turned = initial;
-  const SampleSet turned_all = labelled(samples, F, std::vector<bool>(n, true));
+  const SampleSet turned_all = apply_half_turns(samples, F, std::vector<bool>(n, true));
 
   // The first solve: the views whose labels agree with the pairs' (up to a global
   // turn: the larger of agreeing and disagreeing, so that labels half wrong still
@@ -409,7 +400,7 @@ TurnDecision refine_half_turns(const SampleSet& given, const Isometry3d& F, cons
   std::vector<double> given_squared, turned_squared;
   double gate = o.view_gate;
   for (d.rounds = 1;; ++d.rounds) {
-    const SampleSet set = labelled(samples, F, turned);
+    const SampleSet set = apply_half_turns(samples, F, turned);
     const Calibration c = solve_core(set, fit, distrust, joint);
     judge_views(samples, turned_all, c, given_squared, turned_squared);
     std::vector<bool> next(n);

@@ -86,6 +86,15 @@ int as_integer(const YAML::Node& node, const Location& at, double lowest, double
   return static_cast<int>(v);
 }
 
+bool as_bool(const YAML::Node& node, const Location& at) {
+  try {
+    if (!node.IsScalar()) throw YAML::BadConversion(node.Mark());
+    return node.as<bool>();
+  } catch (const YAML::Exception&) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected true or false", at.str(), "write true or false");
+  }
+}
+
 std::string as_text(const YAML::Node& node, const Location& at) {
   if (!node.IsScalar()) {
     throw HandEyeError(ErrorCode::MalformedFile, "expected a name", at.str(), "write a plain name, e.g. base_link");
@@ -400,6 +409,9 @@ SampleSet parse_samples(const std::string& text, const std::string& source) {
     set.rig.frames = {name("base"), name("effector"), name("camera"), name("pattern")};
   }
   if (root["pattern_face"]) set.rig.T_pattern_face = read_pose(root["pattern_face"], top / "pattern_face");
+  if (const YAML::Node symmetric = root["pattern_symmetric"]) {
+    set.rig.symmetric_face = as_bool(symmetric, top / "pattern_symmetric");
+  }
   if (const YAML::Node size = root["pattern_face_size"]) {
     const auto wh = as_numbers<2>(size, top / "pattern_face_size", "the target's width and height, m");
     set.rig.face_size = Eigen::Vector2d(wh[0], wh[1]);
@@ -448,6 +460,9 @@ std::string format_samples(const SampleSet& set) {
   }
   if (set.rig.T_pattern_face.matrix() != Eigen::Matrix4d::Identity()) {
     emit_keyed_pose(out, "pattern_face", set.rig.T_pattern_face);  // where new views look (Rig)
+  }
+  if (set.rig.symmetric_face) {  // each view's pose is one of two candidates (Rig)
+    out << YAML::Key << "pattern_symmetric" << YAML::Value << true;
   }
   if (!set.rig.face_size.isZero(0.0)) {  // the target's size: the view-following noise's shape (Rig)
     out << YAML::Key << "pattern_face_size" << YAML::Value << YAML::Flow << YAML::BeginSeq << set.rig.face_size.x()
@@ -833,6 +848,9 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::EndMap;
   }
   out << YAML::EndMap;
+  if (!calibration.turned.empty()) {  // a symmetric target: the views turned to agree with the motion
+    out << YAML::Key << "turned_samples" << YAML::Value << YAML::Flow << calibration.turned;
+  }
   if (const auto& h = calibration.honesty) {  // the calibrated split-half check (split_check.h)
     out << YAML::Key << "honesty" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "verdict" << YAML::Value << h->verdict;

@@ -125,6 +125,12 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples", to_string(rig.setup),
            rig.camera_parent_frame().c_str(), rig.frames.camera.c_str(), config_.detection_input.c_str(),
            config_.detection_input == "tf" ? rig.frames.pattern.c_str() : topic.c_str(), session_.samples().size());
+  if (session_.settings().rig.symmetric_face) {
+    ROS_WARN("the target (%s) looks the same turned by 180 degrees: each view's pose is one of two candidates, "
+             "decided from the robot's motion on /calibrate (views that cannot be decided are left out and named). A "
+             "board with one even and one odd number of inner corners avoids this decision.",
+             config_.target_file.c_str());
+  }
 }
 
 CalibrationNode::~CalibrationNode() {
@@ -415,6 +421,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     const std::array<double, 36> cross = to_row_major_6x6(c.cross_covariance);
     std::copy(cross.begin(), cross.end(), res.cross_covariance.begin());
   }
+  res.turned_samples = c.turned;
   if (c.honesty) {
     const Calibration::Honesty& h = *c.honesty;
     res.honesty = h.verdict;

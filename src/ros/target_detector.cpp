@@ -38,6 +38,12 @@ TargetDetectorNode::TargetDetectorNode(ros::NodeHandle node, ros::NodeHandle pn)
   ROS_INFO("target_detector: %s on `%s` (info `%s`), publishing `%s`%s", detector_->target().describe().c_str(),
            image_sub_.getTopic().c_str(), info_sub_.getTopic().c_str(), detections_pub_.getTopic().c_str(),
            publish_tf_ ? (" and TF to `" + pattern_frame_ + "`").c_str() : "");
+  if (is_half_turn_symmetric(detector_->target())) {
+    ROS_WARN("target_detector: %s looks the same turned by 180 degrees: each pose published is one of two candidates "
+             "(the calibration node decides which from the robot's motion; give it the same target_file). A board with "
+             "one even and one odd number of inner corners avoids this.",
+             detector_->target().describe().c_str());
+  }
 }
 
 void TargetDetectorNode::on_camera_info(const sensor_msgs::CameraInfo::ConstPtr& info) {

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
@@ -21,11 +22,7 @@ JointOptions::Robust robust_from_string(const std::string& name) {
 SessionSettings session_settings(const SessionConfig& config) {
   SessionSettings s;
   s.rig = config.rig;
-  if (!config.target_file.empty()) {
-    const Target target = io::read_target(expand_home(config.target_file));
-    s.rig.T_pattern_face = target_face(target);
-    s.rig.face_size = target_face_size(target);
-  }
+  if (!config.target_file.empty()) set_target(s.rig, io::read_target(expand_home(config.target_file)));
   s.sampler = config.sampler;
   if (!config.noise_config.empty()) s.noise = io::read_noise_file(expand_home(config.noise_config));
   s.reject_outliers = config.reject_outliers;
@@ -55,10 +52,13 @@ SessionSettings session_settings(const SessionConfig& config) {
 
 SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config) {
   SessionSettings s = session_settings(config);
-  const Eigen::Isometry3d face = s.rig.T_pattern_face;
-  const Eigen::Vector2d face_size = s.rig.face_size;
+  const Rig configured = s.rig;
   s.rig = samples.rig;
-  if (!config.target_file.empty()) s.rig.T_pattern_face = face, s.rig.face_size = face_size;  // the configured target over the file's
+  if (!config.target_file.empty()) {  // the configured target over the file's
+    s.rig.T_pattern_face = configured.T_pattern_face;
+    s.rig.face_size = configured.face_size;
+    s.rig.symmetric_face = configured.symmetric_face;
+  }
   s.noise = samples.noise;
   s.session_file.clear();
   return s;
@@ -164,27 +164,42 @@ SampleSet CalibrationSession::sample_set() const {
   set.rig = settings_.rig;
   set.noise = settings_.noise;
   set.samples = samples();
-  if (!settings_.noise) {
-    // Samples without a covariance of their own get the mean of the others'.
-    Matrix6d mean_camera = Matrix6d::Zero();
-    int with_noise = 0;
-    for (const PoseSample& sample : set.samples) {
-      if (!sample.noise) continue;
-      mean_camera += sample.noise->camera.as_pose_covariance();
-      ++with_noise;
-    }
-    if (with_noise > 0) {
-      MeasurementNoise fallback;
-      fallback.camera = PoseNoise::from_pose_covariance(mean_camera / with_noise);
-      set.noise = fallback;
-    }
-  }
-  return set;
+  return with_default_noise(std::move(set));  // samples without a covariance of their own get the mean block
 }
 
 // ------------------------------------------------------------------ computations
 
 Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const {
+  if (!settings_.rig.symmetric_face) return calibrate_decided(snapshot);
+  // A symmetric target: each view's candidate from the robot's motion first.
+  JointOptions joint;
+  joint.robust = settings_.robust;
+  const TurnDecision d = decide_half_turns(snapshot.samples, settings_.rig.face_half_turn(), joint);
+  Calibration c = calibrate_decided({snapshot.generation, d.samples});
+  for (Calibration::Rejected& r : c.rejected) r.index = d.kept.at(static_cast<std::size_t>(r.index));  // the snapshot's indices
+  for (const TurnDecision::Undecided& u : d.undecided) {
+    c.rejected.push_back({u.index, "its pose is ambiguous: the target looks the same turned by 180 degrees, and " + u.reason});
+  }
+  std::sort(c.rejected.begin(), c.rejected.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+  for (std::size_t i = 0; i < d.turned.size(); ++i) {
+    if (d.turned[i]) c.turned.push_back(static_cast<int>(i));
+  }
+  c.warnings.push_back("a symmetric target (its inner-corner counts are both odd or both even): " +
+                       std::to_string(c.turned.size()) + " of " + std::to_string(snapshot.samples.samples.size()) +
+                       " views turned by 180 degrees to agree with the robot's motion" +
+                       (d.undecided.empty() ? std::string() : ", " + std::to_string(d.undecided.size()) + " left out as ambiguous") +
+                       "; a board with one even and one odd count avoids this decision");
+  return c;
+}
+
+SampleSet CalibrationSession::decided(const SampleSet& samples, const Calibration& calibration) const {
+  if (calibration.turned.empty()) return samples;
+  std::vector<bool> turned(samples.samples.size(), false);
+  for (int i : calibration.turned) turned.at(static_cast<std::size_t>(i)) = true;
+  return apply_half_turns(samples, settings_.rig.face_half_turn(), turned);
+}
+
+Calibration CalibrationSession::calibrate_decided(const SessionSnapshot& snapshot) const {
   JointOptions joint;
   joint.robust = settings_.robust;
   if (settings_.method != Method::Corners) {
@@ -212,28 +227,28 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     not_run("method corners: the check solves simulated sessions at the pose level; run it on the joint estimate");
     return c;
   }
-  const SessionSnapshot kept{snapshot.generation, without_rejected(snapshot.samples, c)};
+  const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
   if (kept.samples.samples.size() < 8) {
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
     return c;
   }
   // The fit the reference simulates from is the kept samples' own (without the rejected).
-  const Calibration fitted = c.rejected.empty() ? c : calibrate(kept);
+  const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
   record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
   return c;
 }
 
 SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {
   return handeye::split_check(
-      snapshot.samples, [this, &snapshot](const SampleSet& half) { return calibrate({snapshot.generation, half}); }, splits,
-      seed);
+      snapshot.samples, [this, &snapshot](const SampleSet& half) { return calibrate_decided({snapshot.generation, half}); },
+      splits, seed);
 }
 
 HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
                                                const HonestyOptions& options) const {
   return handeye::honesty_check(
-      snapshot.samples, calibration, [this, &snapshot](const SampleSet& half) { return calibrate({snapshot.generation, half}); },
-      options);
+      snapshot.samples, calibration,
+      [this, &snapshot](const SampleSet& half) { return calibrate_decided({snapshot.generation, half}); }, options);
 }
 
 SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {
@@ -256,7 +271,7 @@ SuggestResult CalibrationSession::suggest(const SessionSnapshot& snapshot, const
   SuggestResult r;
   r.options = suggest_options(request.criterion, n);
   r.estimate = calibrate(snapshot);
-  r.samples = without_rejected(snapshot.samples, r.estimate);  // plan from the consistent samples
+  r.samples = without_rejected(decided(snapshot.samples, r.estimate), r.estimate);  // plan from the consistent samples
   const std::vector<Eigen::Isometry3d> candidates = settings_.candidate_poses.empty()
                                                         ? sample_candidates(r.samples, r.estimate, r.options)
                                                         : settings_.candidate_poses;
@@ -285,8 +300,9 @@ Analysis CalibrationSession::analyse(const SessionSnapshot& snapshot) const {
     return a;
   }
   try {
-    a.fits = sample_fits(snapshot.samples, *a.estimate);
-    const SampleSet kept = without_rejected(snapshot.samples, *a.estimate);
+    const SampleSet as_decided = decided(snapshot.samples, *a.estimate);
+    a.fits = sample_fits(as_decided, *a.estimate);
+    const SampleSet kept = without_rejected(as_decided, *a.estimate);
     const SuggestOptions options = suggest_options("", a.samples);
     const std::vector<Eigen::Isometry3d> candidates =
         settings_.candidate_poses.empty() ? sample_candidates(kept, *a.estimate, options) : settings_.candidate_poses;

@@ -51,7 +51,7 @@ void leave_one_out(const CalibrationSession& session, const SessionSnapshot& kep
     SessionSnapshot without = kept;
     without.samples.samples.erase(without.samples.samples.begin() + static_cast<std::ptrdiff_t>(skip));
     try {
-      d.push_back(pose_error(session.calibrate(without).T_parent_camera, X));
+      d.push_back(pose_error(session.calibrate_decided(without).T_parent_camera, X));
     } catch (const HandEyeError&) {
       ++r.leave_one_out_failed;
     }
@@ -247,9 +247,10 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
                               Calibration calibration, const ReportOptions& options) {
   CalibrationReport r;
   r.calibration = std::move(calibration);
-  r.fits = sample_fits(snapshot.samples, r.calibration);
+  const SampleSet as_decided = session.decided(snapshot.samples, r.calibration);  // a symmetric target's views as turned
+  r.fits = sample_fits(as_decided, r.calibration);
   r.advice_sigma = advice_threshold(r, options);
-  const SessionSnapshot kept{snapshot.generation, without_rejected(snapshot.samples, r.calibration)};
+  const SessionSnapshot kept{snapshot.generation, without_rejected(as_decided, r.calibration)};
   // The split-half check first: it may inflate the calibration's covariance, the one predicted below.
   split_half(session, kept, options, r);
   r.predicted_sigma = r.calibration.pose_covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

@@ -82,6 +82,10 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   const Target target = io::read_target(target_path);
   const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(images_dir, poses);
   out << inputs.size() << " images in " << images_dir << ", target: " << target.describe() << "\n";
+  if (is_half_turn_symmetric(target)) {
+    out << "  note: this board looks the same turned by 180 degrees: each image's pose is one of two candidates, "
+           "decided from the robot's motion (a board with one even and one odd number of inner corners avoids it)\n";
+  }
   ProgressBar bar(err, "detecting", ::isatty(STDERR_FILENO) && &err == &std::cerr);
   const auto progress = [&](std::size_t i, std::size_t n, const images::ImageReport&) {
     bar(static_cast<double>(i + 1) / static_cast<double>(n));
@@ -89,8 +93,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   Rig rig;
   rig.setup = setup;
   rig.frames = {"base", "effector", "camera", "pattern"};
-  rig.T_pattern_face = target_face(target);  // where suggested views look (a board's frame is at its corner)
-  rig.face_size = target_face_size(target);   // the view-following noise's shape
+  set_target(rig, target);  // where suggested views look, the view-following noise's shape, a symmetric board
   const images::ImageSession found = images::detect_images(inputs, camera, target, rig, progress);
   char line[256];
   for (const images::ImageReport& r : found.images) {

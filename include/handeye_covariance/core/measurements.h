@@ -50,6 +50,11 @@ struct SampleSet {
   std::vector<PoseSample> samples;
 };
 
+/// The set as the session solves it: detections with their own covariance and no
+/// global noise block get the mean of their camera covariances as the block, which
+/// the samples without one take. Unchanged when it has a block or none has its own.
+SampleSet with_default_noise(SampleSet samples);
+
 struct MotionPair {
   Eigen::Isometry3d A = Eigen::Isometry3d::Identity();  // robot motion
   Eigen::Isometry3d B = Eigen::Isometry3d::Identity();  // camera motion, A X = X B

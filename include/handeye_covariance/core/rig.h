@@ -49,8 +49,16 @@ struct Rig {
   /// detected points (core/target.h target_face_size); zero when the target is not
   /// known. The view-following noise model takes its shape from it (view_noise.h).
   Eigen::Vector2d face_size = Eigen::Vector2d::Zero();
+  /// The target looks the same turned by pi about its face's normal through the
+  /// face's centre (core/target.h is_half_turn_symmetric): each view's detected pose
+  /// P is one of two candidates, P and P face_half_turn(), which the session
+  /// decides from the robot's motion (estimation/symmetric_views.h).
+  bool symmetric_face = false;
 
   bool eye_in_hand() const { return setup == Setup::EyeInHand; }
+  /// F = T_pattern_pattern': the pattern frame turned by pi about the face's
+  /// normal (T_pattern_face's z) through its centre. F F = I.
+  Eigen::Isometry3d face_half_turn() const;
   /// X's parent frame: the effector (eye_in_hand) or the base (eye_to_hand).
   const std::string& camera_parent_frame() const { return eye_in_hand() ? frames.effector : frames.base; }
   /// Y's parent frame: the base (eye_in_hand) or the effector (eye_to_hand).

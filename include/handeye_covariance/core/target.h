@@ -87,6 +87,13 @@ Eigen::Isometry3d half_turn(const Target& target);
 /// sessions of targets that do not have it.
 Eigen::Isometry3d face_half_turn(const Target& target);
 
+struct Rig;
+/// What a session's geometry takes from its target: where its face is
+/// (Rig::T_pattern_face, target_face), its size (Rig::face_size,
+/// target_face_size) and whether it looks the same turned by 180 degrees
+/// (Rig::symmetric_face, is_half_turn_symmetric).
+void set_target(Rig& rig, const Target& target);
+
 /// The width and height (m) of the target's detected points about target_face:
 /// a chessboard's and a ChArUco board's inner corners, the markers' corners.
 Eigen::Vector2d target_face_size(const Target& target);

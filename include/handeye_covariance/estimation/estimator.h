@@ -179,6 +179,11 @@ struct Calibration {
   double covariance_inflation = 1.0, pattern_covariance_inflation = 1.0;
   std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
 
+  /// A symmetric target (Rig::symmetric_face): the samples whose detected pose was
+  /// replaced by its other candidate, turned by 180 degrees about the face's normal
+  /// (CalibrationSession::calibrate; indices into its input, ascending).
+  std::vector<int> turned;
+
   /// Samples left out by solve_robust (outliers.h), indices into its input.
   struct Rejected {
     int index = 0;

@@ -139,6 +139,11 @@ struct TurnDecision {
 TurnDecision refine_half_turns(const SampleSet& samples, const Eigen::Isometry3d& F, const std::vector<bool>& turned,
                                const JointOptions& joint = {}, const HalfTurnOptions& options = {});
 
+/// `samples` with view i replaced by its other candidate P F where turned[i] (its
+/// stated noise and corners following, as above): the views as a decision left
+/// them. Throws HandEyeError(WrongLength) unless there is one label per sample.
+SampleSet apply_half_turns(const SampleSet& samples, const Eigen::Isometry3d& F, const std::vector<bool>& turned);
+
 /// Stages 1-5: each view's candidate decided from the robot's motion. F: half_turn
 /// of the target (core/target.h); the identity (a target without the ambiguity)
 /// keeps every sample as it is, with no solve.

@@ -146,8 +146,17 @@ class CalibrationSession {
   /// The estimate and the best next pose; never throws (problems are reported).
   Analysis analyse(const SessionSnapshot& snapshot) const;
   /// X with its covariance, outliers rejected when configured; method corners
-  /// refines the joint estimate from the kept samples' corners. Throws HandEyeError.
+  /// refines the joint estimate from the kept samples' corners. A symmetric target
+  /// (Rig::symmetric_face) has each view's candidate decided from the robot's motion
+  /// first (estimation/symmetric_views.h): Calibration::turned lists the views
+  /// turned, `rejected` the ones left out as ambiguous, with the rest. Throws HandEyeError.
   Calibration calibrate(const SessionSnapshot& snapshot) const;
+  /// The samples as `calibration` decided them: each view it turned replaced by its
+  /// other candidate (its noise and corners following); all of them, in order, so
+  /// that `rejected`'s indices hold. The samples themselves without a symmetric target.
+  SampleSet decided(const SampleSet& samples, const Calibration& calibration) const;
+  /// calibrate() of samples decided already (decided()): no decision of turns.
+  Calibration calibrate_decided(const SessionSnapshot& snapshot) const;
   /// calibrate(), then the calibrated honesty check on the kept samples
   /// (Calibration::honesty; split_check.h), the covariance inflated when it is
   /// overconfident and the settings say so. The check needs 8 kept samples and a
@@ -155,7 +164,7 @@ class CalibrationSession {
   /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
   /// The split-half check (split_check.h) of this session's calibration: `splits`
-  /// random halves, each calibrated as calibrate() does.
+  /// random halves of the (decided) samples, each calibrated as calibrate_decided() does.
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;
   /// The split-half check against its parametric-bootstrap reference at this
   /// session's own poses and fitted noise (split_check.h, honesty_check), from
