@@ -103,14 +103,25 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
   EXPECT_EQ(ros.width, 640);
   EXPECT_DOUBLE_EQ(ros.K(1, 1), 601.0);
   ASSERT_EQ(ros.distortion.size(), 5u);
+  EXPECT_TRUE(ros.intrinsics_sigma.isZero(0.0));  // not stated: the intrinsics taken as exact
+  // The intrinsics' 1 sigma (px), when the camera's calibration gave it.
+  write(dir / "camera_sigma.yaml",
+        "camera_matrix: {rows: 3, cols: 3, data: [600, 0, 320, 0, 601, 240, 0, 0, 1]}\nintrinsics_sigma: [1.5, 1.4, 0.8, 0.7]\n");
+  EXPECT_EQ(images::read_camera((dir / "camera_sigma.yaml").string()).intrinsics_sigma, Eigen::Vector4d(1.5, 1.4, 0.8, 0.7));
+  write(dir / "camera_bad_sigma.yaml",
+        "camera_matrix: {rows: 3, cols: 3, data: [600, 0, 320, 0, 601, 240, 0, 0, 1]}\nintrinsics_sigma: [1.5, -1, 0.8, 0.7]\n");
+  EXPECT_NE(error_of([&] { images::read_camera((dir / "camera_bad_sigma.yaml").string()); }).find("negative sigma"),
+            std::string::npos);
   for (const char* name : {"camera.yaml", "camera.xml"}) {
     cv::FileStorage file((dir / name).string(), cv::FileStorage::WRITE);
     file << "image_width" << 640 << "image_height" << 480;
     file << "camera_matrix" << (cv::Mat_<double>(3, 3) << 600, 0, 320, 0, 601, 240, 0, 0, 1);
     file << "distortion_coefficients" << (cv::Mat_<double>(1, 5) << -0.1, 0.05, 0, 0, 0);
+    file << "intrinsics_sigma" << (cv::Mat_<double>(1, 4) << 1.5, 1.4, 0.8, 0.7);
     file.release();
     const CameraModel opencv = images::read_camera((dir / name).string());
     EXPECT_TRUE(opencv.K.isApprox(ros.K)) << name;
+    EXPECT_EQ(opencv.intrinsics_sigma, Eigen::Vector4d(1.5, 1.4, 0.8, 0.7)) << name;
     EXPECT_EQ(opencv.distortion, ros.distortion) << name;
     EXPECT_EQ(opencv.height, 480) << name;
   }

@@ -299,5 +299,93 @@ TEST(RealData, TheReportsOfTheRealSessions) {
   }
 }
 
+/// Every real session in shared/realdata with its target and, where there is one, the
+/// published X (the Franka sessions: ViSP's; the KUKA sessions: the data's README
+/// gives X_park, OpenCV's calibrateHandEye (PARK) on the same files).
+struct RealCase {
+  const char* name;
+  fs::path dir;
+  Setup setup;
+  Target target;
+  Eigen::Isometry3d published;
+};
+std::vector<RealCase> real_cases() {
+  const fs::path root = realdata();
+  const fs::path kuka = root / "rwhe-kuka";
+  return {
+      {"franka eye-to-hand AprilTag", root / "visp-franka" / "data-eye-to-hand", Setup::EyeToHand,
+       make_target(single_tag_layout(10, 0.048)),
+       theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018}, {-1.104108108, -1.112745553, 1.289540899})},
+      {"franka eye-in-hand chessboard 9 x 6", root / "visp-franka" / "data-eye-in-hand", Setup::EyeInHand,
+       io::parse_target("{type: chessboard, inner_corners: [9, 6], square: 0.0236}", "chessboard.yaml"),
+       theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244}, {0.001783530191, 0.009173747947, 1.581782359})},
+      {"kuka_2 chessboard 24 x 17", kuka / "kuka_2", Setup::EyeInHand, io::read_target((kuka / "kuka_2" / "target.yaml").string()),
+       theta_u_pose({0.01439, -0.1079, -0.08187}, {-1.20742, 1.28362, -1.18276})},
+      {"kuka_3 ChArUco 12 x 9", kuka / "kuka_3", Setup::EyeInHand, io::read_target((kuka / "kuka_3" / "target.yaml").string()),
+       theta_u_pose({0.25415, 0.0329, -0.10348}, {-1.21382, 1.27539, -1.17461})},
+  };
+}
+
+// Every real session on both paths, as a user runs them: the images with the
+// detector's covariances (handeye images), and the same images' poses without a
+// covariance (a detector that publishes a plain PoseStamped; the target's size
+// known). The calibrated check (split_check.h, 200 splits against 100 simulated
+// sessions at the session's own poses) gives each its ratio; the covariance a
+// user reads is honest either way: the ratio within [0.8, 1.25], or the verdict
+// overconfident and the covariance inflated by it (the model's kept beside it).
+// The KUKA sessions' X within 3 sigma per axis of X_park (their own detections'
+// OpenCV estimate), X's uncertainty being ours and the jackknife of ours.
+TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
+  for (const RealCase& c : real_cases()) {
+    ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
+    Rig rig{c.setup, {"base", "effector", "camera", "pattern"}};
+    set_target(rig, c.target);
+    const images::ImageSession found = images::detect_images(images::pair_images_with_poses(c.dir, c.dir),
+                                                             images::read_camera((c.dir / "camera_info.yaml").string()),
+                                                             c.target, rig);
+    SampleSet poses = found.samples;  // the second path: no covariance anywhere
+    poses.noise.reset();
+    for (PoseSample& s : poses.samples) s.noise.reset(), s.corners.reset();
+    for (const auto& [path, samples] : {std::pair<const char*, const SampleSet*>{"images", &found.samples},
+                                        {"poses without a covariance", &poses}}) {
+      CalibrationSession session(session_settings(*samples));
+      session.replace(samples->samples, c.name);
+      const Calibration cal = session.calibrate_checked(session.snapshot());
+      ASSERT_TRUE(cal.honesty) << c.name;
+      const Calibration::Honesty& h = *cal.honesty;
+      ASSERT_NE(h.verdict, "not run") << c.name << ": " << h.text;
+      const Vector6d error = pose_error(cal.T_parent_camera, c.published);
+      const Vector6d sigma = cal.pose_covariance.diagonal().cwiseSqrt();
+      std::printf("[honesty, real %s, %s, %zu samples] split-half NEES %.2f against %.2f (5-95%% %.2f to %.2f): ratio "
+                  "%.3f, %s; covariance x%.3f; X - published [%.2f %.2f %.2f] mm [%.3f %.3f %.3f] deg, in its sigma "
+                  "[%.2f %.2f %.2f %.2f %.2f %.2f]; noise: %s\n",
+                  c.name, path, samples->samples.size(), h.split_half_nees, h.reference_mean, h.reference_low,
+                  h.reference_high, h.ratio, h.text.c_str(), h.inflation, error(0) * 1e3, error(1) * 1e3, error(2) * 1e3,
+                  error(3) * 180 / M_PI, error(4) * 180 / M_PI, error(5) * 180 / M_PI, error(0) / sigma(0),
+                  error(1) / sigma(1), error(2) / sigma(2), error(3) / sigma(3), error(4) / sigma(4), error(5) / sigma(5),
+                  cal.noise_model.c_str());
+      EXPECT_TRUE(std::isfinite(h.ratio) && h.ratio > 0.0) << c.name;
+      const bool within = h.ratio >= 0.8 && h.ratio <= 1.25;
+      const bool inflated = h.verdict == "overconfident" && std::abs(h.inflation - h.ratio) < 1e-12 &&
+                            cal.pose_covariance.isApprox(h.ratio * h.model_pose_covariance);
+      EXPECT_TRUE(within || inflated || h.verdict == "underconfident") << c.name << ", " << path << ": " << h.text;
+    }
+  }
+}
+
+// The KUKA sessions through the node's path: X within 3 sigma of X_park per axis
+// (combined with the jackknife spread of our pipeline for X_park's, as the Franka
+// sessions are judged against ViSP's).
+TEST(RealData, KukaSessionsLandWithin3SigmaOfOpenCvsX) {
+  for (const RealCase& c : real_cases()) {
+    if (std::string(c.name).rfind("kuka", 0) != 0) continue;
+    ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
+    std::printf("[real %s, the node's path] %s\n", c.name, c.dir.c_str());
+    const RealSession session = real_session(c.dir, c.setup, c.target);
+    EXPECT_EQ(session.detected, session.images) << "every image shows the board";
+    judge(session, c.published);
+  }
+}
+
 }  // namespace
 }  // namespace handeye

@@ -261,6 +261,63 @@ TEST(PatternPose, ReprojectionJacobianMatchesNumericDifferences) {
   }
 }
 
+// The intrinsics' uncertainty of a camera file (intrinsics_sigma) enters each
+// view's pose covariance as the pose's own sensitivity to them carries it: the
+// Jacobian of the projections against numeric differences, the pose's shift for a
+// slightly wrong fx or cx against the re-estimated pose, and the added covariance
+// A diag(sigma^2) A^T (a 1% focal length: depth 1% of the distance).
+TEST(PatternPose, IntrinsicsUncertaintyEntersTheViewsCovariance) {
+  CameraModel camera = simulated_camera();
+  const TagLayout layout = io::read_tag_layout(board_file());
+  std::vector<Vector3d> points;
+  for (const TagPlacement& tag : layout.tags)
+    for (const Vector3d& c : tag.corners()) points.push_back(c);
+  Isometry3d T = frontal_view(0.7);
+  T.translation() *= 0.8 / T.translation().norm();
+  const auto JK = intrinsics_jacobian(camera, T, points);
+  for (int k = 0; k < 4; ++k) {
+    const double h = 1e-4;
+    CameraModel plus = camera, minus = camera;
+    const int row = k == 1 || k == 3 ? 1 : 0, col = k < 2 ? row : 2;  // fx (0,0), fy (1,1), cx (0,2), cy (1,2)
+    plus.K(row, col) += h, minus.K(row, col) -= h;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector2d numeric = (project(plus, T * points[i]) - project(minus, T * points[i])) / (2 * h);
+      EXPECT_LT((JK.block<2, 1>(2 * i, k) - numeric).norm(), 1e-6 * (1.0 + numeric.norm())) << k << " " << i;
+    }
+  }
+  // Exact corners of the view: the pose, then the pose with fx 0.5 px long, re-fitted.
+  PointCorrespondences exact;
+  exact.object = points;
+  for (const Vector3d& p : points) exact.image.push_back(project(camera, T * p));
+  exact.blocks = 2;
+  PixelNoise noise(0.1);
+  const PatternPoseResult as_given = estimate_pose(camera, exact, noise);
+  ASSERT_TRUE(as_given.pose) << as_given.refusal;
+  CameraModel longer = camera;
+  longer.K(0, 0) += 0.5;
+  PixelNoise noise2(0.1);
+  const PatternPoseResult refit = estimate_pose(longer, exact, noise2);
+  ASSERT_TRUE(refit.pose);
+  const Vector6d shift = test::pose_perturbation(refit.pose->T_camera_pattern, as_given.pose->T_camera_pattern);
+  const auto J = reprojection_jacobian(camera, as_given.pose->T_camera_pattern, points);
+  const Vector6d predicted = -(J.transpose() * J).ldlt().solve(J.transpose() * JK.col(0) * 0.5);
+  EXPECT_LT((shift - predicted).norm(), 0.02 * predicted.norm()) << shift.transpose() << " / " << predicted.transpose();
+  // The covariance with sigma_fx = sigma_fy = 1% (6 px): depth about 1% of 0.8 m more.
+  CameraModel uncertain = camera;
+  uncertain.intrinsics_sigma << 6.0, 6.0, 0.0, 0.0;
+  PixelNoise noise3(0.1);
+  const PatternPoseResult with_sigma = estimate_pose(uncertain, exact, noise3);
+  ASSERT_TRUE(with_sigma.pose);
+  const Matrix6d added = with_sigma.pose->covariance - as_given.pose->covariance;
+  const Eigen::Matrix<double, 6, 4> A = (J.transpose() * J).ldlt().solve(J.transpose() * JK);
+  const Matrix6d expected = A * Eigen::Vector4d(36.0, 36.0, 0.0, 0.0).asDiagonal() * A.transpose();
+  EXPECT_LT((added - expected).norm(), 1e-6 * expected.norm());
+  const double depth_sigma = std::sqrt(added(2, 2));
+  std::printf("[ figures  ] 1%% focal length at 0.8 m: the view's depth 1 sigma grows by %.2f mm (pixel part %.3f mm)\n",
+              depth_sigma * 1e3, std::sqrt(as_given.pose->covariance(2, 2)) * 1e3);
+  EXPECT_NEAR(depth_sigma, 0.01 * T.translation().z(), 0.3 * 0.01 * T.translation().z());
+}
+
 TEST(PixelNoise, PoolsOverTheWindowAndKeepsTheFloor) {
   PixelNoise noise(0.1, 3);
   EXPECT_EQ(noise.sigma(), 0.1);  // nothing seen yet: the floor

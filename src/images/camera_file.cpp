@@ -217,6 +217,25 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
         }
       }
     }
+    // Optional: the 1 sigma of fx, fy, cx, cy (px), an opencv-matrix of 4 as the others.
+    const cv::Mat sigma = xml ? small_matrix(storage["intrinsics_sigma"], "intrinsics_sigma", 4, source, hint)
+                              : yaml_matrix(yaml, "intrinsics_sigma", 4, source, hint);
+    if (!sigma.empty()) {
+      if (sigma.total() != 4 || sigma.channels() != 1) {
+        throw HandEyeError(ErrorCode::WrongLength, "intrinsics_sigma needs 4 numbers: the 1 sigma of fx, fy, cx, cy (px)",
+                           source, hint);
+      }
+      cv::Mat values;
+      sigma.convertTo(values, CV_64F);
+      for (int k = 0; k < 4; ++k) {
+        const double v = values.at<double>(k);
+        if (!(v >= 0.0) || !std::isfinite(v)) {
+          throw HandEyeError(ErrorCode::MalformedFile, "intrinsics_sigma holds a negative or non-finite sigma", source,
+                             "give the 1 sigma of fx, fy, cx, cy in px, each >= 0");
+        }
+        file.intrinsics_sigma[k] = v;
+      }
+    }
     file.width = xml ? image_size(storage["image_width"], "image_width", source)
                      : yaml_image_size(yaml, "image_width", source);
     file.height = xml ? image_size(storage["image_height"], "image_height", source)

@@ -1235,6 +1235,16 @@ Target read_target(const std::string& path) { return parse_target(read_file(path
 
 // ---------------------------------------------------------------- camera_info
 
+Eigen::Vector4d intrinsics_sigma(const YAML::Node& node, const Location& at) {
+  const auto values = as_numbers<4>(node, at, "the 1 sigma of fx, fy, cx, cy in px");
+  const Eigen::Vector4d sigma(values[0], values[1], values[2], values[3]);
+  if (!(sigma.array() >= 0.0).all()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "intrinsics_sigma holds a negative sigma", at.str(),
+                       "give the 1 sigma of fx, fy, cx, cy in px, each >= 0 (e.g. from handeye images --refine-intrinsics)");
+  }
+  return sigma;
+}
+
 CameraModel parse_camera_info(const std::string& text, const std::string& source) {
   const std::string hint = "a ROS camera_info YAML (camera_calibration writes one): image_width, image_height, "
                            "camera_matrix: {data: [9 numbers]}, distortion_coefficients: {data: [...]}";
@@ -1262,6 +1272,7 @@ CameraModel parse_camera_info(const std::string& text, const std::string& source
   for (const auto& [key, member] : {std::pair<const char*, int*>{"image_width", &camera.width}, {"image_height", &camera.height}}) {
     if (root[key]) *member = as_integer(root[key], top / key, 0, 100000, std::string(key) + " (pixels)");
   }
+  if (const YAML::Node sigma = root["intrinsics_sigma"]) camera.intrinsics_sigma = intrinsics_sigma(sigma, top / "intrinsics_sigma");
   return camera;
 }
 

@@ -196,6 +196,21 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel
   return J;
 }
 
+Eigen::Matrix<double, Eigen::Dynamic, 4> intrinsics_jacobian(const CameraModel& camera, const Isometry3d& T_camera_pattern,
+                                                             const std::vector<Vector3d>& points) {
+  std::vector<cv::Point2d> pixels;
+  cv::Mat jacobian;  // columns: rvec (3), tvec (3), fx, fy, cx, cy, the distortion's
+  const Eigen::AngleAxisd axis_angle(T_camera_pattern.linear());
+  const Vector3d r = axis_angle.angle() * axis_angle.axis(), t = T_camera_pattern.translation();
+  cv::projectPoints(cv_points(points), cv::Mat(cv::Vec3d(r.x(), r.y(), r.z())), cv::Mat(cv::Vec3d(t.x(), t.y(), t.z())),
+                    camera_matrix(camera), distortion(camera), pixels, jacobian);
+  Eigen::Matrix<double, Eigen::Dynamic, 4> J(2 * points.size(), 4);
+  for (int row = 0; row < J.rows(); ++row) {
+    for (int c = 0; c < 4; ++c) J(row, c) = jacobian.at<double>(row, 6 + c);
+  }
+  return J;
+}
+
 TargetObservation tag_correspondences(const TagLayout& layout, const std::vector<TagCorners>& detections,
                                        const PatternPoseOptions& options) {
   TargetObservation result;
@@ -349,6 +364,13 @@ PatternPoseResult estimate_pose(const CameraModel& camera, const PointCorrespond
   pose.pixel_sigma = noise.sigma();
   pose.covariance_variance = noise.covariance_variance();
   pose.covariance = pose.covariance_variance * information.inverse();
+  if ((camera.intrinsics_sigma.array() > 0.0).any()) {
+    // The intrinsics' own uncertainty: the fit moves the pose by -A dK when the
+    // projections move by J_K dK, A = (J^T W J)^-1 J^T W J_K.
+    const Eigen::Matrix<double, 6, 4> A =
+        information.ldlt().solve(J.transpose() * weight * intrinsics_jacobian(camera, pose.T_camera_pattern, object));
+    pose.covariance += A * camera.intrinsics_sigma.cwiseAbs2().asDiagonal() * A.transpose();
+  }
   pose.covariance = 0.5 * (pose.covariance + pose.covariance.transpose());
   result.pose = pose;
   return result;

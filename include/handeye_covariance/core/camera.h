@@ -17,6 +17,10 @@ struct CameraModel {
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
   std::vector<double> distortion;
   int width = 0, height = 0;
+  /// The 1 sigma of fx, fy, cx, cy (px) from the camera's own calibration, when the
+  /// camera file states it (`intrinsics_sigma`); zero: taken as exact. Each view's
+  /// pose covariance then carries it (vision/pattern_pose.h).
+  Eigen::Vector4d intrinsics_sigma = Eigen::Vector4d::Zero();
 };
 
 /// Throws HandEyeError when K is not a usable pinhole matrix (fx, fy <= 0, NaN)

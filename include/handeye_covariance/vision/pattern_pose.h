@@ -170,6 +170,14 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> reprojection_jacobian(const CameraModel
                                                                const Eigen::Isometry3d& T_camera_pattern,
                                                                const std::vector<Eigen::Vector3d>& points);
 
+/// d(pixels)/d(fx, fy, cx, cy) (2n x 4) of the pattern points at T_camera_pattern,
+/// by cv::projectPoints: how the intrinsics' uncertainty (CameraModel::intrinsics_sigma)
+/// enters a view's pose covariance, sigma^2 (J^T C^-1 J)^-1 + A diag(sigma_K^2) A^T,
+/// A = (J^T C^-1 J)^-1 J^T C^-1 J_K.
+Eigen::Matrix<double, Eigen::Dynamic, 4> intrinsics_jacobian(const CameraModel& camera,
+                                                             const Eigen::Isometry3d& T_camera_pattern,
+                                                             const std::vector<Eigen::Vector3d>& points);
+
 /// The corners of a detection on the rectified image (camera.rectified(): K, no
 /// distortion) in the raw image's pixels, their covariance carried by the 2x2
 /// Jacobian of the distortion at each corner.
