@@ -81,7 +81,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   h.replicates = check.reference.replicates;
   h.reference_mean = check.reference.mean, h.reference_low = check.reference.low, h.reference_high = check.reference.high;
   h.ratio = check.ratio;
-  h.verdict = check.reference.replicates > 0 ? to_string(check.verdict) : "not run";
+  h.verdict = check.ran() ? to_string(check.verdict) : "not run";
   h.text = check.text;
   h.model_pose_covariance = c.pose_covariance;
   if (inflate && check.verdict == Honesty::Overconfident && check.inflation > 1.0) {

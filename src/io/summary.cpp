@@ -193,7 +193,7 @@ std::string report_summary(const CalibrationReport& report) {
     const HonestyCheck& h = report.honesty;
     out += row("split-half", report.split_half_sigma,
                "   (" + std::to_string(h.observed.splits) + " splits, NEES " + number_text(h.observed.trimmed_mean_nees, 3) +
-                   (h.reference.replicates > 0 ? "; honest here " + number_text(h.reference.mean, 3) + ": " + h.text : "") + ")");
+                   (h.ran() ? "; honest here " + number_text(h.reference.mean, 3) + ": " + h.text : "") + ")");
   } else {
     out += "    split-half      " + report.split_problem + "\n";
   }

@@ -726,7 +726,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
       << YAML::EndSeq;
   out << YAML::Key << "honest_sessions" << YAML::Value << h.reference.replicates;
   out << YAML::Key << "honesty_ratio" << YAML::Value << h.ratio;
-  out << YAML::Key << "honesty" << YAML::Value << (h.reference.replicates > 0 ? to_string(h.verdict) : "not run");
+  out << YAML::Key << "honesty" << YAML::Value << (h.ran() ? to_string(h.verdict) : "not run");
   out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
   if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
   out << YAML::EndMap;

@@ -150,7 +150,7 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
     }
   }
   const HonestyCheck& h = r.honesty;
-  if (h.reference.replicates > 0 && h.verdict != Honesty::Honest) {
+  if (h.ran() && h.verdict != Honesty::Honest) {
     const std::string figures = "split-half NEES " + number_text(h.observed.trimmed_mean_nees, 3) + " against " +
                                 number_text(h.reference.mean, 3) + " (5-95% " + number_text(h.reference.low, 3) + " to " +
                                 number_text(h.reference.high, 3) + ") for an honest covariance on these poses";

@@ -98,8 +98,13 @@ struct HonestyCheck {
   /// What the covariance should be multiplied by to be honest here: the ratio when
   /// overconfident, else 1 (an underconfident covariance is kept: it errs safe).
   double inflation = 1.0;
-  /// A plain verdict: "honest", "overconfident x1.4: sigma is about 1.2x too small", ...
+  /// A plain verdict: "honest", "overconfident x1.4: sigma is about 1.2x too small", ...;
+  /// or why there is none ("no reference: ...").
   std::string text;
+  /// Whether there is a verdict: the session had solved splits and the reference at
+  /// least two simulated sessions (the halves of 4 samples a small session leaves
+  /// may all fail to solve).
+  bool ran() const { return reference.replicates >= 2 && observed.splits > 0; }
 };
 
 /// The split-half check of `samples` (as split_check) and its parametric-bootstrap
