@@ -24,6 +24,7 @@
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "scratch_directory.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "realdata.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/images/image_folder.h"
@@ -33,17 +34,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The real data: $HANDEYE_REALDATA, else shared/realdata beside the repository or
-/// beside one of its parents (a clone may sit deeper than the working copy), else
-/// this workplace's /work/shared/realdata.
-fs::path realdata() {
-  if (const char* env = std::getenv("HANDEYE_REALDATA")) return env;
-  for (fs::path dir = fs::path(HANDEYE_REPOSITORY_DIR).parent_path(); !dir.empty(); dir = dir.parent_path()) {
-    if (fs::exists(dir / "shared" / "realdata")) return dir / "shared" / "realdata";
-    if (dir == dir.root_path()) break;
-  }
-  return "/work/shared/realdata";
-}
+using test::realdata;
 
 Eigen::Isometry3d theta_u_pose(const Eigen::Vector3d& t, const Eigen::Vector3d& theta_u) {
   return se3::make_pose(so3::exp(theta_u), t);

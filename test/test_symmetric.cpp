@@ -23,6 +23,7 @@
 #include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/images/pooled_detector.h"
 #include "handeye_covariance/io/yaml_io.h"
+#include "realdata.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"
@@ -32,16 +33,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The real data: $HANDEYE_REALDATA, else shared/realdata beside the repository or
-/// one of its parents, else /work/shared/realdata (as test_real_data).
-fs::path realdata() {
-  if (const char* env = std::getenv("HANDEYE_REALDATA")) return env;
-  for (fs::path dir = fs::path(HANDEYE_REPOSITORY_DIR).parent_path(); !dir.empty(); dir = dir.parent_path()) {
-    if (fs::exists(dir / "shared" / "realdata")) return dir / "shared" / "realdata";
-    if (dir == dir.root_path()) break;
-  }
-  return "/work/shared/realdata";
-}
+using test::realdata;
 
 /// The decided labels against the planted ones, up to the global turn (which
 /// moves Y only): the number that agree with the nearer of the two readings.
