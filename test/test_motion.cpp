@@ -1,0 +1,438 @@
+// The view planner on the simulated arm (urdf/sim_arm.urdf): kinematics against
+// the UR5's published DH parameters, the reach bound, collision checks, and
+// seeded planning runs whose commanded trajectories this test checks with its
+// own FCL queries on the unpadded geometry.
+#include <fstream>
+#include <sstream>
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/collision_object.h>
+#include <gtest/gtest.h>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/motion/view_planner.h"
+
+using namespace handeye;
+using namespace handeye::motion;
+
+namespace {
+
+std::string sim_arm_urdf() {
+  const std::string path = std::string(HANDEYE_SOURCE_DIR) + "/urdf/sim_arm.urdf";
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+const Arm& sim_arm() {
+  static const Arm arm = Arm::from_urdf(sim_arm_urdf(), "base_link", "tool0", "urdf/sim_arm.urdf");
+  return arm;
+}
+
+// The UR5's forward kinematics from its published DH table, written out here
+// independently of the URDF: T = prod_i Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i).
+Eigen::Isometry3d ur5_dh(const Eigen::VectorXd& q) {
+  const double d[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
+  const double a[6] = {0, -0.425, -0.39225, 0, 0, 0};
+  const double alpha[6] = {M_PI / 2, 0, 0, M_PI / 2, -M_PI / 2, 0};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Isometry3d Ti = Eigen::Isometry3d::Identity();
+    Ti.rotate(Eigen::AngleAxisd(q(i), Eigen::Vector3d::UnitZ()));
+    Ti.translate(Eigen::Vector3d(a[i], 0, d[i]).cwiseProduct(Eigen::Vector3d(0, 0, 1)));
+    Ti.translate(Eigen::Vector3d(a[i], 0, 0));
+    Ti.rotate(Eigen::AngleAxisd(alpha[i], Eigen::Vector3d::UnitX()));
+    T = T * Ti;
+  }
+  return T;
+}
+
+Eigen::VectorXd random_joints(Rng& rng, const Arm& arm, double margin = 0.0) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Eigen::VectorXd q(arm.joints());
+  for (int j = 0; j < arm.joints(); ++j) {
+    const JointLimit& l = arm.limits()[j];
+    q(j) = l.lower + margin + unit(rng) * (l.upper - l.lower - 2 * margin);
+  }
+  return q;
+}
+
+// A camera looking along the flange's z, 5 cm out, in a 8 x 6 x 5 cm housing.
+Eigen::Isometry3d camera_on_flange() {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() = Eigen::Vector3d(0.0, 0.05, 0.04);
+  return X;
+}
+Shape camera_housing() {
+  Shape s;
+  s.kind = Shape::Kind::Box;
+  s.size = Eigen::Vector3d(0.08, 0.06, 0.05);
+  s.T_link_shape = camera_on_flange();
+  s.T_link_shape.translation().z() -= 0.02;
+  return s;
+}
+
+// The test's own collision query: FCL on the unpadded shapes, every pair of
+// bodies more than one joint apart except the pairs the model found always
+// touching, and every moving body against every obstacle.
+struct OwnQuery {
+  const Arm& arm;
+  std::vector<Obstacle> obstacles;
+  std::vector<std::string> always;  // CollisionModel::unchecked_pairs(): "a / b: always touching", ...
+  std::string contact(const Eigen::VectorXd& q) const {
+    auto object = [](Shape::Kind kind, const Eigen::Vector3d& size, const Eigen::Isometry3d& pose) {
+      std::shared_ptr<fcl::CollisionGeometryd> g;
+      if (kind == Shape::Kind::Box) g = std::make_shared<fcl::Boxd>(size);
+      if (kind == Shape::Kind::Cylinder) g = std::make_shared<fcl::Cylinderd>(size(0), size(1));
+      if (kind == Shape::Kind::Sphere) g = std::make_shared<fcl::Sphered>(size(0));
+      return fcl::CollisionObjectd(g, pose);
+    };
+    const auto poses = arm.body_poses(q);
+    const auto& bodies = arm.bodies();
+    auto hit = [](const fcl::CollisionObjectd& a, const fcl::CollisionObjectd& b) {
+      fcl::CollisionRequestd req;
+      fcl::CollisionResultd res;
+      return fcl::collide(&a, &b, req, res) > 0;
+    };
+    for (std::size_t a = 0; a < bodies.size(); ++a) {
+      for (const Shape& sa : bodies[a].shapes) {
+        const auto oa = object(sa.kind, sa.size, poses[a] * sa.T_link_shape);
+        if (bodies[a].joints_before > 0) {
+          for (const Obstacle& o : obstacles) {
+            std::shared_ptr<fcl::CollisionGeometryd> g;
+            if (o.kind == Obstacle::Kind::Plane) g = std::make_shared<fcl::Halfspaced>(Eigen::Vector3d::UnitZ(), 0.0);
+            if (o.kind == Obstacle::Kind::Box) g = std::make_shared<fcl::Boxd>(o.size);
+            if (o.kind == Obstacle::Kind::Cylinder) g = std::make_shared<fcl::Cylinderd>(o.size(0), o.size(1));
+            if (o.kind == Obstacle::Kind::Sphere) g = std::make_shared<fcl::Sphered>(o.size(0));
+            if (hit(oa, fcl::CollisionObjectd(g, o.pose))) return bodies[a].name + " / " + o.name;
+          }
+        }
+        for (std::size_t b = a + 1; b < bodies.size(); ++b) {
+          if (std::abs(bodies[a].joints_before - bodies[b].joints_before) <= 1) continue;
+          const std::string pair = bodies[a].name + " / " + bodies[b].name;
+          if (std::find(always.begin(), always.end(), pair + ": always touching") != always.end()) continue;
+          for (const Shape& sb : bodies[b].shapes)
+            if (hit(oa, object(sb.kind, sb.size, poses[b] * sb.T_link_shape))) return pair;
+        }
+      }
+    }
+    return "";
+  }
+};
+
+}  // namespace
+
+TEST(Arm, ForwardKinematicsIsTheUr5sDhTable) {
+  const Arm& arm = sim_arm();
+  ASSERT_EQ(arm.joints(), 6);
+  Rng rng(3);
+  double worst = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::VectorXd q = random_joints(rng, arm);
+    worst = std::max(worst, se3::log(arm.forward(q).inverse() * ur5_dh(q)).norm());
+  }
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(Arm, InverseKinematicsReachesAndPrefersTheNearestPosture) {
+  const Arm& arm = sim_arm();
+  Rng rng(4);
+  int solved = 0, nearest_is_truth = 0, postures = 0;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::VectorXd truth = random_joints(rng, arm, 0.2);
+    const Eigen::Isometry3d T = arm.forward(truth);
+    // Start 0.05 rad from the truth: the nearest solution is the truth.
+    const Eigen::VectorXd near = truth + Eigen::VectorXd::Constant(6, 0.05);
+    const auto solutions = arm.inverse(T, near, 6, rng);
+    if (solutions.empty()) continue;
+    ++solved;
+    postures += static_cast<int>(solutions.size());
+    for (const auto& q : solutions) EXPECT_LT(se3::log(arm.forward(q).inverse() * T).norm(), 1e-6);
+    nearest_is_truth += largest_joint_change(solutions.front(), truth) < 1e-4;
+  }
+  EXPECT_EQ(solved, 100);
+  EXPECT_EQ(nearest_is_truth, 100);
+  EXPECT_GT(postures, 200) << "several postures per pose (a UR5 has up to 8)";
+}
+
+TEST(Arm, ReachBoundsHowFarAnyPointMoves) {
+  Arm arm = sim_arm();
+  arm.attach("tool0", camera_housing());
+  const std::vector<double> reach = arm.reach();
+  Rng rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  double tightest = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::VectorXd q = random_joints(rng, arm);
+    Eigen::VectorXd dq(6);
+    for (int j = 0; j < 6; ++j) dq(j) = 0.01 * normal(rng);
+    double bound = 0.0;
+    for (int j = 0; j < 6; ++j) bound += reach[j] * std::abs(dq(j));
+    const auto a = arm.body_poses(q), b = arm.body_poses(q + dq);
+    // The shapes' corners and ends (boxes: 8 corners; cylinders: rim points).
+    double moved = 0.0;
+    for (std::size_t i = 0; i < arm.bodies().size(); ++i) {
+      for (const Shape& s : arm.bodies()[i].shapes) {
+        for (int c = 0; c < 8; ++c) {
+          const Eigen::Vector3d sign((c & 1) ? 1 : -1, (c & 2) ? 1 : -1, (c & 4) ? 1 : -1);
+          Eigen::Vector3d p = s.kind == Shape::Kind::Box ? Eigen::Vector3d(0.5 * s.size.cwiseProduct(sign))
+                              : s.kind == Shape::Kind::Cylinder
+                                  ? Eigen::Vector3d(sign.x() * s.size(0), 0.0, 0.5 * sign.z() * s.size(1))
+                                  : Eigen::Vector3d(sign.x() * s.size(0), 0.0, 0.0);
+          moved = std::max(moved, ((b[i] * s.T_link_shape * p) - (a[i] * s.T_link_shape * p)).norm());
+        }
+      }
+    }
+    ASSERT_LE(moved, bound * (1 + 1e-9));
+    tightest = std::max(tightest, moved / bound);
+  }
+  EXPECT_GT(tightest, 0.3) << "the bound is not uselessly loose";
+}
+
+TEST(Collision, TheTableTheArmAndDeclaredObstacles) {
+  Arm arm = sim_arm();
+  arm.attach("tool0", camera_housing());
+  // Upright, the forearm level, the flange pointing down: clear.
+  Eigen::VectorXd ready(6);
+  ready << 0.0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0.0;
+  CollisionModel table(arm, table_plane());
+  EXPECT_FALSE(table.contact(ready)) << table.contact(ready)->text();
+  // The shoulder lifted down through the table.
+  Eigen::VectorXd down = ready;
+  down(1) = 0.3;
+  auto contact = table.contact(down);
+  ASSERT_TRUE(contact);
+  EXPECT_EQ(contact->second, "table");
+  // A box where the flange is.
+  const Eigen::Vector3d flange = arm.forward(ready).translation();
+  auto box = parse_obstacles("obstacles: [{name: fixture, type: box, size: [0.1, 0.1, 0.1], xyz: [" +
+                                 std::to_string(flange.x()) + ", " + std::to_string(flange.y()) + ", " +
+                                 std::to_string(flange.z()) + "]}]",
+                             "test");
+  CollisionModel with_box(arm, box);
+  ASSERT_TRUE(with_box.contact(ready));
+  EXPECT_EQ(with_box.contact(ready)->second, "fixture");
+  // The wrist folded back onto the base: a self-collision, not adjacent.
+  Eigen::VectorXd folded(6);
+  folded << 0.0, -M_PI / 2, 2.8, -M_PI / 2, -M_PI / 2, 0.0;
+  CollisionModel none(arm, {});
+  const auto self = none.contact(folded);
+  ASSERT_TRUE(self);
+  // Adjacent pairs and always-touching pairs are named as not checked.
+  bool adjacent = false;
+  for (const auto& pair : none.unchecked_pairs()) adjacent = adjacent || pair.find("adjacent") != std::string::npos;
+  EXPECT_TRUE(adjacent);
+  EXPECT_GE(none.checked_pairs().size(), 8u);
+}
+
+TEST(Collision, ObstacleFilesAreCheckedWithTheirEntryNamed) {
+  const auto ok = parse_obstacles(
+      "obstacles:\n - {name: table, type: plane}\n - {name: post, type: cylinder, radius: 0.05, length: 1, xyz: [0.5, "
+      "0.5, 0.5], rpy: [0, 1.5707963, 0]}\n - {name: lamp, type: sphere, radius: 0.1, xyz: [0, 0, 2]}\n",
+      "f.yaml");
+  ASSERT_EQ(ok.size(), 3u);
+  EXPECT_NEAR(ok[1].pose.linear().col(2).x(), 1.0, 1e-6) << "rpy as in URDF: pitch turns z towards x";
+  auto code = [](const std::string& text) {
+    try {
+      parse_obstacles(text, "f.yaml");
+    } catch (const HandEyeError& e) {
+      return std::string(to_string(e.code())) + ": " + e.what();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(code("obstacles: [{type: box, size: [1, 2]}]").find("WrongLength"), std::string::npos);
+  EXPECT_NE(code("obstacles: [{type: box, size: [1, 2]}]").find("obstacles[0]"), std::string::npos);
+  EXPECT_NE(code("obstacles: [{type: cone}]").find("box, cylinder, sphere, plane"), std::string::npos);
+  EXPECT_NE(code("obstacles: [{type: sphere, radius: -1}]").find("positive"), std::string::npos);
+  EXPECT_NE(code("boxes: []").find("MissingKey"), std::string::npos);
+  EXPECT_NE(code("obstacles: [{type: sphere, radius: x}]").find("MalformedFile"), std::string::npos);
+  EXPECT_EQ(code("obstacles: []"), "accepted");
+}
+
+TEST(Trajectory, QuinticMoveKeepsToTheSpeedFraction) {
+  const Arm& arm = sim_arm();
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(6), b = a;
+  b(0) = 1.0, b(4) = -0.5;
+  const auto points = timed_move(arm, a, b, 0.1);
+  ASSERT_GE(points.size(), 3u);
+  EXPECT_LT((points.front().position - a).norm(), 1e-12);
+  EXPECT_LT((points.back().position - b).norm(), 1e-12);
+  EXPECT_LT(points.back().velocity.norm(), 1e-12);
+  double peak = 0.0;
+  for (const auto& p : points) peak = std::max(peak, std::abs(p.velocity(0)));
+  EXPECT_LE(peak, 0.1 * arm.limits()[0].velocity * (1 + 1e-9));
+  EXPECT_GT(peak, 0.09 * arm.limits()[0].velocity);
+}
+
+namespace {
+
+// The simulated rig of the planning runs: eye-in-hand, the camera on the flange,
+// a 0.2 x 0.15 m board flat on the table in front of the arm.
+struct PlanningRig {
+  Rig rig;
+  Eigen::Isometry3d X = camera_on_flange();
+  Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();
+  PlanningRig() {
+    rig.setup = Setup::EyeInHand;
+    rig.face_size = Eigen::Vector2d(0.2, 0.15);
+    Y.translation() = Eigen::Vector3d(0.45, 0.15, 0.0);
+  }
+  std::vector<ViewCandidate> candidates(Rng& rng, int n) const {
+    ViewpointOptions views;
+    views.min_distance = 0.3, views.max_distance = 0.7;
+    std::vector<ViewCandidate> out;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Isometry3d view = random_view(rng, views);
+      out.push_back({rig.effector_for_view(X, Y, view), view});
+    }
+    return out;
+  }
+};
+
+// A box on the table near the arm; every other one beside the board, where the
+// camera's moves pass.
+Obstacle random_box(Rng& rng, const Eigen::Vector3d& board, bool beside_board) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Obstacle box;
+  box.name = beside_board ? "box beside the board" : "box";
+  box.kind = Obstacle::Kind::Box;
+  box.size = Eigen::Vector3d(0.05 + 0.2 * unit(rng), 0.05 + 0.2 * unit(rng), 0.1 + 0.4 * unit(rng));
+  const double angle = 2 * M_PI * unit(rng);
+  const Eigen::Vector3d centre = beside_board ? Eigen::Vector3d(board.x() + 0.3 * std::cos(angle), board.y() + 0.3 * std::sin(angle), 0)
+                                              : Eigen::Vector3d((0.3 + 0.5 * unit(rng)) * std::cos(angle),
+                                                                (0.3 + 0.5 * unit(rng)) * std::sin(angle), 0);
+  box.pose.translation() = centre + Eigen::Vector3d(0, 0, 0.5 * box.size.z());
+  box.pose.linear() = Eigen::AngleAxisd(2 * M_PI * unit(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return box;
+}
+
+}  // namespace
+
+// 100 seeded runs: random boxes near the arm and a random start view; the plan's
+// commanded trajectory is checked here, densely (no joint moves more than 0.002
+// rad between checks) on the unpadded geometry with this test's own FCL query.
+TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
+  Arm arm = sim_arm();
+  arm.attach("tool0", camera_housing());
+  const PlanningRig setup;
+  const PlannerOptions options;
+  Eigen::VectorXd ready(6);
+  ready << 0.0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0.0;
+  std::array<int, kRefusals> refused{};
+  int planned = 0, outside_limits = 0, in_collision = 0, too_far = 0, checked_configurations = 0, runs = 0;
+  for (unsigned seed = 1; runs < 100; ++seed) {
+    Rng rng(seed);
+    std::vector<Obstacle> world = table_plane();
+    std::uniform_int_distribution<int> count(1, 3);
+    for (int b = count(rng); b > 0; --b) world.push_back(random_box(rng, setup.Y.translation(), b % 2 == 1));
+    CollisionModel model(arm, world);
+    // A start: a reachable, collision-free view.
+    Eigen::VectorXd start;
+    for (const ViewCandidate& c : setup.candidates(rng, 30)) {
+      const auto solutions = arm.inverse(c.T_base_effector, ready, 4, rng);
+      for (const auto& q : solutions) {
+        bool inside = true;
+        for (int j = 0; j < 6; ++j)
+          inside = inside && q(j) > arm.limits()[j].lower + options.joint_margin &&
+                   q(j) < arm.limits()[j].upper - options.joint_margin;
+        if (inside && !model.contact(q)) {
+          start = q;
+          break;
+        }
+      }
+      if (start.size()) break;
+    }
+    if (!start.size()) continue;  // the boxes left no start view: draw again
+    ++runs;
+    const auto candidates = setup.candidates(rng, 150);
+    const ViewPlan plan = plan_view(arm, model, setup.rig, std::nullopt, start, candidates, options);
+    for (int r = 0; r < kRefusals; ++r) refused[r] += plan.refused[r];
+    if (!plan.found()) continue;
+    ++planned;
+    EXPECT_LT(se3::log(arm.forward(plan.goal).inverse() * candidates[plan.chosen].T_base_effector).norm(), 1e-6);
+    const OwnQuery own{arm, world, model.unchecked_pairs()};
+    const auto trajectory = timed_move(arm, start, plan.goal, 0.1);
+    too_far += largest_joint_change(plan.goal, start) > options.max_joint_step;
+    for (std::size_t k = 0; k + 1 < trajectory.size(); ++k) {
+      const Eigen::VectorXd& a = trajectory[k].position;
+      const Eigen::VectorXd& b = trajectory[k + 1].position;
+      const int steps = std::max(1, static_cast<int>(std::ceil(largest_joint_change(a, b) / 0.002)));
+      for (int s = 0; s <= steps; ++s) {
+        const Eigen::VectorXd q = a + (b - a) * (static_cast<double>(s) / steps);
+        ++checked_configurations;
+        for (int j = 0; j < 6; ++j)
+          outside_limits += q(j) < arm.limits()[j].lower + options.joint_margin - 1e-12 ||
+                            q(j) > arm.limits()[j].upper - options.joint_margin + 1e-12;
+        const std::string contact = own.contact(q);
+        in_collision += !contact.empty();
+        if (!contact.empty()) ADD_FAILURE() << "seed " << seed << ": " << contact;
+      }
+    }
+  }
+  std::printf("[ planner  ] %d of 100 runs planned a view; %d commanded configurations checked\n", planned,
+              checked_configurations);
+  std::printf("[ planner  ] outside the limits less the margin: %d, in collision: %d, joint steps above %.0f deg: %d\n",
+              outside_limits, in_collision, options.max_joint_step * 180 / M_PI, too_far);
+  std::printf("[ planner  ] refused candidates:");
+  for (int r = 0; r < kRefusals; ++r) std::printf(" %s %d%s", to_string(static_cast<Refusal>(r)), refused[r],
+                                                 r + 1 < kRefusals ? "," : "\n");
+  EXPECT_EQ(outside_limits, 0);
+  EXPECT_EQ(in_collision, 0);
+  EXPECT_EQ(too_far, 0);
+  EXPECT_GE(planned, 90);
+  // The checks fire: the boxes and the arm refuse some views on the way.
+  EXPECT_GT(refused[static_cast<int>(Refusal::CollisionAtGoal)] + refused[static_cast<int>(Refusal::CollisionOnPath)], 0);
+}
+
+// Small thin plates (100 x 100 x 2 mm), some grazed, some crossed, some missed, between two free configurations: whenever this test's dense
+// query finds a contact on the straight joint-space path, check_path finds one too
+// (it samples so that nothing moves more than 2 * padding between checks).
+TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
+  Arm arm = sim_arm();
+  arm.attach("tool0", camera_housing());
+  Rng rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int crossing = 0, missed = 0, pairs = 0;
+  for (int draws = 0; pairs < 300; ++draws) {
+    ASSERT_LT(draws, 3000) << "the draws find no free start and goal";
+    Obstacle plate;
+    plate.name = "plate";
+    plate.kind = Obstacle::Kind::Box;
+    plate.size = Eigen::Vector3d(0.002, 0.1, 0.1);
+    // Across the sweep of the pan joint, somewhere along the arm at the middle of the move.
+    const double angle = 2 * M_PI * unit(rng);
+    Eigen::VectorXd middle(6);
+    middle << angle, -1.2, 1.2, -1.5, -1.57, 0.0;
+    const Eigen::Vector3d flange = arm.forward(middle).translation();
+    const Eigen::Vector3d radial = Eigen::Vector3d(flange.x(), flange.y(), 0).normalized();
+    plate.pose.translation() = (0.2 + 0.9 * unit(rng)) * Eigen::Vector3d(flange.x(), flange.y(), 0) +
+                               Eigen::Vector3d(0, 0, flange.z() + 0.6 * (unit(rng) - 0.5));
+    plate.pose.linear().col(0) = Eigen::Vector3d::UnitZ().cross(radial);  // the plate's normal: along the sweep
+    plate.pose.linear().col(1) = radial;
+    plate.pose.linear().col(2) = Eigen::Vector3d::UnitZ();
+    const std::vector<Obstacle> world{plate};
+    CollisionModel model(arm, world);
+    Eigen::VectorXd a = middle, b = middle;
+    a(0) -= 0.6, b(0) += 0.6;
+    for (int j = 1; j < 6; ++j) b(j) += 0.3 * (unit(rng) - 0.5), a(j) += 0.3 * (unit(rng) - 0.5);
+    if (model.contact(a) || model.contact(b)) continue;
+    ++pairs;
+    const OwnQuery own{arm, world, model.unchecked_pairs()};
+    bool hits = false;
+    const int steps = static_cast<int>(std::ceil(largest_joint_change(a, b) / 0.0005));
+    for (int s = 0; s <= steps && !hits; ++s) hits = !own.contact(a + (b - a) * (double(s) / steps)).empty();
+    crossing += hits;
+    missed += hits && !check_path(arm, model, a, b).contact;
+  }
+  std::printf("[ path     ] %d of %d moves cross a 2 mm plate; check_path missed %d\n", crossing, pairs, missed);
+  EXPECT_GT(crossing, 50);
+  EXPECT_LT(crossing, 250);
+  EXPECT_EQ(missed, 0);
+}
