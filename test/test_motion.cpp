@@ -15,24 +15,26 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
-#include "handeye_covariance/motion/view_planner.h"
+#include "handeye_covariance/simulation/arm_rig.h"
 
 using namespace handeye;
 using namespace handeye::motion;
 
 namespace {
 
-std::string sim_arm_urdf() {
-  const std::string path = std::string(HANDEYE_SOURCE_DIR) + "/urdf/sim_arm.urdf";
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+const ArmRig& arm_rig() {
+  static const ArmRig rig = ArmRig::load(std::string(HANDEYE_SOURCE_DIR) + "/urdf/sim_arm.urdf");
+  return rig;
 }
 
+// The bare arm (no camera housing).
 const Arm& sim_arm() {
-  static const Arm arm = Arm::from_urdf(sim_arm_urdf(), "base_link", "tool0", "urdf/sim_arm.urdf");
+  static const Arm arm = [] {
+    std::ifstream in(std::string(HANDEYE_SOURCE_DIR) + "/urdf/sim_arm.urdf");
+    std::stringstream text;
+    text << in.rdbuf();
+    return Arm::from_urdf(text.str(), "base_link", "tool0", "urdf/sim_arm.urdf");
+  }();
   return arm;
 }
 
@@ -62,21 +64,6 @@ Eigen::VectorXd random_joints(Rng& rng, const Arm& arm, double margin = 0.0) {
     q(j) = l.lower + margin + unit(rng) * (l.upper - l.lower - 2 * margin);
   }
   return q;
-}
-
-// A camera looking along the flange's z, 5 cm out, in a 8 x 6 x 5 cm housing.
-Eigen::Isometry3d camera_on_flange() {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.translation() = Eigen::Vector3d(0.0, 0.05, 0.04);
-  return X;
-}
-Shape camera_housing() {
-  Shape s;
-  s.kind = Shape::Kind::Box;
-  s.size = Eigen::Vector3d(0.08, 0.06, 0.05);
-  s.T_link_shape = camera_on_flange();
-  s.T_link_shape.translation().z() -= 0.02;
-  return s;
 }
 
 // The test's own collision query: FCL on the unpadded shapes, every pair of
@@ -163,8 +150,7 @@ TEST(Arm, InverseKinematicsReachesAndPrefersTheNearestPosture) {
 }
 
 TEST(Arm, ReachBoundsHowFarAnyPointMoves) {
-  Arm arm = sim_arm();
-  arm.attach("tool0", camera_housing());
+  const Arm& arm = arm_rig().arm;
   const std::vector<double> reach = arm.reach();
   Rng rng(5);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -197,8 +183,7 @@ TEST(Arm, ReachBoundsHowFarAnyPointMoves) {
 }
 
 TEST(Collision, TheTableTheArmAndDeclaredObstacles) {
-  Arm arm = sim_arm();
-  arm.attach("tool0", camera_housing());
+  const Arm& arm = arm_rig().arm;
   // Upright, the forearm level, the flange pointing down: clear.
   Eigen::VectorXd ready(6);
   ready << 0.0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0.0;
@@ -273,29 +258,6 @@ TEST(Trajectory, QuinticMoveKeepsToTheSpeedFraction) {
 
 namespace {
 
-// The simulated rig of the planning runs: eye-in-hand, the camera on the flange,
-// a 0.2 x 0.15 m board flat on the table in front of the arm.
-struct PlanningRig {
-  Rig rig;
-  Eigen::Isometry3d X = camera_on_flange();
-  Eigen::Isometry3d Y = Eigen::Isometry3d::Identity();
-  PlanningRig() {
-    rig.setup = Setup::EyeInHand;
-    rig.face_size = Eigen::Vector2d(0.2, 0.15);
-    Y.translation() = Eigen::Vector3d(0.45, 0.15, 0.0);
-  }
-  std::vector<ViewCandidate> candidates(Rng& rng, int n) const {
-    ViewpointOptions views;
-    views.min_distance = 0.3, views.max_distance = 0.7;
-    std::vector<ViewCandidate> out;
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Isometry3d view = random_view(rng, views);
-      out.push_back({rig.effector_for_view(X, Y, view), view});
-    }
-    return out;
-  }
-};
-
 // A box on the table near the arm; every other one beside the board, where the
 // camera's moves pass.
 Obstacle random_box(Rng& rng, const Eigen::Vector3d& board, bool beside_board) {
@@ -319,12 +281,9 @@ Obstacle random_box(Rng& rng, const Eigen::Vector3d& board, bool beside_board) {
 // commanded trajectory is checked here, densely (no joint moves more than 0.002
 // rad between checks) on the unpadded geometry with this test's own FCL query.
 TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
-  Arm arm = sim_arm();
-  arm.attach("tool0", camera_housing());
-  const PlanningRig setup;
+  const ArmRig& setup = arm_rig();
+  const Arm& arm = setup.arm;
   const PlannerOptions options;
-  Eigen::VectorXd ready(6);
-  ready << 0.0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0.0;
   std::array<int, kRefusals> refused{};
   int planned = 0, outside_limits = 0, in_collision = 0, too_far = 0, checked_configurations = 0, runs = 0;
   for (unsigned seed = 1; runs < 100; ++seed) {
@@ -333,33 +292,19 @@ TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
     std::uniform_int_distribution<int> count(1, 3);
     for (int b = count(rng); b > 0; --b) world.push_back(random_box(rng, setup.Y.translation(), b % 2 == 1));
     CollisionModel model(arm, world);
-    // A start: a reachable, collision-free view.
-    Eigen::VectorXd start;
-    for (const ViewCandidate& c : setup.candidates(rng, 30)) {
-      const auto solutions = arm.inverse(c.T_base_effector, ready, 4, rng);
-      for (const auto& q : solutions) {
-        bool inside = true;
-        for (int j = 0; j < 6; ++j)
-          inside = inside && q(j) > arm.limits()[j].lower + options.joint_margin &&
-                   q(j) < arm.limits()[j].upper - options.joint_margin;
-        if (inside && !model.contact(q)) {
-          start = q;
-          break;
-        }
-      }
-      if (start.size()) break;
-    }
-    if (!start.size()) continue;  // the boxes left no start view: draw again
+    const std::optional<Eigen::VectorXd> start = setup.random_start(rng, model, options);
+    if (!start) continue;  // the boxes left no start view: draw again
     ++runs;
-    const auto candidates = setup.candidates(rng, 150);
-    const ViewPlan plan = plan_view(arm, model, setup.rig, std::nullopt, start, candidates, options);
+    std::vector<ViewCandidate> candidates;
+    for (int c = 0; c < 150; ++c) candidates.push_back(setup.random_candidate(rng));
+    const ViewPlan plan = plan_view(arm, model, setup.rig, std::nullopt, *start, candidates, options);
     for (int r = 0; r < kRefusals; ++r) refused[r] += plan.refused[r];
     if (!plan.found()) continue;
     ++planned;
     EXPECT_LT(se3::log(arm.forward(plan.goal).inverse() * candidates[plan.chosen].T_base_effector).norm(), 1e-6);
     const OwnQuery own{arm, world, model.unchecked_pairs()};
-    const auto trajectory = timed_move(arm, start, plan.goal, 0.1);
-    too_far += largest_joint_change(plan.goal, start) > options.max_joint_step;
+    const auto trajectory = timed_move(arm, *start, plan.goal, 0.1);
+    too_far += largest_joint_change(plan.goal, *start) > options.max_joint_step;
     for (std::size_t k = 0; k + 1 < trajectory.size(); ++k) {
       const Eigen::VectorXd& a = trajectory[k].position;
       const Eigen::VectorXd& b = trajectory[k + 1].position;
@@ -395,8 +340,7 @@ TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
 // query finds a contact on the straight joint-space path, check_path finds one too
 // (it samples so that nothing moves more than 2 * padding between checks).
 TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
-  Arm arm = sim_arm();
-  arm.attach("tool0", camera_housing());
+  const Arm& arm = arm_rig().arm;
   Rng rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int crossing = 0, missed = 0, pairs = 0;

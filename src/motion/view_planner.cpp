@@ -112,7 +112,7 @@ ViewPlan plan_view(const Arm& arm, const CollisionModel& collision, const Rig& r
     plan.verdicts[i].reason = std::move(reason);
     ++plan.refused[static_cast<int>(refusal)];
   };
-  for (std::size_t i = 0; i < candidates.size() && !plan.found(); ++i) {
+  for (std::size_t i = 0; i < candidates.size() && (options.check_all || !plan.found()); ++i) {
     plan.verdicts[i].checked = true;
     const ViewCandidate& candidate = candidates[i];
     if (!options.workspace.contains(candidate.T_base_effector.translation())) {
@@ -166,8 +166,10 @@ ViewPlan plan_view(const Arm& arm, const CollisionModel& collision, const Rig& r
         failed(Refusal::CollisionOnPath, path.contact->text() + " at " + number_text(100.0 * path.at, 3) + "% of the move");
         continue;
       }
-      plan.chosen = static_cast<int>(i);
-      plan.goal = q;
+      if (!plan.found()) {
+        plan.chosen = static_cast<int>(i);
+        plan.goal = q;
+      }
       why.reset();
       break;
     }

@@ -47,6 +47,9 @@ struct PlannerOptions {
   double max_joint_step = 90.0 * M_PI / 180.0;  // rad, any joint, one move
   Eigen::AlignedBox3d workspace{Eigen::Vector3d(-1.0, -1.0, 0.05), Eigen::Vector3d(1.0, 1.0, 1.2)};  // m, base frame
   int ik_seeds = 6;    // random starts besides the current joints
+  /// Check every candidate (a verdict for each, e.g. for a report), not only up
+  /// to the first that passes; the plan is the same.
+  bool check_all = false;
   unsigned seed = 1;
   /// The target in view at the goal.
   double min_distance = 0.2, max_distance = 1.5;  // m, camera to the face's centre
