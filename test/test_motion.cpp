@@ -15,6 +15,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/motion/move_monitor.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 
 using namespace handeye;
@@ -379,4 +380,59 @@ TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
   EXPECT_GT(crossing, 50);
   EXPECT_LT(crossing, 250);
   EXPECT_EQ(missed, 0);
+}
+
+// A controller that follows the commanded trajectory (joint states every 10 ms),
+// one that stops short, and joint states that stop.
+TEST(MoveMonitor, ArrivalTimeoutAndStalledJointStates) {
+  const Arm& arm = sim_arm();
+  Eigen::VectorXd a = arm_rig().ready, b = a;
+  b(0) += 0.5, b(3) -= 0.2;
+  const auto trajectory = timed_move(arm, a, b, 0.1);
+  const double duration = trajectory.back().time;
+  auto follow = [&](double t, double fraction_reached) {
+    const double tau = std::min(1.0, t / duration);
+    return Eigen::VectorXd(a + std::min(fraction_reached, tau) * (b - a));
+  };
+  {
+    MoveMonitor monitor(trajectory, 100.0);
+    double t = 100.0;
+    MoveStatus status = MoveStatus::Moving;
+    for (; status == MoveStatus::Moving && t < 200.0; t += 0.01) {
+      monitor.joint_state(t, follow(t - 100.0, 1.0));
+      status = monitor.update(t);
+    }
+    EXPECT_EQ(status, MoveStatus::Arrived);
+    EXPECT_NEAR(t - 100.0, duration, 0.05);
+    EXPECT_EQ(monitor.reason(), "");
+  }
+  {
+    MoveMonitor monitor(trajectory, 0.0);
+    double t = 0.0;
+    MoveStatus status = MoveStatus::Moving;
+    for (; status == MoveStatus::Moving && t < 100.0; t += 0.01) {
+      monitor.joint_state(t, follow(t, 0.8));
+      status = monitor.update(t);
+    }
+    EXPECT_EQ(status, MoveStatus::TimedOut);
+    EXPECT_NEAR(t, monitor.deadline(), 0.02);
+    EXPECT_NE(monitor.reason().find("did not arrive"), std::string::npos) << monitor.reason();
+  }
+  {
+    MoveMonitor monitor(trajectory, 0.0);
+    double t = 0.0;
+    MoveStatus status = MoveStatus::Moving;
+    for (; status == MoveStatus::Moving && t < 100.0; t += 0.01) {
+      if (t < 1.0) monitor.joint_state(t, follow(t, 1.0));
+      monitor.joint_state(t, Eigen::VectorXd::Zero(3));  // another chain's joints: ignored
+      status = monitor.update(t);
+    }
+    EXPECT_EQ(status, MoveStatus::JointStatesStalled);
+    EXPECT_NEAR(t, 1.0 + MoveLimits{}.joint_states_timeout, 0.03);
+    EXPECT_EQ(monitor.update(t + 100.0), MoveStatus::JointStatesStalled) << "once stopped, it stays";
+  }
+  const auto hold = hold_trajectory(b);
+  ASSERT_EQ(hold.size(), 1u);
+  EXPECT_EQ(hold[0].position, b);
+  EXPECT_EQ(hold[0].velocity.norm(), 0.0);
 }
