@@ -34,7 +34,7 @@ MoveStatus MoveMonitor::update(double now) {
   const double since = now - last_state_.value_or(start_time_);
   if (since > limits_.joint_states_timeout) {
     status_ = MoveStatus::JointStatesStalled;
-    reason_ = "no joint states for " + number_text(since, 2) + " s (more than " +
+    reason_ = "no joint states for " + number_text(since, 3) + " s (more than " +
               number_text(limits_.joint_states_timeout, 2) + " s) during the move";
   } else if (last_state_ && off <= limits_.arrival_tolerance) {
     status_ = MoveStatus::Arrived;
