@@ -69,7 +69,7 @@ void BM_PlanView(benchmark::State& state) {
   options.check_all = state.range(0) != 0;
   motion::ViewPlan plan;
   for (auto _ : state) {
-    plan = motion::plan_view(s.setup.arm, *s.collision, s.setup.rig, std::nullopt, s.start, s.candidates, options);
+    plan = motion::plan_view(*s.collision, s.setup.rig, std::nullopt, s.start, s.candidates, options);
     benchmark::DoNotOptimize(plan);
   }
   int checked = 0;

@@ -218,6 +218,40 @@ TEST(Collision, TheTableTheArmAndDeclaredObstacles) {
   EXPECT_GE(none.checked_pairs().size(), 8u);
 }
 
+// What a URDF may hold beyond the chain, and chains that are not one.
+TEST(Arm, FixedLinksBelowTheChainAreItsShapesAndAChainMustGoDown) {
+  std::ifstream in(std::string(HANDEYE_SOURCE_DIR) + "/urdf/sim_arm.urdf");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string urdf = text.str();
+  // A camera bolted under tool0, 15 cm out along its z, in a 6 cm box.
+  urdf.replace(urdf.rfind("</robot>"), 8,
+               "<joint name=\"camera_joint\" type=\"fixed\"><parent link=\"tool0\"/><child link=\"camera_link\"/>"
+               "<origin xyz=\"0 0 0.15\"/></joint><link name=\"camera_link\"><collision><geometry>"
+               "<box size=\"0.06 0.06 0.06\"/></geometry></collision></link></robot>");
+  const Arm arm = Arm::from_urdf(urdf, "base_link", "tool0", "test");
+  ASSERT_EQ(arm.bodies().back().name, "tool0");
+  ASSERT_EQ(arm.bodies().back().shapes.size(), 1u);
+  EXPECT_NEAR(arm.bodies().back().shapes[0].T_link_shape.translation().z(), 0.15, 1e-12);
+  EXPECT_GT(arm.reach().back(), 0.15 + 0.05) << "the reach counts the bolted-on box";
+  // The camera's box meets an obstacle that the bare arm does not reach.
+  const Eigen::VectorXd ready = arm_rig().ready;
+  const Eigen::Vector3d box = arm.forward(ready) * Eigen::Vector3d(0, 0, 0.15);
+  const auto world = parse_obstacles("obstacles: [{name: post, type: sphere, radius: 0.01, xyz: [" + std::to_string(box.x()) +
+                                         ", " + std::to_string(box.y()) + ", " + std::to_string(box.z()) + "]}]",
+                                     "test");
+  EXPECT_TRUE(CollisionModel(arm, world).contact(ready));
+  EXPECT_FALSE(CollisionModel(sim_arm(), world).contact(ready));
+  // Up the tree (base below the tip) and a padding of 0 are refused.
+  try {
+    Arm::from_urdf(urdf, "tool0", "base_link", "test");
+    ADD_FAILURE() << "a chain up the tree was accepted";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("not an ancestor"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(CollisionModel(arm, {}, CollisionOptions{0.0, 10, 1}), HandEyeError);
+}
+
 TEST(Collision, ObstacleFilesAreCheckedWithTheirEntryNamed) {
   const auto ok = parse_obstacles(
       "obstacles:\n - {name: table, type: plane}\n - {name: post, type: cylinder, radius: 0.05, length: 1, xyz: [0.5, "
@@ -298,7 +332,7 @@ TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
     ++runs;
     std::vector<ViewCandidate> candidates;
     for (int c = 0; c < 150; ++c) candidates.push_back(setup.random_candidate(rng));
-    const ViewPlan plan = plan_view(arm, model, setup.rig, std::nullopt, *start, candidates, options);
+    const ViewPlan plan = plan_view(model, setup.rig, std::nullopt, *start, candidates, options);
     for (int r = 0; r < kRefusals; ++r) refused[r] += plan.refused[r];
     if (!plan.found()) continue;
     ++planned;
@@ -374,7 +408,7 @@ TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
     const int steps = static_cast<int>(std::ceil(largest_joint_change(a, b) / 0.0005));
     for (int s = 0; s <= steps && !hits; ++s) hits = !own.contact(a + (b - a) * (double(s) / steps)).empty();
     crossing += hits;
-    missed += hits && !check_path(arm, model, a, b).contact;
+    missed += hits && !check_path(model, a, b).contact;
   }
   std::printf("[ path     ] %d of %d moves cross a 2 mm plate; check_path missed %d\n", crossing, pairs, missed);
   EXPECT_GT(crossing, 50);
@@ -403,6 +437,7 @@ TEST(MoveMonitor, ArrivalTimeoutAndStalledJointStates) {
       status = monitor.update(t);
     }
     EXPECT_EQ(status, MoveStatus::Arrived);
+    EXPECT_GE(t - 100.0, duration) << "not arrived while the trajectory still moves";
     EXPECT_NEAR(t - 100.0, duration, 0.05);
     EXPECT_EQ(monitor.reason(), "");
   }

@@ -10,6 +10,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <trajectory_msgs/JointTrajectory.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -49,7 +50,13 @@ TEST(SimulatedArm, FollowsATimedMoveOrSaysWhyNot) {
   Eigen::VectorXd q;
   double last_state = 0.0;
   auto sub = node.subscribe<sensor_msgs::JointState>("joint_states", 10, [&](const sensor_msgs::JointStateConstPtr& m) {
-    q = Eigen::Map<const Eigen::VectorXd>(m->position.data(), m->position.size());
+    Eigen::VectorXd read(arm.joints());  // by name, in the chain's order
+    for (int j = 0; j < arm.joints(); ++j) {
+      const auto at = std::find(m->name.begin(), m->name.end(), arm.limits()[j].name);
+      if (at == m->name.end()) return;
+      read(j) = m->position.at(at - m->name.begin());
+    }
+    q = read;
     last_state = m->header.stamp.toSec();
   });
   auto pub = node.advertise<trajectory_msgs::JointTrajectory>("arm_controller/command", 1, true);
@@ -88,6 +95,7 @@ TEST(SimulatedArm, FollowsATimedMoveOrSaysWhyNot) {
     const auto tf = buffer.lookupTransform("base_link", "tool0", ros::Time(0), ros::Duration(2.0));
     const Eigen::Isometry3d T = conversions::to_eigen(tf.transform);
     EXPECT_LT((T.translation() - arm.forward(q).translation()).norm(), 1e-6);
+    EXPECT_LT(Eigen::AngleAxisd(T.linear().transpose() * arm.forward(q).linear()).angle(), 1e-6);
     EXPECT_LT((T.translation() - arm.forward(goal).translation()).norm(), 0.005);
   } else if (fault == "stops_short") {
     ASSERT_EQ(status, motion::MoveStatus::TimedOut);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include <kdl/chain.hpp>
 #include <kdl/chainiksolverpos_lma.hpp>
@@ -104,6 +105,17 @@ Arm Arm::from_urdf(const std::string& text, const std::string& base_link, const 
       throw HandEyeError(ErrorCode::MissingKey, "the URDF of '" + model->getName() + "' has no link '" + link + "'",
                          where, "set the session's base and effector frames to links of the URDF");
   }
+  // KDL would also build a chain that climbs the tree (reversed segments, whose
+  // axes and limits flip): the base must be an ancestor of the tip.
+  std::vector<std::string> chain_links{tip_link};
+  for (urdf::LinkConstSharedPtr link = model->getLink(tip_link); link->name != base_link;) {
+    link = link->getParent();
+    if (!link)
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         "'" + base_link + "' is not an ancestor of '" + tip_link + "' in the URDF", where,
+                         "give the robot's base link as the base frame and a link below it as the effector frame");
+    chain_links.push_back(link->name);
+  }
   KDL::Tree tree;
   if (!kdl_parser::treeFromUrdfModel(*model, tree))
     throw HandEyeError(ErrorCode::MalformedFile, "kdl_parser could not build a kinematic tree from the URDF", where,
@@ -116,9 +128,28 @@ Arm Arm::from_urdf(const std::string& text, const std::string& base_link, const 
                        "no chain with a movable joint from '" + base_link + "' to '" + tip_link + "' in the URDF", where,
                        "the base frame must be an ancestor of the effector frame in the URDF");
 
+  // A body's shapes: its link's, and those of the links fixed below it off the
+  // chain (a camera or a gripper bolted on), placed by their joints' origins.
+  auto body_shapes = [&](const std::string& name) {
+    std::vector<Shape> shapes;
+    std::function<void(const urdf::Link&, const Eigen::Isometry3d&)> add = [&](const urdf::Link& link,
+                                                                              const Eigen::Isometry3d& T_body_link) {
+      for (Shape shape : link_shapes(link, where)) {
+        shape.T_link_shape = T_body_link * shape.T_link_shape;
+        shapes.push_back(shape);
+      }
+      for (const urdf::JointSharedPtr& joint : link.child_joints) {
+        if (joint->type != urdf::Joint::FIXED) continue;
+        if (std::find(chain_links.begin(), chain_links.end(), joint->child_link_name) != chain_links.end()) continue;
+        add(*model->getLink(joint->child_link_name), T_body_link * to_eigen(joint->parent_to_joint_origin_transform));
+      }
+    };
+    add(*model->getLink(name), Eigen::Isometry3d::Identity());
+    return shapes;
+  };
   Body base;
   base.name = base_link;
-  base.shapes = link_shapes(*model->getLink(base_link), where);
+  base.shapes = body_shapes(base_link);
   arm.bodies_.push_back(base);
   int movable = 0;
   for (unsigned i = 0; i < arm.chain_->getNrOfSegments(); ++i) {
@@ -148,7 +179,7 @@ Arm Arm::from_urdf(const std::string& text, const std::string& base_link, const 
     body.name = segment.getName();
     body.segment = static_cast<int>(i) + 1;
     body.joints_before = movable;
-    body.shapes = link_shapes(*model->getLink(body.name), where);
+    body.shapes = body_shapes(body.name);
     arm.bodies_.push_back(body);
   }
   return arm;

@@ -155,6 +155,10 @@ struct CollisionModel::Impl {
 
 CollisionModel::CollisionModel(const Arm& arm, std::vector<Obstacle> obstacles, const CollisionOptions& options)
     : impl_(std::make_unique<Impl>()), arm_(arm), obstacles_(std::move(obstacles)), options_(options) {
+  if (!(options_.padding > 0.0) || !std::isfinite(options_.padding))
+    throw HandEyeError(ErrorCode::MalformedFile, "the collision padding " + number_text(options_.padding) + " m is not positive",
+                       "CollisionOptions::padding",
+                       "give a positive padding (default 0.005 m): paths are checked at twice its spacing");
   const std::vector<Body>& bodies = arm_.bodies();
   impl_->parts_of_body.resize(bodies.size());
   for (std::size_t b = 0; b < bodies.size(); ++b) {

@@ -31,13 +31,17 @@ MoveStatus MoveMonitor::update(double now) {
   if (status_ != MoveStatus::Moving) return status_;
   const Eigen::VectorXd& goal = trajectory_.back().position;
   const double off = (position_ - goal).cwiseAbs().maxCoeff();
+  // Arrived: the trajectory's time is up and the latest joints are at the goal
+  // (near the goal earlier, the arm is still moving).
+  if (last_state_ && *last_state_ >= start_time_ + trajectory_.back().time && off <= limits_.arrival_tolerance) {
+    status_ = MoveStatus::Arrived;
+    return status_;
+  }
   const double since = now - last_state_.value_or(start_time_);
   if (since > limits_.joint_states_timeout) {
     status_ = MoveStatus::JointStatesStalled;
     reason_ = "no joint states for " + number_text(since, 3) + " s (more than " +
               number_text(limits_.joint_states_timeout, 2) + " s) during the move";
-  } else if (last_state_ && off <= limits_.arrival_tolerance) {
-    status_ = MoveStatus::Arrived;
   } else if (now > deadline()) {
     status_ = MoveStatus::TimedOut;
     reason_ = "the controller did not arrive within " + number_text(deadline() - start_time_, 3) +

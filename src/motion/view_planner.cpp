@@ -40,14 +40,14 @@ std::string ViewPlan::summary() const {
   return out.str();
 }
 
-PathCheck check_path(const Arm& arm, const CollisionModel& collision, const Eigen::VectorXd& from,
-                     const Eigen::VectorXd& to) {
+PathCheck check_path(const CollisionModel& collision, const Eigen::VectorXd& from, const Eigen::VectorXd& to) {
+  const Arm& arm = collision.arm();
   // No point of the arm moves more than sum_j reach_j |dq_j| over the move (arm.h);
   // split it so that each step moves none more than 2 * padding (collision.h).
   const std::vector<double> reach = arm.reach();
   double travel = 0.0;
   for (int j = 0; j < arm.joints(); ++j) travel += reach[j] * std::abs(to(j) - from(j));
-  const double step = std::max(2.0 * collision.padding(), 1e-4);
+  const double step = 2.0 * collision.padding();  // > 0 (CollisionModel)
   const int steps = std::max(1, static_cast<int>(std::ceil(travel / step)));
   PathCheck check;
   for (int k = 0; k <= steps; ++k) {
@@ -95,9 +95,10 @@ std::optional<std::string> view_problem(const Rig& rig, const std::optional<Came
   return std::nullopt;
 }
 
-ViewPlan plan_view(const Arm& arm, const CollisionModel& collision, const Rig& rig,
-                   const std::optional<CameraModel>& camera, const Eigen::VectorXd& current,
-                   const std::vector<ViewCandidate>& candidates, const PlannerOptions& options) {
+ViewPlan plan_view(const CollisionModel& collision, const Rig& rig, const std::optional<CameraModel>& camera,
+                   const Eigen::VectorXd& current, const std::vector<ViewCandidate>& candidates,
+                   const PlannerOptions& options) {
+  const Arm& arm = collision.arm();
   if (current.size() != arm.joints())
     throw HandEyeError(ErrorCode::WrongLength,
                        "the current joints have " + std::to_string(current.size()) + " values, the arm " +
@@ -160,7 +161,7 @@ ViewPlan plan_view(const Arm& arm, const CollisionModel& collision, const Rig& r
         failed(Refusal::CollisionAtGoal, contact->text() + " at the goal");
         continue;
       }
-      const PathCheck path = check_path(arm, collision, current, q);
+      const PathCheck path = check_path(collision, current, q);
       plan.path_samples += path.samples;
       if (path.contact) {
         failed(Refusal::CollisionOnPath, path.contact->text() + " at " + number_text(100.0 * path.at, 3) + "% of the move");

@@ -49,8 +49,10 @@ class SimulatedTrajectoryController {
   void on_command(const trajectory_msgs::JointTrajectory& msg) {
     const ros::Time now = ros::Time::now();
     if (first_command_.isZero()) first_command_ = now;
-    knots_.clear();
-    if (msg.points.empty()) return;  // hold where it is
+    if (msg.points.empty()) {  // hold where it is
+      knots_.clear();
+      return;
+    }
     std::vector<int> index(joints_.size(), -1);
     for (std::size_t j = 0; j < joints_.size(); ++j)
       for (std::size_t k = 0; k < msg.joint_names.size(); ++k)
@@ -58,16 +60,24 @@ class SimulatedTrajectoryController {
     for (std::size_t j = 0; j < joints_.size(); ++j) {
       if (index[j] < 0) {
         ROS_ERROR("trajectory refused: it has no joint '%s' (this controller's joints: ~joints)", joints_[j].c_str());
+        return;  // the previous trajectory goes on, as joint_trajectory_controller does
+      }
+    }
+    for (const auto& point : msg.points) {
+      if (point.positions.size() != msg.joint_names.size()) {
+        ROS_ERROR("trajectory refused: a point has %zu positions for %zu joints", point.positions.size(),
+                  msg.joint_names.size());
         return;
       }
     }
+    knots_.clear();
     start_ = msg.header.stamp.isZero() ? now : msg.header.stamp;
     from_ = position_;
     knots_.push_back({0.0, position_, std::vector<double>(joints_.size(), 0.0)});
     for (const auto& point : msg.points) {
       Knot knot{point.time_from_start.toSec(), {}, {}};
       for (std::size_t j = 0; j < joints_.size(); ++j) {
-        knot.q.push_back(point.positions.at(index[j]));
+        knot.q.push_back(point.positions[index[j]]);
         if (point.velocities.size() == msg.joint_names.size()) knot.v.push_back(point.velocities[index[j]]);
       }
       if (knot.t <= knots_.back().t) {

@@ -38,8 +38,9 @@ struct Shape {
   Eigen::Isometry3d T_link_shape = Eigen::Isometry3d::Identity();
 };
 
-/// One rigid body of the chain: a URDF link (with the links fixed to it, e.g. a
-/// camera bolted on the flange) and the number of movable joints before it.
+/// One rigid body of the chain: a URDF link of the chain with the shapes of the
+/// links fixed below it off the chain (a camera or a gripper bolted on), and the
+/// number of movable joints before it.
 struct Body {
   std::string name;
   int segment = 0;          // the chain's segments up to and including this link
@@ -47,6 +48,8 @@ struct Body {
   std::vector<Shape> shapes;
 };
 
+/// Not thread-safe: KDL caches joint poses inside the chain, so calls on one Arm
+/// from two threads race (copies are independent: one per thread).
 class Arm {
  public:
   /// The chain from `base_link` to `tip_link` of the URDF text. Throws

@@ -59,6 +59,8 @@ struct CollisionOptions {
 
 class CollisionModel {
  public:
+  /// Throws HandEyeError when the padding is not positive (the path check's
+  /// guarantee rests on it).
   CollisionModel(const Arm& arm, std::vector<Obstacle> obstacles, const CollisionOptions& options = {});
   CollisionModel(const CollisionModel&) = delete;
   CollisionModel& operator=(const CollisionModel&) = delete;
@@ -73,6 +75,8 @@ class CollisionModel {
   const std::vector<std::pair<int, int>>& checked_pairs() const { return checked_pairs_; }
   const std::vector<std::string>& unchecked_pairs() const { return unchecked_pairs_; }
   const std::vector<Obstacle>& obstacles() const { return obstacles_; }
+  /// The arm it checks (with whatever was attached before the model was made).
+  const Arm& arm() const { return arm_; }
   double padding() const { return options_.padding; }
 
  private:

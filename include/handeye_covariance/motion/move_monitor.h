@@ -14,7 +14,7 @@
 namespace handeye::motion {
 
 struct MoveLimits {
-  double arrival_tolerance = 0.005;  // rad, every joint, at the goal
+  double arrival_tolerance = 0.005;  // rad, every joint, at the goal, once the trajectory's time is up
   /// The controller may take this long beyond the trajectory's duration.
   double arrival_allowance = 3.0;    // s
   /// Joint states older than this stop the move.

@@ -1,13 +1,13 @@
 // Which of the ranked next views the arm can reach, safely, from where it is.
 //
 // The session ranks candidate views by how much they shrink X's covariance
-// (estimation/next_best_pose.h). For each, best first, the planner asks:
-//   inverse kinematics: a joint solution (KDL, several seeds) nearest the current joints;
-//   joint limits:       every joint within its URDF limits less `joint_margin`;
-//   joint step:         no joint turns more than `max_joint_step` in the move;
+// (estimation/next_best_pose.h). For each, best first, the planner asks, in this order:
 //   workspace:          the effector inside the `workspace` box (base frame);
 //   in view:            at the goal the camera sees the whole target face (predicted
 //                       from the current X and Y) within the distance and tilt limits;
+//   inverse kinematics: a joint solution (KDL, several seeds) nearest the current joints;
+//   joint limits:       every joint within its URDF limits less `joint_margin`;
+//   joint step:         no joint turns more than `max_joint_step` in the move;
 //   collision at goal:  no contact (collision.h) at the goal;
 //   collision on path:  none along the straight joint-space path, sampled so that no
 //                       point of the arm moves more than 2 * padding between samples.
@@ -88,14 +88,15 @@ struct PathCheck {
   double at = 0.0;   // fraction of the move where the contact is
   int samples = 0;
 };
-PathCheck check_path(const Arm& arm, const CollisionModel& collision, const Eigen::VectorXd& from,
-                     const Eigen::VectorXd& to);
+/// The arm is the collision model's (its reach sets the sampling).
+PathCheck check_path(const CollisionModel& collision, const Eigen::VectorXd& from, const Eigen::VectorXd& to);
 
 /// Whether the camera sees the target's face at T_camera_pattern, and if not why.
 std::optional<std::string> view_problem(const Rig& rig, const std::optional<CameraModel>& camera,
                                         const Eigen::Isometry3d& T_camera_pattern, const PlannerOptions& options);
 
-ViewPlan plan_view(const Arm& arm, const CollisionModel& collision, const Rig& rig,
+/// The arm is the collision model's.
+ViewPlan plan_view(const CollisionModel& collision, const Rig& rig,
                    const std::optional<CameraModel>& camera, const Eigen::VectorXd& current,
                    const std::vector<ViewCandidate>& candidates, const PlannerOptions& options);
 
