@@ -16,6 +16,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/motion/move_monitor.h"
+#include "handeye_covariance/session/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 
 using namespace handeye;
@@ -470,4 +471,77 @@ TEST(MoveMonitor, ArrivalTimeoutAndStalledJointStates) {
   ASSERT_EQ(hold.size(), 1u);
   EXPECT_EQ(hold[0].position, b);
   EXPECT_EQ(hold[0].velocity.norm(), 0.0);
+}
+
+// The robot moving itself on the simulated arm (session/auto_calibration.h): the
+// first moves keep the board in view without knowing X, then the session's
+// ranking through the planner; the target sigma is reached and X stays honest.
+TEST(AutoCalibration, ReachesOneMillimetreFromOneStartWithTheBoardInView) {
+  const ArmRig& setup = arm_rig();
+  const CollisionModel model(setup.arm, table_plane());
+  MeasurementNoise noise;
+  noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.translation = std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.rotation = std::pow(0.005 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  int reached = 0, first_moves = 0, first_moves_lost = 0, runs = 0;
+  double nees = 0.0;
+  std::vector<int> samples_needed;
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    Rng rng(seed);
+    const auto start = setup.random_start(rng, model, PlannerOptions{});
+    ASSERT_TRUE(start);
+    SessionSettings settings;
+    settings.rig = setup.rig;
+    settings.noise = noise;
+    settings.suggest.views = setup.views;
+    settings.honesty.splits = 0;
+    CalibrationSession session(settings);
+    const AutoCalibration automatic(model, std::nullopt);
+    std::vector<PoseSample> samples;
+    std::vector<Eigen::Isometry3d> failed;
+    Eigen::VectorXd q = *start;
+    double sigma = 1.0;
+    std::optional<Calibration> last;
+    ++runs;
+    for (int move = 0; move <= 15 && sigma > 1e-3; ++move) {
+      if (move > 0) {
+        const NextMove next = automatic.next(session, session.snapshot(), q, failed);
+        ASSERT_TRUE(next.found) << "seed " << seed << ": " << next.reason;
+        q = next.plan.goal;
+        ASSERT_LT(largest_joint_change(q, next.trajectory.back().position), 1e-12);
+        first_moves += next.bootstrap;
+        const Eigen::Isometry3d P = setup.rig.predicted_view(setup.arm.forward(q), setup.X, setup.Y);
+        if (view_problem(setup.rig, std::nullopt, P, PlannerOptions{})) {
+          first_moves_lost += next.bootstrap;
+          failed.push_back(setup.arm.forward(q));
+          continue;
+        }
+      }
+      samples.push_back(setup.sample_at(rng, q, noise));
+      session.replace(samples, "sample");
+      if (samples.size() < 3) continue;
+      try {
+        last = session.calibrate(session.snapshot());
+        sigma = object_sigma({last->T_parent_camera, last->pose_covariance}, 0.7);
+      } catch (const HandEyeError&) {
+      }
+    }
+    if (sigma <= 1e-3) {
+      ++reached;
+      samples_needed.push_back(static_cast<int>(samples.size()));
+      const Vector6d e = pose_error(last->T_parent_camera, setup.X);
+      nees += e.dot(last->pose_covariance.ldlt().solve(e));
+    }
+  }
+  std::sort(samples_needed.begin(), samples_needed.end());
+  std::printf("[ auto     ] reached 1 mm at 0.7 m in %d of %d runs, median %d samples; first moves %d, %d of them "
+              "without the board; mean NEES %.2f\n",
+              reached, runs, samples_needed.empty() ? 0 : samples_needed[samples_needed.size() / 2], first_moves,
+              first_moves_lost, reached ? nees / reached : 0.0);
+  EXPECT_GE(reached, 7);
+  ASSERT_FALSE(samples_needed.empty());
+  EXPECT_LE(samples_needed[samples_needed.size() / 2], 8);
+  EXPECT_LE(first_moves_lost, first_moves / 5) << "the first moves keep the board in view";
+  EXPECT_LT(nees / reached, 12.0) << "stopping at a sigma does not make X's covariance dishonest";
 }

@@ -123,7 +123,8 @@ ViewPlan plan_view(const CollisionModel& collision, const Rig& rig, const std::o
                  number_text(t.z(), 3) + ") m, outside the workspace box");
       continue;
     }
-    if (auto problem = view_problem(rig, camera, candidate.T_camera_pattern, options)) {
+    if (auto problem = candidate.view_known ? view_problem(rig, camera, candidate.T_camera_pattern, options)
+                                            : std::nullopt) {
       refuse(i, Refusal::TargetNotInView, *problem);
       continue;
     }

@@ -43,6 +43,7 @@ std::optional<Eigen::VectorXd> ArmRig::random_start(Rng& rng, const motion::Coll
                                                     const motion::PlannerOptions& options, int attempts) const {
   for (int a = 0; a < attempts; ++a) {
     const motion::ViewCandidate c = random_candidate(rng);
+    if (motion::view_problem(rig, std::nullopt, c.T_camera_pattern, options)) continue;  // the camera must see the board
     for (const Eigen::VectorXd& q : arm.inverse(c.T_base_effector, ready, 4, rng)) {
       bool inside = true;
       for (int j = 0; j < arm.joints(); ++j)

@@ -62,6 +62,9 @@ struct PlannerOptions {
 struct ViewCandidate {
   Eigen::Isometry3d T_base_effector = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_camera_pattern = Eigen::Isometry3d::Identity();
+  /// false: no calibration predicts the view yet (the first moves), so the
+  /// in-view check is skipped; a view without a detection is then skipped.
+  bool view_known = true;
 };
 
 struct CandidateVerdict {

@@ -26,8 +26,9 @@ struct ArmRig {
 
   /// A random view of the board and the effector pose that shows it.
   motion::ViewCandidate random_candidate(Rng& rng) const;
-  /// A start: the joints of a random view, reachable within the limits less the
-  /// margin and free of contact; none after `attempts` views.
+  /// A start: the joints of a random view with the board whole in the image
+  /// (motion::view_problem, no camera model), reachable within the limits less
+  /// the margin and free of contact; none after `attempts` views.
   std::optional<Eigen::VectorXd> random_start(Rng& rng, const motion::CollisionModel& collision,
                                               const motion::PlannerOptions& options, int attempts = 30) const;
   /// The sample the camera takes at joints q: the true poses perturbed by `noise`.

@@ -1,0 +1,216 @@
+// Issue 40's figure: on the simulated arm, from the same start poses, how many
+// samples the robot moving itself (session/auto_calibration.h: the session's
+// ranking filtered by the planner) needs to reach an object 1 sigma at 0.7 m,
+// against easy_handeye's fixed star of 17 poses around the start (rotations of
+// +-25 and +-12.5 deg about the effector's x, y and z; +-5 cm in x, +-10 cm in y,
+// +3.3 cm in z, in the base frame), run through the same session and the same
+// planner checks. A sample is taken where the board is whole in the image.
+// Seeded; no ROS.
+//
+//   handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40]
+// Prints a Markdown table (scripts/bench puts it in BENCHMARKS.md).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/session/auto_calibration.h"
+#include "handeye_covariance/simulation/arm_rig.h"
+
+namespace {
+
+using namespace handeye;
+
+struct Run {
+  int samples = 0;           // taken in all
+  int to_target = -1;        // samples when the target was first reached; -1: not reached
+  std::vector<double> sigma; // object sigma after each sample (0 before an estimate)
+  int moves = 0, no_detection = 0;
+  std::vector<double> plan_ms;
+  double nees = 0.0;         // final X against the truth
+};
+
+MeasurementNoise rig_noise() {  // the simulated rig's detections (rig_simulator's defaults), a small robot noise
+  MeasurementNoise noise;
+  noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.translation = std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.rotation = std::pow(0.005 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  return noise;
+}
+
+struct Sim {
+  const ArmRig& rig;
+  const motion::CollisionModel& collision;
+  Rng rng;
+  CalibrationSession session;
+  std::vector<PoseSample> samples;
+  std::vector<Eigen::Isometry3d> failed;  // moves without a detection
+  Run run;
+  double target;
+
+  Sim(const ArmRig& r, const motion::CollisionModel& c, unsigned seed, double target_sigma)
+      : rig(r), collision(c), rng(seed), session(settings()), target(target_sigma) {}
+
+  SessionSettings settings() const {
+    SessionSettings s;
+    s.rig = rig.rig;
+    s.noise = rig_noise();
+    s.suggest.views = rig.views;
+    s.honesty.splits = 0;
+    return s;
+  }
+
+  // The camera takes a sample at q if it sees the whole board; then the session calibrates.
+  void take(const Eigen::VectorXd& q) {
+    const Eigen::Isometry3d P = rig.rig.predicted_view(rig.arm.forward(q), rig.X, rig.Y);
+    if (motion::view_problem(rig.rig, std::nullopt, P, motion::PlannerOptions{})) {
+      ++run.no_detection;
+      failed.push_back(rig.arm.forward(q));
+      return;
+    }
+    samples.push_back(rig.sample_at(rng, q, rig_noise()));
+    session.replace(samples, "sample");
+    ++run.samples;
+    double sigma = 0.0;
+    if (samples.size() >= 3) {
+      try {
+        const Calibration c = session.calibrate(session.snapshot());
+        sigma = object_sigma({c.T_parent_camera, c.pose_covariance}, 0.7);
+        const Vector6d e = pose_error(c.T_parent_camera, rig.X);
+        run.nees = e.dot(c.pose_covariance.ldlt().solve(e));
+      } catch (const HandEyeError&) {
+      }
+    }
+    run.sigma.push_back(sigma);
+    if (run.to_target < 0 && sigma > 0.0 && sigma <= target) run.to_target = run.samples;
+  }
+};
+
+Run run_auto(const ArmRig& rig, const motion::CollisionModel& collision, const Eigen::VectorXd& start, unsigned seed,
+             double target, int max_views) {
+  Sim sim(rig, collision, seed, target);
+  const AutoCalibration automatic(collision, std::nullopt);
+  Eigen::VectorXd q = start;
+  sim.take(q);
+  while (sim.run.to_target < 0 && sim.run.moves < max_views) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const NextMove move = automatic.next(sim.session, sim.session.snapshot(), q, sim.failed);
+    sim.run.plan_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (!move.found) {
+      std::fprintf(stderr, "seed %u: %s\n", seed, move.reason.c_str());
+      break;
+    }
+    q = move.plan.goal;
+    ++sim.run.moves;
+    sim.take(q);
+  }
+  return sim.run;
+}
+
+// easy_handeye's CalibrationMovements._compute_poses_around_state, in its order.
+std::vector<Eigen::Isometry3d> star(const Eigen::Isometry3d& E, double angle, double translation) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (const double scale : {1.0, 0.5})
+    for (int axis = 0; axis < 3; ++axis)
+      for (const double sign : {1.0, -1.0}) {
+        Eigen::Isometry3d p = E;
+        p.rotate(Eigen::AngleAxisd(sign * scale * angle, Eigen::Vector3d::Unit(axis)));
+        poses.push_back(p);
+      }
+  for (const Eigen::Vector3d& d : {Eigen::Vector3d(translation / 2, 0, 0), Eigen::Vector3d(-translation / 2, 0, 0),
+                                   Eigen::Vector3d(0, translation, 0), Eigen::Vector3d(0, -translation, 0),
+                                   Eigen::Vector3d(0, 0, translation / 3)}) {
+    Eigen::Isometry3d p = E;
+    p.translation() += d;
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+Run run_star(const ArmRig& rig, const motion::CollisionModel& collision, const Eigen::VectorXd& start, unsigned seed,
+             double target) {
+  Sim sim(rig, collision, seed, target);
+  sim.take(start);
+  Eigen::VectorXd q = start;
+  for (const Eigen::Isometry3d& pose : star(rig.arm.forward(start), 25.0 * M_PI / 180.0, 0.1)) {
+    // Each star pose from the start (easy_handeye plans every one from there), checked as ours are.
+    const motion::ViewPlan plan =
+        motion::plan_view(collision, rig.rig, std::nullopt, q, {{pose, Eigen::Isometry3d::Identity(), false}}, {});
+    if (!plan.found()) continue;
+    q = plan.goal;
+    ++sim.run.moves;
+    sim.take(q);
+  }
+  return sim.run;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int seeds = 20, max_views = 40;
+  double target_mm = 1.0;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--seeds")) seeds = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--target-mm")) target_mm = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--max-views")) max_views = std::atoi(argv[i + 1]);
+    else {
+      std::fprintf(stderr, "usage: handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40]\n");
+      return 2;
+    }
+  }
+  const ArmRig rig = ArmRig::load(HANDEYE_SOURCE_DIR "/urdf/sim_arm.urdf");
+  const motion::CollisionModel collision(rig.arm, motion::table_plane());
+  const double target = target_mm * 1e-3;
+  std::printf("| seed | auto: samples to %.2g mm | star: samples to %.2g mm | star: samples taken: sigma [mm] | "
+              "auto: samples to the star's sigma | auto: NEES of X | moves without a detection (auto / star) |\n",
+              target_mm, target_mm);
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::vector<double> auto_samples, star_samples, auto_to_star, plan_ms, nees;
+  int star_reached = 0, auto_reached = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    Rng rng(seed);
+    const auto start = rig.random_start(rng, collision, motion::PlannerOptions{});
+    if (!start) continue;
+    const Run a = run_auto(rig, collision, *start, 1000 + seed, target, max_views);
+    const Run s = run_star(rig, collision, *start, 1000 + seed, target);
+    const double star_sigma = s.sigma.empty() ? 0.0 : s.sigma.back();
+    // Auto's samples to reach what the star reaches in all its samples (running further if it must).
+    const Run a2 = star_sigma > 0.0 ? run_auto(rig, collision, *start, 1000 + seed, star_sigma, max_views) : Run{};
+    auto_reached += a.to_target > 0;
+    star_reached += s.to_target > 0;
+    if (a.to_target > 0) auto_samples.push_back(a.to_target);
+    if (s.to_target > 0) star_samples.push_back(s.to_target);
+    if (a2.to_target > 0) auto_to_star.push_back(static_cast<double>(a2.to_target) / s.samples);
+    plan_ms.insert(plan_ms.end(), a.plan_ms.begin(), a.plan_ms.end());
+    nees.push_back(a.nees);
+    char star_text[64];
+    if (star_sigma > 0.0)
+      std::snprintf(star_text, sizeof star_text, "%d: %.3f", s.samples, star_sigma * 1e3);
+    else
+      std::snprintf(star_text, sizeof star_text, "%d: no estimate", s.samples);
+    std::printf("| %d | %s | %s | %s | %s | %.2f | %d / %d |\n", seed,
+                a.to_target > 0 ? std::to_string(a.to_target).c_str() : "not reached",
+                s.to_target > 0 ? std::to_string(s.to_target).c_str() : "not reached", star_text,
+                a2.to_target > 0 ? std::to_string(a2.to_target).c_str() : "not reached", a.nees, a.no_detection,
+                s.no_detection);
+  }
+  double mean_nees = 0.0;
+  for (double n : nees) mean_nees += n / nees.size();
+  std::printf("\nauto reached %.2g mm in %d of %zu runs, median %.0f samples; the star in %d, median %.0f samples.\n",
+              target_mm, auto_reached, nees.size(), median(auto_samples), star_reached, median(star_samples));
+  std::printf("auto's samples to reach the star's final sigma over the star's samples: median %.2f (goal <= 0.6).\n",
+              median(auto_to_star));
+  std::printf("planning one move (session ranking + planner): median %.1f ms; mean NEES of auto's final X %.2f "
+              "(6 expected).\n",
+              median(plan_ms), mean_nees);
+  return 0;
+}
