@@ -326,7 +326,7 @@ lines += [
     "",
     "The simulated arm from 20 seeded start views (the board whole in a 60 x 45 deg image), the rig simulator's",
     "detection noise (0.3 mm, 0.05 deg) and a small robot noise (0.05 mm, 0.005 deg). `auto`",
-    "(session/auto_calibration.h): two 5 cm shifts and two 20 deg turns about the target to start, then the",
+    "(motion/auto_calibration.h): two 5 cm shifts and two 20 deg turns about the target to start, then the",
     "session's ranking through the planner, until the object 1 sigma at 0.7 m is 1 mm. The star: easy_handeye's",
     "17 poses around the start (+-25 and +-12.5 deg about the effector's axes, +-5 cm x, +-10 cm y, +3.3 cm z),",
     "each checked by the same planner, through the same session. A sample is taken where the board is whole in",

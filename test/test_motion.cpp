@@ -16,7 +16,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/motion/move_monitor.h"
-#include "handeye_covariance/session/auto_calibration.h"
+#include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 
 using namespace handeye;
@@ -473,7 +473,7 @@ TEST(MoveMonitor, ArrivalTimeoutAndStalledJointStates) {
   EXPECT_EQ(hold[0].velocity.norm(), 0.0);
 }
 
-// The robot moving itself on the simulated arm (session/auto_calibration.h): the
+// The robot moving itself on the simulated arm (motion/auto_calibration.h): the
 // first moves keep the board in view without knowing X, then the session's
 // ranking through the planner; the target sigma is reached and X stays honest.
 TEST(AutoCalibration, ReachesOneMillimetreFromOneStartWithTheBoardInView) {

@@ -1,4 +1,4 @@
-#include "handeye_covariance/session/auto_calibration.h"
+#include "handeye_covariance/motion/auto_calibration.h"
 
 #include "handeye_covariance/core/errors.h"
 
