@@ -118,6 +118,32 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
     std::lock_guard<std::mutex> outputs(output_mutex_);
     refresh_tf();
   });
+  if (param(private_node_, "motion/enabled", false)) {  // the robot moving itself (ros/arm_mover.h)
+    SessionAccess access;
+    access.session = &session_;
+    access.snapshot = [this] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return session_.snapshot();
+    };
+    access.samples = [this] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return session_.samples().size();
+    };
+    access.take_sample = [this](double now) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const SessionEvent event = session_.take_sample(now);
+      record(event, true);
+      return event;
+    };
+    access.object_sigma = [this]() -> std::pair<bool, std::optional<double>> {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!analysis_ || analysis_->generation != session_.generation()) return {false, std::nullopt};
+      if (!analysis_->estimate) return {true, std::nullopt};
+      return {true, object_sigma({analysis_->estimate->T_parent_camera, analysis_->estimate->pose_covariance},
+                                 config_.working_distance)};
+    };
+    mover_ = std::make_unique<ArmMover>(node_, private_node_, std::move(access));
+  }
   worker_ = std::thread(&CalibrationNode::work, this);  // last: nothing below may throw
   detection_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &detection_queue_);
   detection_spinner_->start();

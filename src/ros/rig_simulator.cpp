@@ -7,6 +7,11 @@
 // ~target_file, ~layout_file or one tag ~tag_size of id 0: target_params.h) and
 // publishes the image and its CameraInfo, stamped with the capture time, for the
 // target_detector node.
+// With ~robot_source:=tf the rig moves no robot: a real or simulated arm does
+// (simulated_arm.launch), and the camera sees the target from the effector pose in
+// TF at each capture, with X from ~truth and the target's pose Y from
+// ~pattern_pose (x y z qx qy qz qw); it detects only when the target's face
+// (~face_size, m) is whole in a 60 x 45 deg image (motion/view_planner.h).
 // With ~camera_link set, the rig publishes a camera driver's own TF tree
 // (camera_link -> the optical frame, the usual optical rotation) and can stamp
 // its detections in another frame of that tree (~detection_frame); their pose
@@ -20,10 +25,13 @@
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <optional>
 
+#include "handeye_covariance/motion/view_planner.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
@@ -68,10 +76,25 @@ class RigSimulator {
                           : typical_X(setup_);
     trajectory_ = make_rig_trajectory(rng_, setup_, X, param(pn, "poses", 12), param(pn, "pause_time", 2.0),
                                       param(pn, "move_time", 1.0));
+    robot_from_tf_ = param<std::string>(pn, "robot_source", "trajectory") == "tf";
+    if (robot_from_tf_) {
+      publish_robot_tf_ = false;
+      const std::vector<double> y = param(pn, "pattern_pose", std::vector<double>{0.45, 0.15, 0.0, 0, 0, 0, 1});
+      if (y.size() != 7) throw std::invalid_argument("~pattern_pose must be 7 numbers: x y z qx qy qz qw");
+      trajectory_.T_world_pattern = se3::make_pose(
+          Eigen::Quaterniond(y[6], y[3], y[4], y[5]).normalized().toRotationMatrix(), Eigen::Vector3d(y[0], y[1], y[2]));
+      trajectory_.rig.setup = setup_;
+      const std::vector<double> face = param(pn, "face_size", std::vector<double>{0.2, 0.15});
+      trajectory_.rig.face_size = Eigen::Vector2d(face.at(0), face.at(1));
+      tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_);
+    }
     std::optional<Target> target;
     if (output_ == "images") {
       target = target_from_params(pn);
-      trajectory_.look_at_face(target_face(*target));
+      if (robot_from_tf_)
+        trajectory_.rig.T_pattern_face = target_face(*target);  // ~pattern_pose is the target's own frame
+      else
+        trajectory_.look_at_face(target_face(*target));
     }
     flange_T_tool_ = se3::make_pose(so3::exp(Eigen::Vector3d(0, 0, 0.3)), Eigen::Vector3d(0, 0, 0.12));
 
@@ -112,12 +135,32 @@ class RigSimulator {
     tf_timer_ = node.createTimer(ros::Duration(1.0 / param(pn, "tf_rate", 200.0)), &RigSimulator::publish_tf, this);
     detection_timer_ =
         node.createTimer(ros::Duration(1.0 / param(pn, "detection_rate", 20.0)), &RigSimulator::publish_detection, this);
-    ROS_INFO("rig simulator: %s, %zu poses, %.1f s pause, %.1f s move, detections as `%s`", to_string(setup_),
-             trajectory_.poses.size(), trajectory_.pause, trajectory_.move, output_.c_str());
+    if (robot_from_tf_)
+      ROS_INFO("rig simulator: %s, the robot from TF (%s -> %s), detections as `%s`", to_string(setup_), base_.c_str(),
+               effector_.c_str(), output_.c_str());
+    else
+      ROS_INFO("rig simulator: %s, %zu poses, %.1f s pause, %.1f s move, detections as `%s`", to_string(setup_),
+               trajectory_.poses.size(), trajectory_.pause, trajectory_.move, output_.c_str());
   }
 
  private:
   double elapsed(const ros::Time& t) const { return (t - start_).toSec(); }
+
+  /// The true T_camera_pattern at `capture`: the rig's own trajectory, or the arm's
+  /// effector in TF (none when TF has no pose then, or the face is not whole in view).
+  std::optional<Eigen::Isometry3d> view_at(const ros::Time& capture) {
+    if (!robot_from_tf_) return trajectory_.pattern_at(elapsed(capture));
+    geometry_msgs::TransformStamped E;
+    try {
+      E = tf_buffer_.lookupTransform(base_, effector_, capture, ros::Duration(0.05));
+    } catch (const tf2::TransformException&) {
+      return std::nullopt;
+    }
+    const Eigen::Isometry3d P =
+        trajectory_.rig.predicted_view(conversions::to_eigen(E.transform), trajectory_.X, trajectory_.T_world_pattern);
+    if (motion::view_problem(trajectory_.rig, std::nullopt, P, motion::PlannerOptions{})) return std::nullopt;
+    return P;
+  }
 
   void publish_tf(const ros::TimerEvent&) {
     if (!publish_robot_tf_) return;
@@ -131,7 +174,9 @@ class RigSimulator {
     std_msgs::Header header;
     header.stamp = capture;
     header.frame_id = camera_;
-    const cv::Mat image = renderer_->render(trajectory_.pattern_at(elapsed(capture)), rng_);
+    const std::optional<Eigen::Isometry3d> view = view_at(capture);
+    if (!view) return;
+    const cv::Mat image = renderer_->render(*view, rng_);
     const sensor_msgs::ImagePtr msg = cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, image).toImageMsg();
     sensor_msgs::CameraInfo info = conversions::to_camera_info(renderer_->camera());
     info.header = header;
@@ -146,7 +191,9 @@ class RigSimulator {
       return;
     }
     // Noise in the optical frame; the detection (pose and covariance) in detection_frame.
-    PoseWithCovariance P{perturb(rng_, trajectory_.pattern_at(elapsed(capture)), noise_), noise_.as_pose_covariance()};
+    const std::optional<Eigen::Isometry3d> view = view_at(capture);
+    if (!view) return;
+    PoseWithCovariance P{perturb(rng_, *view, noise_), noise_.as_pose_covariance()};
     if (detection_frame_ != camera_) P = compose({T_link_optical_, Matrix6d::Zero()}, P);
     geometry_msgs::PoseWithCovarianceStamped pose = conversions::to_stamped_msg(P, detection_frame_, capture);
     if (!detection_covariance_) pose.pose.covariance.fill(0.0);
@@ -175,7 +222,9 @@ class RigSimulator {
   Setup setup_;
   std::string base_, effector_, camera_, pattern_frame_, output_, camera_link_, detection_frame_;
   Eigen::Isometry3d T_link_optical_;
-  bool publish_robot_tf_, detection_covariance_;
+  bool publish_robot_tf_, detection_covariance_, robot_from_tf_ = false;
+  tf2_ros::Buffer tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   double latency_;
   std::vector<int> tag_ids_;
   PoseNoise noise_;  // in the optical frame

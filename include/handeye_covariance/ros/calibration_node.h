@@ -28,6 +28,7 @@
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/ros/static_edges.h"
+#include "handeye_covariance/ros/arm_mover.h"
 #include "handeye_covariance/session/calibration_session.h"
 
 namespace handeye {
@@ -109,7 +110,8 @@ class CalibrationNode {
   std::string last_event_ = "started";
   std::uint32_t detections_received_ = 0;
   std::deque<double> detection_ages_;  // s, the last kAgeWindow handled detections
-  std::thread worker_;                 // last: starts once everything above exists
+  std::thread worker_;                 // starts once everything above exists
+  std::unique_ptr<ArmMover> mover_;    // ~motion/enabled; last, so it stops first
 };
 
 }  // namespace handeye

@@ -1,0 +1,95 @@
+// The robot moving itself, on the calibration node (issue 40): the next move from
+// the session (motion/auto_calibration.h), sent as trajectory_msgs/JointTrajectory
+// to the trajectory controller's command topic, watched from /joint_states
+// (motion/move_monitor.h), then a sample where the arm stands still.
+//
+// Services beside the node's others (/<namespace>/...): plan_move plans the next
+// move and says it on ~motion_status; move executes it (planning first if there is
+// no current plan: the confirm mode); auto_calibrate plans, moves and samples until
+// the target object sigma or ~motion/max_views. stop_motion sends a hold trajectory from the service call
+// itself (no queue in between) and ends either mode. Every failure stops the
+// motion and says why on ~motion_status: no view passes (with the planner's
+// counts per reason), the controller does not arrive, joint states stall; a goal
+// without a detection is skipped and the next view planned.
+//
+// Threads: callbacks only store (joint states) or set a request; the motion
+// thread plans and moves. The session is read through SessionAccess.
+#pragma once
+
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <std_msgs/String.h>
+#include <std_srvs/Trigger.h>
+
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/motion/move_monitor.h"
+
+namespace handeye {
+
+/// What the mover needs of the node's session (each call takes the node's lock).
+struct SessionAccess {
+  const CalibrationSession* session = nullptr;             // settings and const computations only
+  std::function<SessionSnapshot()> snapshot;
+  std::function<std::size_t()> samples;                    // accepted samples so far
+  std::function<SessionEvent(double now)> take_sample;     // manual sampling at now
+  /// Whether the latest analysis is of the current samples, and its object sigma
+  /// (m) when it has an estimate.
+  std::function<std::pair<bool, std::optional<double>>()> object_sigma;
+};
+
+class ArmMover {
+ public:
+  /// Reads ~motion/* and robot_description; throws HandEyeError naming what is wrong.
+  ArmMover(ros::NodeHandle node, ros::NodeHandle private_node, SessionAccess access);
+  ~ArmMover();
+
+ private:
+  enum class Request { None, Plan, Move, Auto };
+  bool plan_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  bool move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  bool auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  bool stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  void on_joint_states(const sensor_msgs::JointStateConstPtr& msg);
+  void run();
+  /// Plans the next move (mutex_ not held); false with the reason on ~motion_status.
+  bool plan();
+  /// Moves to the planned goal and takes the sample there; false when the motion stopped.
+  bool execute();
+  void publish(const std::vector<motion::TrajectoryPoint>& trajectory);
+  void status(const std::string& state, const std::string& text);
+  std::optional<Eigen::VectorXd> joints() const;
+
+  SessionAccess access_;
+  std::unique_ptr<motion::Arm> arm_;
+  std::unique_ptr<motion::CollisionModel> collision_;
+  std::unique_ptr<AutoCalibration> automatic_;
+  motion::MoveLimits limits_;
+  double sample_timeout_ = 4.0;  // s after arrival
+  int max_views_ = 30;
+  double target_object_sigma_ = 1e-3;
+  bool auto_start_ = false;  // ~motion/auto_start
+
+  ros::Publisher command_pub_, status_pub_;
+  ros::Subscriber joint_states_;
+  std::vector<ros::ServiceServer> services_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  Request request_ = Request::None;
+  bool stop_ = false, shutting_down_ = false;
+  std::optional<NextMove> planned_;
+  std::vector<Eigen::Isometry3d> failed_;  // goals without a detection
+  Eigen::VectorXd joints_;
+  double joints_stamp_ = 0.0;
+  std::string state_ = "idle";
+  std::thread thread_;  // last
+};
+
+}  // namespace handeye

@@ -1,0 +1,323 @@
+#include "handeye_covariance/ros/arm_mover.h"
+
+#include <trajectory_msgs/JointTrajectory.h>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/ros/params.h"
+
+namespace handeye {
+namespace {
+
+double deg(const ros::NodeHandle& pn, const std::string& name, double fallback_deg) {
+  return param(pn, name, fallback_deg) * M_PI / 180.0;
+}
+
+std::string mm(double m) { return number_text(m * 1e3, 3) + " mm"; }
+
+}  // namespace
+
+ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess access) : access_(std::move(access)) {
+  std::string urdf, key;
+  if (!node.searchParam("robot_description", key) || !node.getParam(key, urdf) || urdf.empty())
+    throw HandEyeError(ErrorCode::MissingKey, "no URDF on the parameter robot_description", "~motion/enabled",
+                       "load the robot's URDF (robot_state_publisher's launch does), or set ~motion/enabled false");
+  const Rig& rig = access_.session->settings().rig;
+  arm_ = std::make_unique<motion::Arm>(motion::Arm::from_urdf(urdf, rig.frames.base, rig.frames.effector, "robot_description"));
+  const std::string obstacles_file = param<std::string>(pn, "motion/obstacles_file", "");
+  motion::CollisionOptions collision;
+  collision.padding = param(pn, "motion/padding", collision.padding);
+  collision_ = std::make_unique<motion::CollisionModel>(
+      *arm_, obstacles_file.empty() ? motion::table_plane() : motion::read_obstacles(obstacles_file), collision);
+
+  AutoCalibrationOptions options;
+  options.speed_fraction = param(pn, "motion/speed_fraction", options.speed_fraction);
+  options.planner.joint_margin = deg(pn, "motion/joint_margin_deg", 5.0);
+  options.planner.max_joint_step = deg(pn, "motion/max_joint_step_deg", 90.0);
+  const std::vector<double> box = param(pn, "motion/workspace", std::vector<double>{-1.0, -1.0, 0.05, 1.0, 1.0, 1.2});
+  if (box.size() != 6)
+    throw HandEyeError(ErrorCode::WrongLength, "~motion/workspace needs 6 numbers", "~motion/workspace",
+                       "give [min x, min y, min z, max x, max y, max z] in the base frame, metres");
+  options.planner.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[1], box[2]), Eigen::Vector3d(box[3], box[4], box[5]));
+  const std::vector<double> fov = param(pn, "motion/field_of_view_deg", std::vector<double>{60.0, 45.0});
+  options.planner.field_of_view_x = fov.at(0) * M_PI / 180.0;
+  options.planner.field_of_view_y = fov.at(1) * M_PI / 180.0;
+  automatic_ = std::make_unique<AutoCalibration>(*collision_, std::nullopt, options);
+  limits_.arrival_allowance = param(pn, "motion/arrival_timeout", limits_.arrival_allowance);
+  limits_.joint_states_timeout = param(pn, "motion/joint_states_timeout", limits_.joint_states_timeout);
+  sample_timeout_ = param(pn, "motion/sample_timeout", access_.session->settings().sampler.still_window + 3.0);
+  max_views_ = param(pn, "motion/max_views", max_views_);
+  auto_start_ = param(pn, "motion/auto_start", false);
+  target_object_sigma_ = access_.session->settings().target_object_sigma;
+
+  command_pub_ = node.advertise<trajectory_msgs::JointTrajectory>(
+      param<std::string>(pn, "motion/controller_topic", "/arm_controller/command"), 1);
+  status_pub_ = pn.advertise<std_msgs::String>("motion_status", 10, true);
+  joint_states_ = node.subscribe(param<std::string>(pn, "motion/joint_states_topic", "/joint_states"), 10,
+                                 &ArmMover::on_joint_states, this);
+  // Beside the node's other services (/<namespace>/calibrate, ...).
+  services_ = {node.advertiseService("plan_move", &ArmMover::plan_service, this),
+               node.advertiseService("move", &ArmMover::move_service, this),
+               node.advertiseService("auto_calibrate", &ArmMover::auto_service, this),
+               node.advertiseService("stop_motion", &ArmMover::stop_service, this)};
+  status("idle", "the arm " + rig.frames.base + " -> " + rig.frames.effector + " (" + std::to_string(arm_->joints()) +
+                     " joints), " + std::to_string(collision_->obstacles().size()) + " obstacle(s)");
+  thread_ = std::thread(&ArmMover::run, this);
+}
+
+ArmMover::~ArmMover() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shutting_down_ = true;
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void ArmMover::on_joint_states(const sensor_msgs::JointStateConstPtr& msg) {
+  Eigen::VectorXd q(arm_->joints());
+  for (int j = 0; j < arm_->joints(); ++j) {
+    const auto at = std::find(msg->name.begin(), msg->name.end(), arm_->limits()[j].name);
+    if (at == msg->name.end() || static_cast<std::size_t>(at - msg->name.begin()) >= msg->position.size()) return;
+    q(j) = msg->position[at - msg->name.begin()];
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  joints_ = q;
+  joints_stamp_ = msg->header.stamp.isZero() ? ros::Time::now().toSec() : msg->header.stamp.toSec();
+}
+
+std::optional<Eigen::VectorXd> ArmMover::joints() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (joints_.size() == 0) return std::nullopt;
+  return joints_;
+}
+
+void ArmMover::status(const std::string& state, const std::string& text) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_ = state;
+  }
+  std_msgs::String msg;
+  msg.data = state + ": " + text;
+  status_pub_.publish(msg);
+  if (state == "failed")
+    ROS_WARN("motion %s", msg.data.c_str());
+  else
+    ROS_INFO("motion %s", msg.data.c_str());
+}
+
+void ArmMover::publish(const std::vector<motion::TrajectoryPoint>& trajectory) {
+  trajectory_msgs::JointTrajectory msg;  // a zero stamp: start now
+  for (const motion::JointLimit& limit : arm_->limits()) msg.joint_names.push_back(limit.name);
+  for (const motion::TrajectoryPoint& p : trajectory) {
+    trajectory_msgs::JointTrajectoryPoint point;
+    point.positions.assign(p.position.data(), p.position.data() + p.position.size());
+    point.velocities.assign(p.velocity.data(), p.velocity.data() + p.velocity.size());
+    point.time_from_start = ros::Duration(p.time);
+    msg.points.push_back(point);
+  }
+  command_pub_.publish(msg);
+}
+
+bool ArmMover::plan_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (request_ != Request::None || state_ == "moving") {
+    res.message = "busy (" + state_ + "): call ~stop_motion first";
+    return true;
+  }
+  request_ = Request::Plan, stop_ = false;
+  wake_.notify_all();
+  res.success = true;
+  res.message = "planning; the plan is on ~motion_status";
+  return true;
+}
+
+bool ArmMover::move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (request_ != Request::None || state_ == "moving") {
+    res.message = "busy (" + state_ + "): call ~stop_motion first";
+    return true;
+  }
+  request_ = Request::Move, stop_ = false;
+  wake_.notify_all();
+  res.success = true;
+  res.message = planned_ ? "moving to the planned view" : "planning, then moving";
+  return true;
+}
+
+bool ArmMover::auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (request_ != Request::None || state_ == "moving") {
+    res.message = "busy (" + state_ + "): call ~stop_motion first";
+    return true;
+  }
+  request_ = Request::Auto, stop_ = false;
+  wake_.notify_all();
+  res.success = true;
+  res.message = "calibrating by itself until " + mm(target_object_sigma_) + " or " + std::to_string(max_views_) +
+                " views; ~stop_motion stops it";
+  return true;
+}
+
+bool ArmMover::stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  // The hold goes out from here, not through the motion thread.
+  std::optional<Eigen::VectorXd> q;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    request_ = Request::None;
+    planned_.reset();
+    if (joints_.size()) q = joints_;
+  }
+  wake_.notify_all();
+  if (q) publish(motion::hold_trajectory(*q));
+  status("stopped", q ? "a hold trajectory was sent at the current joints" : "no joint states yet: nothing to hold");
+  res.success = true;
+  res.message = "stopped";
+  return true;
+}
+
+bool ArmMover::plan() {
+  const std::optional<Eigen::VectorXd> q = joints();
+  if (!q) {
+    status("failed", "no joint states of the arm's joints on " + joint_states_.getTopic());
+    return false;
+  }
+  const NextMove move = automatic_->next(*access_.session, access_.snapshot(), *q, failed_);
+  if (!move.found) {
+    status("failed", move.reason);
+    return false;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    planned_ = move;
+  }
+  status("planned", (move.bootstrap ? "a first move (" : "view " + std::to_string(move.plan.chosen + 1) + " of the ranking (") +
+                        move.plan.summary() + "), " + number_text(move.trajectory.back().time, 3) + " s" +
+                        (move.bootstrap ? ""
+                                        : ", object sigma " + mm(move.object_sigma) + " -> " +
+                                              mm(move.predicted_object_sigma)));
+  return true;
+}
+
+bool ArmMover::execute() {
+  std::optional<NextMove> move;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    move = planned_;
+  }
+  const std::optional<Eigen::VectorXd> now_joints = joints();
+  // A plan from elsewhere (the arm moved since): plan again from here.
+  if (!move || !now_joints || motion::largest_joint_change(*now_joints, move->plan.start) > 0.01) {
+    if (!plan()) return false;
+    std::lock_guard<std::mutex> lock(mutex_);
+    move = planned_;
+  }
+  const std::size_t samples_before = access_.samples();
+  const double start = ros::Time::now().toSec();
+  publish(move->trajectory);
+  status("moving", number_text(move->trajectory.back().time, 3) + " s to the goal");
+  motion::MoveMonitor monitor(move->trajectory, start, limits_);
+  double seen = -1.0;
+  for (ros::Rate rate(200.0); ros::ok(); rate.sleep()) {
+    Eigen::VectorXd q;
+    double stamp;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stop_) return false;  // ~stop_motion sent the hold
+      q = joints_, stamp = joints_stamp_;
+    }
+    if (stamp != seen && q.size()) monitor.joint_state(stamp, q), seen = stamp;
+    const motion::MoveStatus s = monitor.update(ros::Time::now().toSec());
+    if (s == motion::MoveStatus::Arrived) break;
+    if (s != motion::MoveStatus::Moving) {
+      publish(motion::hold_trajectory(monitor.position()));
+      status("failed", monitor.reason() + "; a hold trajectory was sent");
+      return false;
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    planned_.reset();
+  }
+  // The sample at the goal: the session's sampler takes it once the arm and the
+  // detection are still; without auto-sampling, ask for it.
+  status("sampling", "arrived; waiting for a still detection");
+  const double arrived = ros::Time::now().toSec();
+  const bool auto_sample = access_.session->settings().sampler.auto_sample;
+  const double still = access_.session->settings().sampler.still_window;
+  for (ros::Rate rate(20.0); ros::ok(); rate.sleep()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stop_) return false;
+    }
+    if (access_.samples() > samples_before) {
+      status("sampled", "a sample at the goal (" + std::to_string(access_.samples()) + " in the session)");
+      return true;
+    }
+    const double waited = ros::Time::now().toSec() - arrived;
+    if (!auto_sample && waited > still + 0.1) access_.take_sample(ros::Time::now().toSec());
+    if (waited > sample_timeout_) break;
+  }
+  failed_.push_back(arm_->forward(move->plan.goal));
+  status("skipped", "no sample at the goal within " + number_text(sample_timeout_, 3) +
+                        " s (is the target detected there?); the next view is planned without it");
+  return true;
+}
+
+void ArmMover::run() {
+  // ~motion/auto_start: calibrate by itself once the arm's joints and a first sample are in.
+  while (auto_start_) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (shutting_down_) return;
+      if (joints_.size() && request_ == Request::None && access_.samples() > 0) {
+        request_ = Request::Auto;
+        break;
+      }
+    }
+    ros::Duration(0.1).sleep();
+  }
+  while (true) {
+    Request request;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [&] { return shutting_down_ || request_ != Request::None; });
+      if (shutting_down_) return;
+      request = request_;
+    }
+    if (request == Request::Plan) {
+      plan();
+    } else if (request == Request::Move) {
+      execute();
+    } else if (request == Request::Auto) {
+      for (int views = 0;; ++views) {
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          if (stop_) break;
+        }
+        // A fresh estimate of every sample so far (the node's worker follows each sample).
+        auto [fresh, sigma] = access_.object_sigma();
+        for (int wait = 0; wait < 200 && !fresh; ++wait) {
+          ros::Duration(0.05).sleep();
+          std::tie(fresh, sigma) = access_.object_sigma();
+        }
+        if (sigma && *sigma <= target_object_sigma_) {
+          status("done", "object sigma " + mm(*sigma) + " <= " + mm(target_object_sigma_) + " after " +
+                             std::to_string(access_.samples()) + " samples");
+          break;
+        }
+        if (views >= max_views_) {
+          status("failed", "~motion/max_views (" + std::to_string(max_views_) + ") moves without reaching " +
+                               mm(target_object_sigma_));
+          break;
+        }
+        if (!plan() || !execute()) break;
+      }
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    request_ = Request::None;
+  }
+}
+
+}  // namespace handeye

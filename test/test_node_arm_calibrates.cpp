@@ -1,0 +1,146 @@
+// The calibration node moving the simulated arm by itself (test/arm_calibrates.test).
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <std_msgs/String.h>
+#include <std_srvs/Trigger.h>
+#include <trajectory_msgs/JointTrajectory.h>
+
+#include <mutex>
+
+#include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+
+using namespace handeye;
+
+namespace {
+
+struct Watch {
+  std::mutex mutex;
+  std::vector<std::pair<double, std::string>> motion;  // (received, text)
+  std::vector<std::pair<double, std::size_t>> commands;  // (received, points)
+  std::optional<CalibrationStatus> status;
+  std::optional<geometry_msgs::PoseStamped> truth;
+};
+
+bool wait_for(const std::function<bool()>& done, double seconds) {
+  const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && ros::WallTime::now() < until) {
+    if (done()) return true;
+    ros::WallDuration(0.002).sleep();
+  }
+  return done();
+}
+
+std::string last_motion(Watch& w) {
+  std::lock_guard<std::mutex> lock(w.mutex);
+  return w.motion.empty() ? "" : w.motion.back().second;
+}
+
+}  // namespace
+
+TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
+  ros::NodeHandle node;
+  const std::string ns = ros::NodeHandle("~").param<std::string>("namespace", "");
+  const std::string test_case = ros::NodeHandle("~").param<std::string>("case", "auto");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  Watch w;
+  auto motion_sub = node.subscribe<std_msgs::String>(ns + "/handeye_calibration/motion_status", 100,
+                                                     [&](const std_msgs::StringConstPtr& m) {
+                                                       std::lock_guard<std::mutex> lock(w.mutex);
+                                                       w.motion.emplace_back(ros::WallTime::now().toSec(), m->data);
+                                                     });
+  auto command_sub = node.subscribe<trajectory_msgs::JointTrajectory>(
+      "/arm_controller/command", 10, [&](const trajectory_msgs::JointTrajectoryConstPtr& m) {
+        std::lock_guard<std::mutex> lock(w.mutex);
+        w.commands.emplace_back(ros::WallTime::now().toSec(), m->points.size());
+      });
+  auto status_sub = node.subscribe<CalibrationStatus>(ns + "/handeye_calibration/status", 10,
+                                                      [&](const CalibrationStatus::ConstPtr& m) {
+                                                        std::lock_guard<std::mutex> lock(w.mutex);
+                                                        w.status = *m;
+                                                      });
+  auto truth_sub = node.subscribe<geometry_msgs::PoseStamped>("/rig_simulator/truth", 1,
+                                                              [&](const geometry_msgs::PoseStampedConstPtr& m) {
+                                                                std::lock_guard<std::mutex> lock(w.mutex);
+                                                                w.truth = *m;
+                                                              });
+  ASSERT_TRUE(ros::service::waitForService(ns + "/stop_motion", ros::Duration(30.0)));
+
+  if (test_case == "auto") {
+    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("done:", 0) == 0 || last_motion(w).rfind("failed:", 0) == 0; }, 150.0))
+        << last_motion(w);
+    std::printf("[ arm      ] %s\n", last_motion(w).c_str());
+    ASSERT_EQ(last_motion(w).rfind("done:", 0), 0u) << last_motion(w);
+    ASSERT_TRUE(wait_for([&] {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      return w.status && w.status->target_reached && w.truth;
+    }, 10.0));
+    std::lock_guard<std::mutex> lock(w.mutex);
+    EXPECT_LE(w.status->samples, 10);
+    // X against the truth, under its covariance (one draw of a chi2(6): < 22.5 at 99.9%).
+    const PoseWithCovariance X = conversions::to_core(w.status->estimate);
+    const Vector6d e = pose_error(X.pose, conversions::to_eigen(w.truth->pose));
+    const double nees = e.dot(X.covariance.ldlt().solve(e));
+    std::printf("[ arm      ] %d samples, object sigma %.3f mm, NEES of X %.2f\n", w.status->samples,
+                w.status->object_error_mm, nees);
+    EXPECT_LT(nees, 22.5);
+    return;
+  }
+
+  // stop and stops_short: one move, asked for.
+  std_srvs::Trigger move;
+  ASSERT_TRUE(wait_for([&] {
+    std::lock_guard<std::mutex> lock(w.mutex);
+    return w.status && w.status->samples >= 1;
+  }, 30.0));
+  ASSERT_TRUE(ros::service::call(ns + "/move", move));
+  ASSERT_TRUE(move.response.success) << move.response.message;
+  ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("moving:", 0) == 0; }, 10.0)) << last_motion(w);
+  const double moving_at = ros::WallTime::now().toSec();
+  if (test_case == "stop") {
+    ros::WallDuration(0.2).sleep();
+    std::size_t before;
+    {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      before = w.commands.size();
+    }
+    std_srvs::Trigger stop;
+    const double asked = ros::WallTime::now().toSec();
+    ASSERT_TRUE(ros::service::call(ns + "/stop_motion", stop));
+    ASSERT_TRUE(wait_for([&] {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      return w.commands.size() > before;
+    }, 1.0));
+    std::lock_guard<std::mutex> lock(w.mutex);
+    const double latency = w.commands.back().first - asked;
+    std::printf("[ arm      ] hold trajectory %.1f ms after stop_motion was called (%zu point)\n", latency * 1e3,
+                w.commands.back().second);
+    EXPECT_EQ(w.commands.back().second, 1u) << "a hold is one point";
+    EXPECT_LT(latency, 0.05);
+    EXPECT_EQ(w.motion.back().second.rfind("stopped:", 0), 0u) << w.motion.back().second;
+  } else {  // stops_short
+    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("failed:", 0) == 0; }, 60.0)) << last_motion(w);
+    const double stopped = ros::WallTime::now().toSec() - moving_at;
+    std::printf("[ arm      ] %.2f s after the move began: %s\n", stopped, last_motion(w).c_str());
+    EXPECT_NE(last_motion(w).find("did not arrive"), std::string::npos);
+    // The deadline is the move's duration + ~motion/arrival_timeout (3 s); it is in the plan's text.
+    std::string planned;
+    {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      for (const auto& [t, text] : w.motion)
+        if (text.rfind("moving:", 0) == 0) planned = text;
+    }
+    const double duration = std::stod(planned.substr(std::string("moving: ").size()));
+    EXPECT_LT(stopped, duration + 3.0 + 1.0) << planned;
+    std::lock_guard<std::mutex> lock(w.mutex);
+    EXPECT_EQ(w.commands.back().second, 1u) << "the failure sent a hold";
+  }
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_arm_calibrates");
+  ros::NodeHandle keep;
+  return RUN_ALL_TESTS();
+}
