@@ -29,7 +29,7 @@
 namespace handeye {
 namespace {
 
-std::string artifact_dir, config_path, samples_path;
+std::string artifact_dir, config_path, samples_path, test_case;
 const std::string kNs = "/handeye_eye_on_hand/";
 QApplication* app = nullptr;
 
@@ -60,26 +60,13 @@ void press(QPushButton* button) {
   QTest::mouseClick(button, Qt::LeftButton);
 }
 
-/// The same formatting as the panel: mm to 2 decimals, degrees to 3.
-QString mm(double value) { return QString::number(value, 'f', 2); }
-QString deg(double value) { return QString::number(value, 'f', 3); }
-
-TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
-  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
-  test::StatusWatcher status(kNs + "handeye_calibration/status");
-  visualization_msgs::MarkerArray next_pose;
-  ros::NodeHandle nh;
-  auto next_pose_sub = nh.subscribe<visualization_msgs::MarkerArray>(
-      kNs + "handeye_calibration/next_pose_markers", 1, [&](const auto& msg) { next_pose = *msg; });
-
-  const test::DisplayLock display;  // the X display is this test's while it runs (see the lock)
-  auto frame = std::make_unique<rviz::VisualizationFrame>();
+/// rviz with the package's config, and the calibration panel in it.
+void open_rviz(std::unique_ptr<rviz::VisualizationFrame>& frame, QWidget*& panel) {
+  frame = std::make_unique<rviz::VisualizationFrame>();
   frame->setApp(app);
   frame->setSplashPath("");
   frame->initialize(QString::fromStdString(config_path));
   frame->show();
-
-  QWidget* panel = nullptr;
   ASSERT_TRUE(pump_until(
       [&] {
         for (QWidget* w : frame->findChildren<QWidget*>()) {
@@ -89,6 +76,25 @@ TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
       },
       30.0))
       << "the panel did not load from " << config_path << " (pluginlib: plugin_description.xml?)";
+}
+
+/// The same formatting as the panel: mm to 2 decimals, degrees to 3.
+QString mm(double value) { return QString::number(value, 'f', 2); }
+QString deg(double value) { return QString::number(value, 'f', 3); }
+
+TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
+  if (test_case == "motion") GTEST_SKIP() << "the motion case (rviz_panel_motion.test)";
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
+  test::StatusWatcher status(kNs + "handeye_calibration/status");
+  visualization_msgs::MarkerArray next_pose;
+  ros::NodeHandle nh;
+  auto next_pose_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      kNs + "handeye_calibration/next_pose_markers", 1, [&](const auto& msg) { next_pose = *msg; });
+
+  const test::DisplayLock display;  // the X display is this test's while it runs (see the lock)
+  std::unique_ptr<rviz::VisualizationFrame> frame;
+  QWidget* panel = nullptr;
+  ASSERT_NO_FATAL_FAILURE(open_rviz(frame, panel));
   const auto find = [&](const char* name) {
     QWidget* w = panel->findChild<QWidget*>(name);
     EXPECT_NE(w, nullptr) << "no widget `" << name << "` in the panel";
@@ -236,6 +242,51 @@ TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
   frame.reset();  // before QApplication and ROS go
 }
 
+// Move / Auto / Stop against the simulated arm (test/rviz_panel_motion.test): the
+// panel moves the arm to one view, starts calibrating by itself, stops it during a
+// move, and starts again until the target; the motion line follows ~motion_status.
+TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
+  if (test_case != "motion") GTEST_SKIP() << "needs the simulated arm (rviz_panel_motion.test)";
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
+  test::StatusWatcher status(kNs + "handeye_calibration/status");
+  const test::DisplayLock display;
+  std::unique_ptr<rviz::VisualizationFrame> frame;
+  QWidget* panel = nullptr;
+  ASSERT_NO_FATAL_FAILURE(open_rviz(frame, panel));
+  auto* move = panel->findChild<QPushButton*>("move");
+  auto* automatic = panel->findChild<QPushButton*>("auto_calibrate");
+  auto* stop = panel->findChild<QPushButton*>("stop_motion");
+  auto* motion = panel->findChild<QLabel*>("motion_label");
+  ASSERT_TRUE(move && automatic && stop && motion);
+  ASSERT_TRUE(pump_until([&] { return status.received && status.latest.samples >= 1; }, 60.0)) << "no first sample";
+
+  // Move: one view, then its sample.
+  press(move);
+  ASSERT_TRUE(pump_until([&] { return motion->text().contains("sampled:") || motion->text().contains("failed:"); }, 60.0))
+      << motion->text().toStdString();
+  ASSERT_TRUE(motion->text().contains("sampled:")) << motion->text().toStdString();
+  ASSERT_TRUE(pump_until([&] { return status.latest.samples >= 2; }, 10.0));
+  // Auto, then Stop during a move: stopped, and the arm holds.
+  press(automatic);
+  ASSERT_TRUE(pump_until([&] { return motion->text().contains("moving:"); }, 30.0)) << motion->text().toStdString();
+  EXPECT_TRUE(stop->isEnabled()) << "Stop is never disabled";
+  QTest::mouseClick(stop, Qt::LeftButton);
+  ASSERT_TRUE(pump_until([&] { return motion->text().contains("stopped:"); }, 2.0)) << motion->text().toStdString();
+  const int after_stop = status.latest.samples;
+  pump_until([] { return false; }, 3.0);
+  EXPECT_TRUE(motion->text().contains("stopped:")) << "nothing moves after Stop: " << motion->text().toStdString();
+  EXPECT_EQ(status.latest.samples, after_stop);
+  // Auto again, to the target.
+  press(automatic);
+  ASSERT_TRUE(pump_until([&] { return motion->text().contains("done:") || motion->text().contains("failed:"); }, 150.0))
+      << motion->text().toStdString();
+  EXPECT_TRUE(motion->text().contains("done:")) << motion->text().toStdString();
+  ASSERT_TRUE(pump_until([&] { return status.latest.target_reached; }, 10.0));
+  std::printf("[rviz panel] %s (%d samples)\n", motion->text().toStdString().c_str(), status.latest.samples);
+  screenshot("rviz_panel_motion.png");
+  frame.reset();
+}
+
 }  // namespace
 }  // namespace handeye
 
@@ -248,5 +299,6 @@ int main(int argc, char** argv) {
   handeye::artifact_dir = pn.param<std::string>("artifact_dir", "/tmp");
   handeye::config_path = pn.param<std::string>("config", "");
   handeye::samples_path = pn.param<std::string>("samples", "");
+  handeye::test_case = pn.param<std::string>("case", "");
   return RUN_ALL_TESTS();
 }

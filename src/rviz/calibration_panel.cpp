@@ -9,6 +9,8 @@
 #include <QLineEdit>
 #include <QMessageBox>
 #include <QPushButton>
+#include <std_msgs/String.h>
+#include <std_srvs/Trigger.h>
 #include <QTableWidget>
 #include <QTextDocument>
 #include <QTimer>
@@ -74,6 +76,7 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   target_label_ = label("target_label");
   event_label_ = label("event_label");
   reply_label_ = label("reply_label");
+  motion_label_ = label("motion_label");
 
   take_button_ = button("Take sample", "take_sample", "Sample the current robot pose and detection (the robot must stand still)");
   remove_button_ = button("Remove selected", "remove_sample", "Remove the sample selected in the table");
@@ -82,6 +85,10 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   reset_button_ = button("Reset", "reset", "Drop every sample (asks first)");
   suggest_button_ = button("Suggest pose", "suggest_pose",
                            "Rank next poses by the predicted object error; the best is drawn in 3D (ghost frame, frustum)");
+  move_button_ = button("Move", "move",
+                        "Move the arm to the next view the session ranks (planned and checked first) and sample there");
+  auto_button_ = button("Auto", "auto_calibrate", "Plan, move and sample until the target object error (Stop stops it)");
+  stop_button_ = button("Stop", "stop_motion", "Stop the arm at once (a hold trajectory)");
   auto* buttons = new QGridLayout;
   buttons->addWidget(take_button_, 0, 0);
   buttons->addWidget(remove_button_, 0, 1);
@@ -89,6 +96,9 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   buttons->addWidget(calibrate_button_, 1, 0);
   buttons->addWidget(save_button_, 1, 1);
   buttons->addWidget(reset_button_, 1, 2);
+  buttons->addWidget(move_button_, 2, 0);
+  buttons->addWidget(auto_button_, 2, 1);
+  buttons->addWidget(stop_button_, 2, 2);
 
   table_ = new QTableWidget(0, 5);
   table_->setObjectName("samples");
@@ -109,6 +119,7 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   layout->addWidget(object_label_);
   layout->addWidget(target_label_);
   layout->addLayout(buttons);
+  layout->addWidget(motion_label_);
   layout->addWidget(reply_label_);
   layout->addWidget(table_, 1);
   layout->addWidget(event_label_);
@@ -122,6 +133,9 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   connect(save_button_, &QPushButton::clicked, this, &CalibrationPanel::save_calibration);
   connect(reset_button_, &QPushButton::clicked, this, &CalibrationPanel::reset);
   connect(suggest_button_, &QPushButton::clicked, this, &CalibrationPanel::suggest);
+  connect(move_button_, &QPushButton::clicked, this, &CalibrationPanel::move);
+  connect(auto_button_, &QPushButton::clicked, this, &CalibrationPanel::auto_calibrate);
+  connect(stop_button_, &QPushButton::clicked, this, &CalibrationPanel::stop_motion);
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, &CalibrationPanel::check_connection);
   reply_timer_ = new QTimer(this);
@@ -174,11 +188,17 @@ bool CalibrationPanel::set_namespace(const QString& text) {
   }
   namespace_ = ns;
   status_sub_ = subscriber;
+  // Only a node that moves the arm publishes it; the line stays empty otherwise.
+  motion_sub_ = node_.subscribe<std_msgs::String>(ns + "handeye_calibration/motion_status", 1,
+                                                  [this](const std_msgs::String::ConstPtr& m) {
+                                                    motion_label_->setText("<b>Motion</b> " +
+                                                                           QString::fromStdString(m->data).toHtmlEscaped());
+                                                  });
   namespace_box_->setEditText(QString::fromStdString(namespace_));
   have_status_ = false;
   status_ = CalibrationStatus();
   table_->setRowCount(0);
-  for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_}) l->clear();
+  for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_, motion_label_}) l->clear();
   samples_label_->setText("Waiting for " + QString::fromStdString(namespace_ + kStatusSuffix).toHtmlEscaped() + " ...");
   last_status_ = ros::WallTime::now();
   return true;
@@ -318,10 +338,19 @@ void CalibrationPanel::show_reply(const QString& text, bool success) {
 
 void CalibrationPanel::set_busy(bool busy) {
   calls_in_flight_ = std::max(0, calls_in_flight_ + (busy ? 1 : -1));
-  for (QPushButton* b : {take_button_, remove_button_, calibrate_button_, save_button_, reset_button_, suggest_button_}) {
+  for (QPushButton* b : {take_button_, remove_button_, calibrate_button_, save_button_, reset_button_, suggest_button_,
+                         move_button_, auto_button_}) {
     b->setEnabled(calls_in_flight_ == 0);
   }
 }
+
+namespace {
+QString trigger_reply(const std_srvs::Trigger& s) { return QString::fromStdString(s.response.message).toHtmlEscaped(); }
+}  // namespace
+
+void CalibrationPanel::move() { call<std_srvs::Trigger>("move", {}, trigger_reply); }
+void CalibrationPanel::auto_calibrate() { call<std_srvs::Trigger>("auto_calibrate", {}, trigger_reply); }
+void CalibrationPanel::stop_motion() { call<std_srvs::Trigger>("stop_motion", {}, trigger_reply); }
 
 void CalibrationPanel::take_sample() {
   call<TakeSample>("take_sample", {}, [](const TakeSample& s) {

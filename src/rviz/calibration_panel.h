@@ -51,6 +51,11 @@ class CalibrationPanel : public rviz::Panel {
   void save_calibration();
   void reset();
   void suggest();
+  /// The robot moving itself (the node's ~motion/enabled): move to the next
+  /// view, calibrate by itself, stop at once.
+  void move();
+  void auto_calibrate();
+  void stop_motion();
   /// Once a second: a status that stopped coming, and the namespaces on offer.
   void check_connection();
   /// The replies of finished service calls, shown on rviz's thread.
@@ -76,7 +81,7 @@ class CalibrationPanel : public rviz::Panel {
   std::vector<std::shared_ptr<Reply>> pending_;
 
   ros::NodeHandle node_;
-  ros::Subscriber status_sub_;
+  ros::Subscriber status_sub_, motion_sub_;
   std::string namespace_;  // with a leading and a trailing '/'
   CalibrationStatus status_;
   ros::WallTime last_status_;
@@ -84,8 +89,9 @@ class CalibrationPanel : public rviz::Panel {
   int calls_in_flight_ = 0;
 
   QComboBox* namespace_box_;
-  QLabel *samples_label_, *sigma_label_, *object_label_, *target_label_, *event_label_, *reply_label_;
+  QLabel *samples_label_, *sigma_label_, *object_label_, *target_label_, *event_label_, *reply_label_, *motion_label_;
   QPushButton *take_button_, *remove_button_, *calibrate_button_, *save_button_, *reset_button_, *suggest_button_;
+  QPushButton *move_button_, *auto_button_, *stop_button_;  // Stop is never disabled
   QTableWidget* table_;
   QTimer *timer_, *reply_timer_;
 };
