@@ -88,7 +88,18 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     return;
   }
 
-  // stop and stops_short: one move, asked for.
+  if (test_case == "no_detection") {
+    // A goal without a detection is skipped, and the next view is planned after it.
+    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("skipped:", 0) == 0; }, 90.0)) << last_motion(w);
+    ASSERT_TRUE(wait_for([&] {
+      const std::string m = last_motion(w);
+      return m.rfind("planned:", 0) == 0 || m.rfind("moving:", 0) == 0;
+    }, 30.0)) << last_motion(w);
+    std::printf("[ arm      ] after a skipped goal: %s\n", last_motion(w).c_str());
+    return;
+  }
+
+  // stop, stops_short and stall: one move, asked for.
   std_srvs::Trigger move;
   ASSERT_TRUE(wait_for([&] {
     std::lock_guard<std::mutex> lock(w.mutex);
@@ -119,6 +130,11 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     EXPECT_EQ(w.commands.back().second, 1u) << "a hold is one point";
     EXPECT_LT(latency, 0.05);
     EXPECT_EQ(w.motion.back().second.rfind("stopped:", 0), 0u) << w.motion.back().second;
+  } else if (test_case == "stall") {
+    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("failed:", 0) == 0; }, 10.0)) << last_motion(w);
+    std::printf("[ arm      ] %.2f s after the move began: %s\n", ros::WallTime::now().toSec() - moving_at,
+                last_motion(w).c_str());
+    EXPECT_NE(last_motion(w).find("no joint states for"), std::string::npos);
   } else {  // stops_short
     ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("failed:", 0) == 0; }, 60.0)) << last_motion(w);
     const double stopped = ros::WallTime::now().toSec() - moving_at;

@@ -11,7 +11,8 @@
 // (simulated_arm.launch), and the camera sees the target from the effector pose in
 // TF at each capture, with X from ~truth and the target's pose Y from
 // ~pattern_pose (x y z qx qy qz qw); it detects only when the target's face
-// (~face_size, m) is whole in a 60 x 45 deg image (motion/view_planner.h).
+// (~face_size, m) is whole in a 60 x 45 deg image (motion/view_planner.h);
+// ~blind_after > 0 (s) stops every detection from then on, for a test.
 // With ~camera_link set, the rig publishes a camera driver's own TF tree
 // (camera_link -> the optical frame, the usual optical rotation) and can stamp
 // its detections in another frame of that tree (~detection_frame); their pose
@@ -87,6 +88,7 @@ class RigSimulator {
       const std::vector<double> face = param(pn, "face_size", std::vector<double>{0.2, 0.15});
       trajectory_.rig.face_size = Eigen::Vector2d(face.at(0), face.at(1));
       tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_);
+      blind_after_ = param(pn, "blind_after", 0.0);  // s; > 0: no detection from then on (a test's fault)
     }
     std::optional<Target> target;
     if (output_ == "images") {
@@ -150,6 +152,7 @@ class RigSimulator {
   /// effector in TF (none when TF has no pose then, or the face is not whole in view).
   std::optional<Eigen::Isometry3d> view_at(const ros::Time& capture) {
     if (!robot_from_tf_) return trajectory_.pattern_at(elapsed(capture));
+    if (blind_after_ > 0.0 && elapsed(capture) > blind_after_) return std::nullopt;
     geometry_msgs::TransformStamped E;
     try {
       E = tf_buffer_.lookupTransform(base_, effector_, capture, ros::Duration(0.05));
@@ -223,6 +226,7 @@ class RigSimulator {
   std::string base_, effector_, camera_, pattern_frame_, output_, camera_link_, detection_frame_;
   Eigen::Isometry3d T_link_optical_;
   bool publish_robot_tf_, detection_covariance_, robot_from_tf_ = false;
+  double blind_after_ = 0.0;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   double latency_;
