@@ -72,6 +72,15 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
         << last_motion(w);
     std::printf("[ arm      ] %s\n", last_motion(w).c_str());
     ASSERT_EQ(last_motion(w).rfind("done:", 0), 0u) << last_motion(w);
+    {  // Wall time per view: from the first move's start to the end, over the moves.
+      std::lock_guard<std::mutex> lock(w.mutex);
+      int moves = 0;
+      double first = 0.0;
+      for (const auto& [t, text] : w.motion)
+        if (text.rfind("moving:", 0) == 0) first = moves++ ? first : t;
+      std::printf("[ arm      ] %d moves, %.1f s per view (planning, moving at 10%% speed, settling, sampling)\n", moves,
+                  (w.motion.back().first - first) / std::max(moves, 1));
+    }
     ASSERT_TRUE(wait_for([&] {
       std::lock_guard<std::mutex> lock(w.mutex);
       return w.status && w.status->target_reached && w.truth;
