@@ -1,4 +1,5 @@
 // The calibration node moving the simulated arm by itself (test/arm_calibrates.test).
+#include <actionlib/client/simple_action_client.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_msgs/String.h>
@@ -94,6 +95,57 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     std::printf("[ arm      ] %d samples, object sigma %.3f mm, NEES of X %.2f\n", w.status->samples,
                 w.status->object_error_mm, nees);
     EXPECT_LT(nees, 22.5);
+    return;
+  }
+
+  if (test_case == "action") {
+    // AutoCalibrate for scripts: cancelled during a move (the arm holds), then again to the target.
+    actionlib::SimpleActionClient<AutoCalibrateAction> client(ns + "/auto_calibrate_action", true);
+    ASSERT_TRUE(client.waitForServer(ros::Duration(30.0)));
+    ASSERT_TRUE(wait_for([&] {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      return w.status && w.status->samples >= 1;
+    }, 30.0));
+    std::mutex feedback_mutex;
+    std::vector<std::string> states;
+    auto on_feedback = [&](const handeye_covariance::AutoCalibrateFeedbackConstPtr& f) {
+      std::lock_guard<std::mutex> lock(feedback_mutex);
+      states.push_back(f->state);
+    };
+    AutoCalibrateGoal goal;
+    goal.target_mm = 1.0;
+    client.sendGoal(goal, {}, {}, on_feedback);
+    ASSERT_TRUE(wait_for([&] {
+      std::lock_guard<std::mutex> lock(feedback_mutex);
+      return !states.empty() && states.back() == "moving";
+    }, 30.0));
+    std::size_t commands_before;
+    {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      commands_before = w.commands.size();
+    }
+    client.cancelGoal();
+    ASSERT_TRUE(client.waitForResult(ros::Duration(5.0)));
+    EXPECT_EQ(client.getState(), actionlib::SimpleClientGoalState::PREEMPTED) << client.getState().toString();
+    ASSERT_TRUE(wait_for([&] {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      return w.commands.size() > commands_before && w.commands.back().second == 1u;
+    }, 1.0)) << "cancelling sends a hold";
+    {
+      std::lock_guard<std::mutex> lock(feedback_mutex);
+      states.clear();
+    }
+    client.sendGoal(goal, {}, {}, on_feedback);
+    ASSERT_TRUE(client.waitForResult(ros::Duration(150.0)));
+    EXPECT_EQ(client.getState(), actionlib::SimpleClientGoalState::SUCCEEDED) << client.getState().toString();
+    const auto result = client.getResult();
+    EXPECT_TRUE(result->reached);
+    EXPECT_LE(result->object_error_mm, 1.0);
+    EXPECT_GT(result->object_error_mm, 0.0);
+    std::lock_guard<std::mutex> lock(feedback_mutex);
+    std::printf("[ arm      ] action: cancelled during a move, then %s with %d samples, %.3f mm, %zu feedback messages\n",
+                client.getState().toString().c_str(), result->samples, result->object_error_mm, states.size());
+    EXPECT_GE(states.size(), 3u);
     return;
   }
 

@@ -59,16 +59,21 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
                node.advertiseService("move", &ArmMover::move_service, this),
                node.advertiseService("auto_calibrate", &ArmMover::auto_service, this),
                node.advertiseService("stop_motion", &ArmMover::stop_service, this)};
+  action_ = std::make_unique<actionlib::SimpleActionServer<AutoCalibrateAction>>(node, "auto_calibrate_action", false);
+  action_->registerGoalCallback([this] { on_goal(); });
+  action_->registerPreemptCallback([this] { on_preempt(); });
+  action_->start();
   status("idle", "the arm " + rig.frames.base + " -> " + rig.frames.effector + " (" + std::to_string(arm_->joints()) +
                      " joints), " + std::to_string(collision_->obstacles().size()) + " obstacle(s)");
   thread_ = std::thread(&ArmMover::run, this);
 }
 
 ArmMover::~ArmMover() {
+  if (action_) action_->shutdown();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     shutting_down_ = true;
-    stop_ = true;
+    ++request_id_;
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
@@ -100,6 +105,19 @@ void ArmMover::status(const std::string& state, const std::string& text) {
   std_msgs::String msg;
   msg.data = state + ": " + text;
   status_pub_.publish(msg);
+  bool goal;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    goal = action_goal_;
+  }
+  if (goal && action_ && action_->isActive()) {
+    AutoCalibrateFeedback feedback;
+    feedback.samples = static_cast<int>(access_.samples());
+    feedback.object_error_mm = access_.object_sigma().second.value_or(0.0) * 1e3;
+    feedback.state = state;
+    feedback.text = msg.data;
+    action_->publishFeedback(feedback);
+  }
   if (state == "failed")
     ROS_WARN("motion %s", msg.data.c_str());
   else
@@ -125,7 +143,7 @@ bool ArmMover::plan_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
     res.message = "busy (" + state_ + "): call ~stop_motion first";
     return true;
   }
-  request_ = Request::Plan, stop_ = false;
+  request_ = Request::Plan, ++request_id_;
   wake_.notify_all();
   res.success = true;
   res.message = "planning; the plan is on ~motion_status";
@@ -138,7 +156,7 @@ bool ArmMover::move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
     res.message = "busy (" + state_ + "): call ~stop_motion first";
     return true;
   }
-  request_ = Request::Move, stop_ = false;
+  request_ = Request::Move, ++request_id_;
   wake_.notify_all();
   res.success = true;
   res.message = planned_ ? "moving to the planned view" : "planning, then moving";
@@ -151,7 +169,7 @@ bool ArmMover::auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
     res.message = "busy (" + state_ + "): call ~stop_motion first";
     return true;
   }
-  request_ = Request::Auto, stop_ = false;
+  request_ = Request::Auto, ++request_id_, action_goal_ = false;
   wake_.notify_all();
   res.success = true;
   res.message = "calibrating by itself until " + mm(target_object_sigma_) + " or " + std::to_string(max_views_) +
@@ -160,21 +178,55 @@ bool ArmMover::auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
 }
 
 bool ArmMover::stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  stop_now("~stop_motion");
+  if (action_->isActive()) {
+    AutoCalibrateResult result;
+    result.message = "stopped by ~stop_motion";
+    action_->setAborted(result, result.message);
+  }
+  res.success = true;
+  res.message = "stopped";
+  return true;
+}
+
+void ArmMover::stop_now(const std::string& why) {
   // The hold goes out from here, not through the motion thread.
   std::optional<Eigen::VectorXd> q;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    stop_ = true;
+    ++request_id_;  // whatever runs sees it is no longer asked for
     request_ = Request::None;
+    action_goal_ = false;
     planned_.reset();
     if (joints_.size()) q = joints_;
   }
   wake_.notify_all();
   if (q) publish(motion::hold_trajectory(*q));
-  status("stopped", q ? "a hold trajectory was sent at the current joints" : "no joint states yet: nothing to hold");
-  res.success = true;
-  res.message = "stopped";
-  return true;
+  status("stopped", (q ? "a hold trajectory was sent at the current joints (" : "no joint states yet: nothing to hold (") +
+                        why + ")");
+}
+
+void ArmMover::on_goal() {
+  const auto goal = action_->acceptNewGoal();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (request_ != Request::None || state_ == "moving") {
+    AutoCalibrateResult result;
+    result.message = "busy (" + state_ + "): cancel or call ~stop_motion first";
+    action_->setAborted(result, result.message);
+    return;
+  }
+  request_ = Request::Auto, ++request_id_, action_goal_ = true;
+  goal_target_ = goal->target_mm > 0.0 ? goal->target_mm * 1e-3 : target_object_sigma_;
+  goal_max_views_ = goal->max_views > 0 ? goal->max_views : max_views_;
+  wake_.notify_all();
+}
+
+void ArmMover::on_preempt() {
+  stop_now("the action was cancelled");
+  AutoCalibrateResult result;
+  result.samples = static_cast<int>(access_.samples());
+  result.message = "cancelled: the arm holds";
+  action_->setPreempted(result, result.message);
 }
 
 bool ArmMover::plan() {
@@ -200,7 +252,7 @@ bool ArmMover::plan() {
   return true;
 }
 
-bool ArmMover::execute() {
+bool ArmMover::execute(std::uint64_t id) {
   std::optional<NextMove> move;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -224,7 +276,7 @@ bool ArmMover::execute() {
     double stamp;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (stop_) return false;  // ~stop_motion sent the hold
+      if (request_id_ != id) return false;  // stopped (the hold went out) or asked for something else
       q = joints_, stamp = joints_stamp_;
     }
     if (stamp != seen && q.size()) monitor.joint_state(stamp, q), seen = stamp;
@@ -249,7 +301,7 @@ bool ArmMover::execute() {
   for (ros::Rate rate(20.0); ros::ok(); rate.sleep()) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (stop_) return false;
+      if (request_id_ != id) return false;
     }
     if (access_.samples() > samples_before) {
       status("sampled", "a sample at the goal (" + std::to_string(access_.samples()) + " in the session)");
@@ -280,21 +332,29 @@ void ArmMover::run() {
   }
   while (true) {
     Request request;
+    std::uint64_t id;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [&] { return shutting_down_ || request_ != Request::None; });
       if (shutting_down_) return;
-      request = request_;
+      request = request_, id = request_id_;
     }
     if (request == Request::Plan) {
       plan();
     } else if (request == Request::Move) {
-      execute();
+      execute(id);
     } else if (request == Request::Auto) {
+      double target = target_object_sigma_;
+      int max_views = max_views_;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (action_goal_) target = goal_target_, max_views = goal_max_views_;
+      }
+      bool reached = false;
       for (int views = 0;; ++views) {
         {
           std::lock_guard<std::mutex> lock(mutex_);
-          if (stop_) break;
+          if (request_id_ != id) break;
         }
         // A fresh estimate of every sample so far (the node's worker follows each sample).
         auto [fresh, sigma] = access_.object_sigma();
@@ -302,21 +362,40 @@ void ArmMover::run() {
           ros::Duration(0.05).sleep();
           std::tie(fresh, sigma) = access_.object_sigma();
         }
-        if (sigma && *sigma <= target_object_sigma_) {
-          status("done", "object sigma " + mm(*sigma) + " <= " + mm(target_object_sigma_) + " after " +
+        if (sigma && *sigma <= target) {
+          reached = true;
+          status("done", "object sigma " + mm(*sigma) + " <= " + mm(target) + " after " +
                              std::to_string(access_.samples()) + " samples");
           break;
         }
-        if (views >= max_views_) {
-          status("failed", "~motion/max_views (" + std::to_string(max_views_) + ") moves without reaching " +
-                               mm(target_object_sigma_));
+        if (views >= max_views) {
+          status("failed", std::to_string(max_views) + " moves (the most allowed) without reaching " + mm(target));
           break;
         }
-        if (!plan() || !execute()) break;
+        if (!plan() || !execute(id)) break;
+      }
+      bool goal;
+      std::string last;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        goal = action_goal_ && request_id_ == id;  // not stopped, cancelled or replaced meanwhile
+        if (goal) action_goal_ = false;
+        last = state_;
+      }
+      if (goal && action_->isActive()) {
+        AutoCalibrateResult result;
+        result.reached = reached;
+        result.samples = static_cast<int>(access_.samples());
+        result.object_error_mm = access_.object_sigma().second.value_or(0.0) * 1e3;
+        result.message = last;
+        if (reached)
+          action_->setSucceeded(result, "reached");
+        else
+          action_->setAborted(result, "not reached: see ~motion_status");
       }
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    request_ = Request::None;
+    if (request_id_ == id) request_ = Request::None;  // a request made meanwhile runs next
   }
 }
 

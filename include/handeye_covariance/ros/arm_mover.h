@@ -6,7 +6,9 @@
 // Services beside the node's others (/<namespace>/...): plan_move plans the next
 // move and says it on ~motion_status; move executes it (planning first if there is
 // no current plan: the confirm mode); auto_calibrate plans, moves and samples until
-// the target object sigma or ~motion/max_views. stop_motion sends a hold trajectory from the service call
+// the target object sigma or ~motion/max_views; the action auto_calibrate_action
+// (AutoCalibrate.action) does the same for scripts, with feedback, and cancelling it
+// stops the arm. stop_motion sends a hold trajectory from the service call
 // itself (no queue in between) and ends either mode. Every failure stops the
 // motion and says why on ~motion_status: no view passes (with the planner's
 // counts per reason), the controller does not arrive, joint states stall; a goal
@@ -16,12 +18,14 @@
 // thread plans and moves. The session is read through SessionAccess.
 #pragma once
 
+#include <actionlib/server/simple_action_server.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_msgs/String.h>
 #include <std_srvs/Trigger.h>
 
 #include <condition_variable>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -30,6 +34,7 @@
 
 #include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/motion/move_monitor.h"
+#include "handeye_covariance/ros/messages.h"
 
 namespace handeye {
 
@@ -56,12 +61,17 @@ class ArmMover {
   bool move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   bool auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   bool stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  void on_goal();
+  void on_preempt();
+  /// Sends the hold at the latest joints, from the calling thread; the motion thread stops.
+  void stop_now(const std::string& why);
   void on_joint_states(const sensor_msgs::JointStateConstPtr& msg);
   void run();
   /// Plans the next move (mutex_ not held); false with the reason on ~motion_status.
   bool plan();
-  /// Moves to the planned goal and takes the sample there; false when the motion stopped.
-  bool execute();
+  /// Moves to the planned goal and takes the sample there, for request `id`; false
+  /// when the motion stopped or another request came.
+  bool execute(std::uint64_t id);
   void publish(const std::vector<motion::TrajectoryPoint>& trajectory);
   void status(const std::string& state, const std::string& text);
   std::optional<Eigen::VectorXd> joints() const;
@@ -79,12 +89,18 @@ class ArmMover {
   ros::Publisher command_pub_, status_pub_;
   ros::Subscriber joint_states_;
   std::vector<ros::ServiceServer> services_;
+  std::unique_ptr<actionlib::SimpleActionServer<AutoCalibrateAction>> action_;
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   Request request_ = Request::None;
-  bool stop_ = false, shutting_down_ = false;
+  bool shutting_down_ = false;
+  /// Moved on by every request and by a stop: work started for an older one stops.
+  std::uint64_t request_id_ = 0;
   std::optional<NextMove> planned_;
+  bool action_goal_ = false;          // the current Auto is the action's goal
+  double goal_target_ = 0.0;          // m, of that goal
+  int goal_max_views_ = 0;
   std::vector<Eigen::Isometry3d> failed_;  // goals without a detection
   Eigen::VectorXd joints_;
   double joints_stamp_ = 0.0;

@@ -1,6 +1,7 @@
 // The package's generated messages and services, named in namespace handeye.
 #pragma once
 
+#include "handeye_covariance/AutoCalibrateAction.h"
 #include "handeye_covariance/Calibrate.h"
 #include "handeye_covariance/CalibrationStatus.h"
 #include "handeye_covariance/ListSamples.h"
@@ -15,6 +16,10 @@
 #include "handeye_covariance/TakeSample.h"
 
 namespace handeye {
+using handeye_covariance::AutoCalibrateAction;
+using handeye_covariance::AutoCalibrateFeedback;
+using handeye_covariance::AutoCalibrateGoal;
+using handeye_covariance::AutoCalibrateResult;
 using handeye_covariance::Calibrate;
 using handeye_covariance::CalibrationStatus;
 using handeye_covariance::ListSamples;
