@@ -5,6 +5,7 @@
 #include <std_msgs/String.h>
 #include <std_srvs/Trigger.h>
 #include <trajectory_msgs/JointTrajectory.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include <mutex>
 
@@ -21,6 +22,7 @@ struct Watch {
   std::vector<std::pair<double, std::size_t>> commands;  // (received, points)
   std::optional<CalibrationStatus> status;
   std::optional<geometry_msgs::PoseStamped> truth;
+  std::size_t ghost_shapes = 0;  // the planned move's ghost arm (~planned_move_markers)
 };
 
 bool wait_for(const std::function<bool()>& done, double seconds) {
@@ -66,6 +68,14 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
                                                                 std::lock_guard<std::mutex> lock(w.mutex);
                                                                 w.truth = *m;
                                                               });
+  auto markers_sub = node.subscribe<visualization_msgs::MarkerArray>(
+      ns + "/handeye_calibration/planned_move_markers", 10, [&](const visualization_msgs::MarkerArrayConstPtr& m) {
+        std::size_t shapes = 0;
+        for (const auto& marker : m->markers)
+          shapes += marker.ns == "handeye_planned_move" && marker.type == visualization_msgs::Marker::CYLINDER;
+        std::lock_guard<std::mutex> lock(w.mutex);
+        w.ghost_shapes = std::max(w.ghost_shapes, shapes);
+      });
   ASSERT_TRUE(ros::service::waitForService(ns + "/stop_motion", ros::Duration(30.0)));
 
   if (test_case == "auto") {
@@ -189,6 +199,7 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     std::printf("[ arm      ] hold trajectory %.1f ms after stop_motion was called (%zu point)\n", latency * 1e3,
                 w.commands.back().second);
     EXPECT_EQ(w.commands.back().second, 1u) << "a hold is one point";
+    EXPECT_EQ(w.ghost_shapes, 7u) << "the planned move showed the arm's 7 cylinders at the goal";
     EXPECT_LT(latency, 0.05);
     EXPECT_EQ(w.motion.back().second.rfind("stopped:", 0), 0u) << w.motion.back().second;
   } else if (test_case == "stall") {

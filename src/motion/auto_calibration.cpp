@@ -95,6 +95,7 @@ NextMove AutoCalibration::next(const CalibrationSession& session, const SessionS
     request.count = session.settings().suggest.candidates;
     const SuggestResult suggestion = session.suggest(snapshot, request);
     move.object_sigma = suggestion.suggestion.current_object_sigma;
+    move.X = suggestion.estimate.T_parent_camera;
     for (const ScoredPose& pose : suggestion.suggestion.ranked) {
       if (near_any(pose.T_base_effector, failed, session.settings().sampler)) continue;
       candidates.push_back({pose.T_base_effector, pose.T_camera_pattern, true});

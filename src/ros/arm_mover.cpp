@@ -1,8 +1,11 @@
 #include "handeye_covariance/ros/arm_mover.h"
 
 #include <trajectory_msgs/JointTrajectory.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/ros/covariance_markers.h"
+#include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"
 
 namespace handeye {
@@ -52,6 +55,7 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   command_pub_ = node.advertise<trajectory_msgs::JointTrajectory>(
       param<std::string>(pn, "motion/controller_topic", "/arm_controller/command"), 1);
   status_pub_ = pn.advertise<std_msgs::String>("motion_status", 10, true);
+  markers_pub_ = pn.advertise<visualization_msgs::MarkerArray>("planned_move_markers", 1, true);
   joint_states_ = node.subscribe(param<std::string>(pn, "motion/joint_states_topic", "/joint_states"), 10,
                                  &ArmMover::on_joint_states, this);
   // Beside the node's other services (/<namespace>/calibrate, ...).
@@ -229,6 +233,55 @@ void ArmMover::on_preempt() {
   action_->setPreempted(result, result.message);
 }
 
+void ArmMover::publish_plan_markers(const std::optional<NextMove>& move) {
+  const Rig& rig = access_.session->settings().rig;
+  const ros::Time stamp = ros::Time::now();
+  visualization_msgs::MarkerArray markers;
+  visualization_msgs::Marker clear;
+  clear.header.frame_id = rig.frames.base;
+  clear.header.stamp = stamp;
+  clear.ns = "handeye_planned_move";
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  markers.markers.push_back(clear);
+  if (move) {
+    const std::vector<Eigen::Isometry3d> poses = arm_->body_poses(move->plan.goal);
+    int id = 0;
+    for (std::size_t b = 0; b < arm_->bodies().size(); ++b) {
+      for (const motion::Shape& shape : arm_->bodies()[b].shapes) {
+        visualization_msgs::Marker m;
+        m.header = clear.header;
+        m.ns = clear.ns;
+        m.id = id++;
+        m.action = visualization_msgs::Marker::ADD;
+        m.pose = conversions::to_pose_msg(poses[b] * shape.T_link_shape);
+        if (shape.kind == motion::Shape::Kind::Box) {
+          m.type = visualization_msgs::Marker::CUBE;
+          m.scale.x = shape.size.x(), m.scale.y = shape.size.y(), m.scale.z = shape.size.z();
+        } else if (shape.kind == motion::Shape::Kind::Cylinder) {
+          m.type = visualization_msgs::Marker::CYLINDER;
+          m.scale.x = m.scale.y = 2.0 * shape.size(0), m.scale.z = shape.size(1);
+        } else {
+          m.type = visualization_msgs::Marker::SPHERE;
+          m.scale.x = m.scale.y = m.scale.z = 2.0 * shape.size(0);
+        }
+        m.color.r = 0.4f, m.color.g = 0.7f, m.color.b = 1.0f, m.color.a = 0.35f;
+        markers.markers.push_back(m);
+      }
+    }
+    const std::string label = move->bootstrap ? "planned: a first move"
+                                              : "planned: object " + number_text(move->object_sigma * 1e3, 3) + " -> " +
+                                                    number_text(move->predicted_object_sigma * 1e3, 3) + " mm (1 sigma)";
+    NextPoseMarkerOptions options;
+    options.ns = "handeye_planned_move_view";
+    const visualization_msgs::MarkerArray view =
+        next_pose_markers(rig, arm_->forward(move->plan.goal), move->X.value_or(Eigen::Isometry3d::Identity()), 0.3,
+                          label, rig.frames.base, stamp, options);
+    for (const auto& m : view.markers)  // without X, no frustum (id 1): the ghost effector frame and the label
+      if (move->X || m.id != 1) markers.markers.push_back(m);
+  }
+  markers_pub_.publish(markers);
+}
+
 bool ArmMover::plan() {
   const std::optional<Eigen::VectorXd> q = joints();
   if (!q) {
@@ -244,6 +297,7 @@ bool ArmMover::plan() {
     std::lock_guard<std::mutex> lock(mutex_);
     planned_ = move;
   }
+  publish_plan_markers(move);
   status("planned", (move.bootstrap ? "a first move (" : "view " + std::to_string(move.plan.chosen + 1) + " of the ranking (") +
                         move.plan.summary() + "), " + number_text(move.trajectory.back().time, 3) + " s" +
                         (move.bootstrap ? ""
@@ -292,6 +346,7 @@ bool ArmMover::execute(std::uint64_t id) {
     std::lock_guard<std::mutex> lock(mutex_);
     planned_.reset();
   }
+  publish_plan_markers(std::nullopt);
   // The sample at the goal: the session's sampler takes it once the arm and the
   // detection are still; without auto-sampling, ask for it.
   status("sampling", "arrived; waiting for a still detection");

@@ -40,6 +40,7 @@ struct NextMove {
   std::vector<motion::TrajectoryPoint> trajectory;
   double object_sigma = 0.0;            // m, now; 0 before there is an estimate
   double predicted_object_sigma = 0.0;  // m, after the view; 0 for a first move
+  std::optional<Eigen::Isometry3d> X;   // the estimate the view was predicted with (none for a first move)
   std::string reason;               // when not found: why, with the planner's counts
 };
 

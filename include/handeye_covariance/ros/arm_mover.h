@@ -86,7 +86,11 @@ class ArmMover {
   double target_object_sigma_ = 1e-3;
   bool auto_start_ = false;  // ~motion/auto_start
 
-  ros::Publisher command_pub_, status_pub_;
+  /// The planned move in RViz (~planned_move_markers): the arm's collision shapes at
+  /// the goal as a translucent ghost, the camera's frustum there (once X is
+  /// estimated) and the predicted gain; cleared once the move is done.
+  void publish_plan_markers(const std::optional<NextMove>& move);
+  ros::Publisher command_pub_, status_pub_, markers_pub_;
   ros::Subscriber joint_states_;
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<actionlib::SimpleActionServer<AutoCalibrateAction>> action_;
