@@ -50,6 +50,12 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   sample_timeout_ = param(pn, "motion/sample_timeout", access_.session->settings().sampler.still_window + 3.0);
   max_views_ = param(pn, "motion/max_views", max_views_);
   auto_start_ = param(pn, "motion/auto_start", false);
+  const std::string mode = param<std::string>(pn, "motion/mode", "confirm");
+  if (mode != "confirm" && mode != "auto")
+    throw HandEyeError(ErrorCode::MalformedFile, "unknown ~motion/mode '" + mode + "'", "~motion/mode",
+                       "use confirm (the next move is planned and shown; Move moves) or auto (auto_calibrate at start)");
+  confirm_ = mode == "confirm";
+  auto_start_ = auto_start_ || mode == "auto";
   target_object_sigma_ = access_.session->settings().target_object_sigma;
 
   command_pub_ = node.advertise<trajectory_msgs::JointTrajectory>(
@@ -368,18 +374,23 @@ bool ArmMover::execute(std::uint64_t id) {
   }
   failed_.push_back(arm_->forward(move->plan.goal));
   status("skipped", "no sample at the goal within " + number_text(sample_timeout_, 3) +
-                        " s (is the target detected there?); the next view is planned without it");
+                        " s (is the target detected there, and TF " + access_.session->settings().rig.frames.base +
+                        " -> " + access_.session->settings().rig.frames.effector +
+                        " available?); the next view is planned without it");
   return true;
 }
 
 void ArmMover::run() {
-  // ~motion/auto_start: calibrate by itself once the arm's joints and a first sample are in.
-  while (auto_start_) {
+  // Wait for the arm's joints and a first sample; then auto: calibrate by itself;
+  // confirm: plan the next move and show it (Move moves).
+  while (auto_start_ || confirm_) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (shutting_down_) return;
-      if (joints_.size() && request_ == Request::None && access_.samples() > 0) {
-        request_ = Request::Auto;
+      if (request_ != Request::None) break;  // asked for something meanwhile
+      if (joints_.size() && access_.samples() > 0) {
+        if (auto_start_) request_ = Request::Auto, ++request_id_;
+        else request_ = Request::Plan, ++request_id_;
         break;
       }
     }
@@ -397,7 +408,7 @@ void ArmMover::run() {
     if (request == Request::Plan) {
       plan();
     } else if (request == Request::Move) {
-      execute(id);
+      if (execute(id) && confirm_) plan();  // the next one, shown for the operator's Move
     } else if (request == Request::Auto) {
       double target = target_object_sigma_;
       int max_views = max_views_;

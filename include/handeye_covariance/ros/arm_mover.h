@@ -3,9 +3,11 @@
 // to the trajectory controller's command topic, watched from /joint_states
 // (motion/move_monitor.h), then a sample where the arm stands still.
 //
-// Services beside the node's others (/<namespace>/...): plan_move plans the next
-// move and says it on ~motion_status; move executes it (planning first if there is
-// no current plan: the confirm mode); auto_calibrate plans, moves and samples until
+// ~motion/mode confirm (default): the next move is planned and shown (RViz, ~motion_status)
+// as soon as there is a sample and after each move, and the arm moves only on Move;
+// auto: auto_calibrate at start. Services beside the node's others (/<namespace>/...):
+// plan_move plans the next move again; move executes the shown one (planning first
+// if there is none); auto_calibrate plans, moves and samples until
 // the target object sigma or ~motion/max_views; the action auto_calibrate_action
 // (AutoCalibrate.action) does the same for scripts, with feedback, and cancelling it
 // stops the arm. stop_motion sends a hold trajectory from the service call
@@ -84,7 +86,8 @@ class ArmMover {
   double sample_timeout_ = 4.0;  // s after arrival
   int max_views_ = 30;
   double target_object_sigma_ = 1e-3;
-  bool auto_start_ = false;  // ~motion/auto_start
+  bool auto_start_ = false;  // ~motion/auto_start, or ~motion/mode auto
+  bool confirm_ = true;      // ~motion/mode confirm: the next move is planned and shown ahead of Move
 
   /// The planned move in RViz (~planned_move_markers): the arm's collision shapes at
   /// the goal as a translucent ghost, the camera's frustum there (once X is
