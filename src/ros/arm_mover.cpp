@@ -147,43 +147,38 @@ void ArmMover::publish(const std::vector<motion::TrajectoryPoint>& trajectory) {
   command_pub_.publish(msg);
 }
 
+std::optional<std::string> ArmMover::ask(Request request) {  // mutex_ held
+  if (request_ != Request::None || state_ == "moving") return "busy (" + state_ + "): call ~stop_motion first";
+  request_ = request, ++request_id_;
+  if (request == Request::Auto) action_goal_ = false;  // the services' Auto; on_goal marks the action's
+  wake_.notify_all();
+  return std::nullopt;
+}
+
 bool ArmMover::plan_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (request_ != Request::None || state_ == "moving") {
-    res.message = "busy (" + state_ + "): call ~stop_motion first";
-    return true;
-  }
-  request_ = Request::Plan, ++request_id_;
-  wake_.notify_all();
-  res.success = true;
-  res.message = "planning; the plan is on ~motion_status";
+  const std::optional<std::string> busy = ask(Request::Plan);
+  res.success = !busy;
+  res.message = busy ? *busy : "planning; the plan is on ~motion_status";
   return true;
 }
 
 bool ArmMover::move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (request_ != Request::None || state_ == "moving") {
-    res.message = "busy (" + state_ + "): call ~stop_motion first";
-    return true;
-  }
-  request_ = Request::Move, ++request_id_;
-  wake_.notify_all();
-  res.success = true;
-  res.message = planned_ ? "moving to the planned view" : "planning, then moving";
+  const bool planned = planned_.has_value();
+  const std::optional<std::string> busy = ask(Request::Move);
+  res.success = !busy;
+  res.message = busy ? *busy : planned ? "moving to the planned view" : "planning, then moving";
   return true;
 }
 
 bool ArmMover::auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (request_ != Request::None || state_ == "moving") {
-    res.message = "busy (" + state_ + "): call ~stop_motion first";
-    return true;
-  }
-  request_ = Request::Auto, ++request_id_, action_goal_ = false;
-  wake_.notify_all();
-  res.success = true;
-  res.message = "calibrating by itself until " + mm(target_object_sigma_) + " or " + std::to_string(max_views_) +
-                " views; ~stop_motion stops it";
+  const std::optional<std::string> busy = ask(Request::Auto);
+  res.success = !busy;
+  res.message = busy ? *busy
+                     : "calibrating by itself until " + mm(target_object_sigma_) + " or " + std::to_string(max_views_) +
+                           " views; ~stop_motion stops it";
   return true;
 }
 
@@ -219,16 +214,15 @@ void ArmMover::stop_now(const std::string& why) {
 void ArmMover::on_goal() {
   const auto goal = action_->acceptNewGoal();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (request_ != Request::None || state_ == "moving") {
+  if (const std::optional<std::string> busy = ask(Request::Auto)) {
     AutoCalibrateResult result;
-    result.message = "busy (" + state_ + "): cancel or call ~stop_motion first";
+    result.message = *busy;
     action_->setAborted(result, result.message);
     return;
   }
-  request_ = Request::Auto, ++request_id_, action_goal_ = true;
+  action_goal_ = true;
   goal_target_ = goal->target_mm > 0.0 ? goal->target_mm * 1e-3 : target_object_sigma_;
   goal_max_views_ = goal->max_views > 0 ? goal->max_views : max_views_;
-  wake_.notify_all();
 }
 
 void ArmMover::on_preempt() {

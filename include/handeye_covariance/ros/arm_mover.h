@@ -63,6 +63,8 @@ class ArmMover {
   bool move_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   bool auto_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   bool stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
+  /// Takes a request unless busy (mutex_ held): the reason when busy.
+  std::optional<std::string> ask(Request request);
   void on_goal();
   void on_preempt();
   /// Sends the hold at the latest joints, from the calling thread; the motion thread stops.
