@@ -187,10 +187,11 @@ CollisionModel::CollisionModel(const Arm& arm, std::vector<Obstacle> obstacles, 
   for (std::size_t a = 0; a < bodies.size(); ++a) {
     for (std::size_t b = a + 1; b < bodies.size(); ++b) {
       if (impl_->parts_of_body[a].empty() || impl_->parts_of_body[b].empty()) continue;
-      const int apart = std::abs(bodies[a].joints_before - bodies[b].joints_before);
-      if (apart <= 1) {
-        unchecked_pairs_.push_back(bodies[a].name + " / " + bodies[b].name +
-                                   (apart == 0 ? ": rigidly joined" : ": adjacent"));
+      // Rigidly joined: no movable joint between them. Adjacent: parent and child links
+      // in the URDF (consecutive bodies of the chain), as MoveIt leaves them out.
+      const bool rigid = bodies[a].joints_before == bodies[b].joints_before;
+      if (rigid || b == a + 1) {
+        unchecked_pairs_.push_back(bodies[a].name + " / " + bodies[b].name + (rigid ? ": rigidly joined" : ": adjacent"));
         continue;
       }
       candidates.emplace_back(static_cast<int>(a), static_cast<int>(b));

@@ -68,7 +68,8 @@ class CollisionModel {
 
   /// The first contact at joints q, if any (not thread-safe: it moves the
   /// model's FCL objects): obstacles against every body that
-  /// moves, and body pairs not adjacent, rigidly joined or always touching.
+  /// moves, and body pairs not adjacent (parent and child links in the URDF),
+  /// rigidly joined (no movable joint between) or always touching.
   std::optional<Contact> contact(const Eigen::VectorXd& q) const;
 
   /// The body pairs checked against each other, and those left out with why.
