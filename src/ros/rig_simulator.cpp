@@ -93,8 +93,10 @@ class RigSimulator {
     std::optional<Target> target;
     if (output_ == "images") {
       target = target_from_params(pn);
-      if (robot_from_tf_)
-        trajectory_.rig.T_pattern_face = target_face(*target);  // ~pattern_pose is the target's own frame
+      if (robot_from_tf_) {  // ~pattern_pose is the target's own frame; it is seen when its face is
+        trajectory_.rig.T_pattern_face = target_face(*target);
+        trajectory_.rig.face_size = target_face_size(*target);
+      }
       else
         trajectory_.look_at_face(target_face(*target));
     }
