@@ -62,6 +62,16 @@ PathCheck check_path(const CollisionModel& collision, const Eigen::VectorXd& fro
   return check;
 }
 
+std::optional<std::string> limit_problem(const Arm& arm, const Eigen::VectorXd& q, double margin) {
+  for (int j = 0; j < arm.joints(); ++j) {
+    const JointLimit& limit = arm.limits()[j];
+    if (q(j) < limit.lower + margin || q(j) > limit.upper - margin)
+      return limit.name + " at " + degrees(q(j)) + ", within " + degrees(margin) + " of its limits [" +
+             degrees(limit.lower) + ", " + degrees(limit.upper) + "]";
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> view_problem(const Rig& rig, const std::optional<CameraModel>& camera,
                                         const Eigen::Isometry3d& T_camera_pattern, const PlannerOptions& options) {
   const Eigen::Isometry3d T_camera_face = T_camera_pattern * rig.T_pattern_face;
@@ -141,15 +151,8 @@ ViewPlan plan_view(const CollisionModel& collision, const Rig& rig, const std::o
       if (!why || static_cast<int>(refusal) > static_cast<int>(*why)) why = refusal, reason = text;
     };
     for (const Eigen::VectorXd& q : solutions) {
-      std::string limit_problem;
-      for (int j = 0; j < arm.joints() && limit_problem.empty(); ++j) {
-        const JointLimit& limit = arm.limits()[j];
-        if (q(j) < limit.lower + options.joint_margin || q(j) > limit.upper - options.joint_margin)
-          limit_problem = limit.name + " at " + degrees(q(j)) + ", within " + degrees(options.joint_margin) +
-                          " of its limits [" + degrees(limit.lower) + ", " + degrees(limit.upper) + "]";
-      }
-      if (!limit_problem.empty()) {
-        failed(Refusal::OutsideJointLimits, limit_problem);
+      if (const std::optional<std::string> problem = limit_problem(arm, q, options.joint_margin)) {
+        failed(Refusal::OutsideJointLimits, *problem);
         continue;
       }
       const double step = largest_joint_change(q, current);

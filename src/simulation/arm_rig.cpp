@@ -44,13 +44,8 @@ std::optional<Eigen::VectorXd> ArmRig::random_start(Rng& rng, const motion::Coll
   for (int a = 0; a < attempts; ++a) {
     const motion::ViewCandidate c = random_candidate(rng);
     if (motion::view_problem(rig, std::nullopt, c.T_camera_pattern, options)) continue;  // the camera must see the board
-    for (const Eigen::VectorXd& q : arm.inverse(c.T_base_effector, ready, 4, rng)) {
-      bool inside = true;
-      for (int j = 0; j < arm.joints(); ++j)
-        inside = inside && q(j) > arm.limits()[j].lower + options.joint_margin &&
-                 q(j) < arm.limits()[j].upper - options.joint_margin;
-      if (inside && !collision.contact(q)) return q;
-    }
+    for (const Eigen::VectorXd& q : arm.inverse(c.T_base_effector, ready, 4, rng))
+      if (!motion::limit_problem(arm, q, options.joint_margin) && !collision.contact(q)) return q;
   }
   return std::nullopt;
 }

@@ -94,6 +94,10 @@ struct PathCheck {
 /// The arm is the collision model's (its reach sets the sampling).
 PathCheck check_path(const CollisionModel& collision, const Eigen::VectorXd& from, const Eigen::VectorXd& to);
 
+/// The first joint of q within `margin` of its URDF limits (or beyond), with the
+/// numbers; none when every joint is inside them less the margin.
+std::optional<std::string> limit_problem(const Arm& arm, const Eigen::VectorXd& q, double margin);
+
 /// Whether the camera sees the target's face at T_camera_pattern, and if not why.
 std::optional<std::string> view_problem(const Rig& rig, const std::optional<CameraModel>& camera,
                                         const Eigen::Isometry3d& T_camera_pattern, const PlannerOptions& options);
