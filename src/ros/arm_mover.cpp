@@ -148,7 +148,9 @@ void ArmMover::publish(const std::vector<motion::TrajectoryPoint>& trajectory) {
 }
 
 std::optional<std::string> ArmMover::ask(Request request) {  // mutex_ held
-  if (request_ != Request::None || state_ == "moving") return "busy (" + state_ + "): call ~stop_motion first";
+  // A plan only shows a move: anything asked for replaces it (confirm mode plans at start).
+  if ((request_ != Request::None && request_ != Request::Plan) || state_ == "moving")
+    return "busy (" + state_ + "): call ~stop_motion first";
   request_ = request, ++request_id_;
   if (request == Request::Auto) action_goal_ = false;  // the services' Auto; on_goal marks the action's
   wake_.notify_all();
