@@ -202,5 +202,24 @@ std::string report_summary(const CalibrationReport& report) {
   return out;
 }
 
+std::string check_summary(const CalibrationCheck& check) {
+  std::string text = std::string(check.changed ? "CHANGED: " : "") + check.verdict + "\n";
+  text += line("  %zu new views: chi2 %.1f on %d dof (p = %.2g); the best change of X alone explains %.1f, of Y "
+               "alone %.1f",
+                 check.views.size(), check.chi2, check.dof, check.chi2_p_value, check.X_alone.chi2_drop,
+                 check.Y_alone.chi2_drop);
+  text += "  view   error mm  (1 sigma mm)   error deg  (1 sigma deg)   sigma\n";
+  for (std::size_t i = 0; i < check.views.size(); ++i) {
+    const CheckedView& v = check.views[i];
+    text += line("  %4zu   %8.3f  (%8.3f)     %8.4f  (%8.4f)      %5.2f", i, v.translation_error * 1e3,
+                   v.predicted_translation_sigma * 1e3, v.rotation_error * 180.0 / M_PI,
+                   v.predicted_rotation_sigma * 180.0 / M_PI, v.mahalanobis);
+  }
+  text += "  (1 sigma: the error's RMS the calibration predicts for that view, its own noise and X's and Y's "
+          "uncertainty; sigma: the view's Mahalanobis length, about 2.3 on average when nothing changed)\n";
+  for (const std::string& a : check.advice) text += "  advice: " + a + "\n";
+  return text;
+}
+
 }  // namespace io
 }  // namespace handeye

@@ -910,6 +910,61 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   return std::string(out.c_str()) + "\n";
 }
 
+std::string format_check(const CalibrationCheck& check, const std::string& calibration_path) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  const auto emit_6 = [&](const char* key, const Vector6d& v) {
+    out << YAML::Key << key << YAML::Value;
+    emit_numbers(out, v.data(), 6);
+  };
+  const auto emit_6x6 = [&](const char* key, const Matrix6d& m) {
+    const auto rows = to_row_major_6x6(m);
+    out << YAML::Key << key << YAML::Value;
+    emit_numbers(out, rows.data(), rows.size());
+  };
+  out << YAML::Key << "calibration" << YAML::Value << calibration_path;
+  out << YAML::Key << "verdict" << YAML::Value << (check.changed ? "changed" : "consistent");
+  out << YAML::Key << "p_value" << YAML::Value << check.p_value;
+  out << YAML::Key << "alpha" << YAML::Value << check.alpha;
+  out << YAML::Key << "text" << YAML::Value << check.verdict;
+  if (check.changed) {
+    out << YAML::Key << "changed" << YAML::Value << check.change.what;
+    const EstimatedChange::Delta& main = check.change.X_change ? *check.change.X_change : *check.change.Y_change;
+    emit_6("change", main.value);  // ROS order, m and rad: the new pose is exp(change) times the saved one
+    emit_6x6("change_covariance", main.covariance);
+    if (check.change.what == "both") {
+      emit_6("pattern_change", check.change.Y_change->value);
+      emit_6x6("pattern_change_covariance", check.change.Y_change->covariance);
+    }
+  }
+  out << YAML::Key << "statistic" << YAML::Value << check.statistic;  // max(T_X, T_Y)
+  out << YAML::Key << "chi2" << YAML::Value << check.chi2;
+  out << YAML::Key << "dof" << YAML::Value << check.dof;
+  out << YAML::Key << "chi2_p_value" << YAML::Value << check.chi2_p_value;
+  out << YAML::Key << "hypotheses" << YAML::Value << YAML::BeginSeq;
+  for (const EstimatedChange* h : {&check.X_alone, &check.Y_alone, &check.both}) {
+    if (h->what.empty()) continue;  // both: not identified from one or two views
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "changed" << YAML::Value << h->what << YAML::Key << "chi2_drop"
+        << YAML::Value << h->chi2_drop << YAML::Key << "dof" << YAML::Value << h->dof << YAML::Key << "residual_chi2"
+        << YAML::Value << h->residual_chi2 << YAML::Key << "residual_p_value" << YAML::Value << h->residual_p_value
+        << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;  // humans read these: mm and degrees
+  for (const CheckedView& v : check.views) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "translation_mm" << YAML::Value << v.translation_error * 1e3
+        << YAML::Key << "predicted_translation_mm" << YAML::Value << v.predicted_translation_sigma * 1e3 << YAML::Key
+        << "rotation_deg" << YAML::Value << v.rotation_error * 180.0 / M_PI << YAML::Key << "predicted_rotation_deg"
+        << YAML::Value << v.predicted_rotation_sigma * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << v.mahalanobis
+        << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "advice" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& a : check.advice) out << a;
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
 namespace {
 /// `covariance: {pose: [36]}` (ROS order, wins when present) or
 /// `{rotation: [9], translation: [9]}` (no cross block).
@@ -1050,6 +1105,62 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   if (const YAML::Node noise = root["noise"];
       noise && noise.IsMap() && noise["model"] && noise["model"].IsMap() && noise["model"]["effector"]) {
     file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
+    if (noise["origin"] && noise["origin"].IsScalar() && noise["origin"].Scalar() != "given") {
+      file.noise_origin = NoiseOrigin::EstimatedFromResiduals;
+    }
+  }
+  if (const YAML::Node pattern = root["pattern"]; pattern && pattern.IsMap()) {  // a joint result: Y and Cov(X, Y)
+    const Location at = top / "pattern";
+    PoseWithCovariance Y;
+    Y.pose = read_pose(pattern, at);
+    Y.covariance = read_pose_covariance(require(pattern, "covariance", at, hint), at / "covariance");
+    file.pattern = Y;
+    file.context.pattern_parent = pattern["parent"] && pattern["parent"].IsScalar() ? pattern["parent"].Scalar() : "";
+    file.context.pattern_child = pattern["child"] && pattern["child"].IsScalar() ? pattern["child"].Scalar() : "";
+    file.cross_covariance = from_row_major_6x6(as_numbers<36>(
+        require(root, "cross_covariance", top, "a joint result with `pattern` has `cross_covariance` (36 numbers)"),
+        top / "cross_covariance", "6x6 Cov(X, Y), X's ROS order in rows"));
+  }
+  if (const YAML::Node model = root["noise"] && root["noise"].IsMap() ? root["noise"]["residual_model"] : YAML::Node();
+      model && model.IsMap()) {
+    const Location at = top / "noise" / "residual_model";
+    const std::string model_hint = "`residual_model` is {camera_scale, camera: [36], robot: [36], view_scale, view_points}";
+    Calibration::ResidualNoise m;
+    m.camera_scale = as_finite(require(model, "camera_scale", at, model_hint), at / "camera_scale", "NaN in camera_scale",
+                               model_hint);
+    m.camera = from_row_major_6x6(as_numbers<36>(require(model, "camera", at, model_hint), at / "camera", "6x6, ROS order"));
+    m.robot = from_row_major_6x6(as_numbers<36>(require(model, "robot", at, model_hint), at / "robot", "6x6, ROS order"));
+    check_covariance(m.camera, (at / "camera").str());
+    check_covariance(m.robot, (at / "robot").str());
+    if (model["view_scale"]) m.view_scale = as_finite(model["view_scale"], at / "view_scale", "NaN in view_scale", model_hint);
+    if (model["view_points"]) {
+      const std::vector<double> points = as_number_list(model["view_points"], at / "view_points", "x, y, z of each point");
+      if (points.size() % 3 != 0) {
+        throw HandEyeError(ErrorCode::WrongLength, "`view_points` needs 3 numbers per point", (at / "view_points").str(),
+                           model_hint);
+      }
+      for (std::size_t i = 0; i + 2 < points.size(); i += 3) m.view_points.emplace_back(points[i], points[i + 1], points[i + 2]);
+    }
+    file.residual_noise = m;
+  }
+  if (const YAML::Node estimated = root["noise"] && root["noise"].IsMap() ? root["noise"]["estimated"] : YAML::Node();
+      estimated && estimated.IsSequence()) {  // each estimated noise number with its 1 sigma: how well the noise is known
+    const Location at = top / "noise" / "estimated";
+    const std::string hint = "each entry is {name, value, sigma, unit, supported}";
+    for (std::size_t i = 0; i < estimated.size(); ++i) {
+      const YAML::Node e = estimated[i];
+      Calibration::NoiseComponent c;
+      c.name = as_text(require(e, "name", at[i], hint), at[i] / "name");
+      c.value = as_finite(require(e, "value", at[i], hint), at[i] / "value", "NaN in a noise value", hint);
+      c.sigma = as_finite(require(e, "sigma", at[i], hint), at[i] / "sigma", "NaN in a noise sigma", hint);
+      if (e["unit"]) c.unit = e["unit"].IsNull() ? "" : as_text(e["unit"], at[i] / "unit");
+      if (e["supported"]) c.at_bound = !as_bool(e["supported"], at[i] / "supported");
+      file.noise_components.push_back(c);
+    }
+  }
+  if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
+    file.inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
+                               "the honesty check's inflation is a number >= 1");
   }
   return file;
 }
@@ -1060,6 +1171,29 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
 }
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
+
+Calibration calibration_of(const CalibrationFile& file) {
+  Calibration c;
+  c.method = Method::Joint;
+  c.T_parent_camera = file.T_parent_camera.pose;
+  c.pose_covariance = file.T_parent_camera.covariance;
+  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
+  c.pattern = file.pattern;
+  c.cross_covariance = file.cross_covariance;
+  c.residual_noise = file.residual_noise;
+  c.noise_components = file.noise_components;
+  c.noise_origin = file.noise_origin;
+  if (file.noise) c.noise = *file.noise;
+  c.samples_used = file.samples_used;
+  if (file.inflation > 1.0) {
+    Calibration::Honesty h;
+    h.inflation = file.inflation;
+    h.verdict = "overconfident";
+    c.honesty = h;
+  }
+  return c;
+}
 
 StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);

@@ -643,6 +643,40 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   return kOk;
 }
 
+int check_command(const Args& args, std::ostream& out, std::ostream& err) {
+  // New views from images need OpenCV: handeye_images detects them and runs the same check.
+  for (const std::string& a : args) {
+    if (a == "--images" || a.rfind("--images=", 0) == 0) return run_tool("handeye_images", "check", args, out, err);
+  }
+  std::string calibration, input, output;
+  double alpha = 0.01;
+  po::options_description options("check: is a saved calibration still right? New views against X, Y and their covariance");
+  options.add_options()("help,h", "show this help")(
+      "calibration,c", po::value(&calibration)->required(),
+      "the calibration's result file (`handeye solve`, `handeye images`, the node's /save_calibration)")(
+      "input,i", po::value(&input), "the new views: a samples file (as `handeye solve` reads)")(
+      "images", "or a folder of new images, with --poses, --camera and --target as `handeye images` takes them")(
+      "alpha", po::value(&alpha), "the false-alarm rate (default 0.01: one check in 100 says changed when nothing did)")(
+      "output,o", po::value(&output), "write the check (YAML): verdict, p_value, changed, change, change_covariance");
+  po::variables_map vm;
+  if (!parse("check", "--calibration FILE (--input SAMPLES | --images DIR --poses DIR --camera FILE --target FILE) "
+             "[--output FILE]  (exit 0: consistent, 3: changed)",
+             options, args, vm, out)) {
+    return kOk;
+  }
+  if (input.empty()) {
+    throw HandEyeError(ErrorCode::MissingKey, "no new views", "--input",
+                       "give --input samples.yaml, or --images DIR --poses DIR --camera FILE --target FILE");
+  }
+  io::Input data = io::read_input(input);
+  const SampleSet* views = std::get_if<SampleSet>(&data);
+  if (!views) {
+    throw HandEyeError(ErrorCode::MalformedFile, "a check needs absolute views (a samples file), not motion pairs", input,
+                       "record the new views as samples: robot pose and detected pattern pose each");
+  }
+  return run_check(calibration, *views, output, alpha, out);
+}
+
 const CommandTable& commands() {
   static const CommandTable table = {
       {"solve", {"solve AX = XB from a samples or motions file; print X with 1 sigma, write the result YAML",
@@ -660,6 +694,8 @@ const CommandTable& commands() {
                  noise_command}},
       {"suggest", {"which poses to add next and how many more reach a target sigma (predicted covariance)",
                    suggest_command}},
+      {"check", {"is a saved calibration still right? a few new views against it: verdict, p-value, what moved (exit 3)",
+                 check_command}},
       {"report", {"a calibration report: residuals, leave-one-out and split-half checks, rotation axes, advice (HTML)",
                   report_command}},
       {"validate", {"Monte-Carlo check of the covariance (paper section IV-A): epsilon, NEES, coverage, plots",

@@ -4,6 +4,8 @@
 #include <iostream>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
 namespace cli {
@@ -97,6 +99,26 @@ void HonestyArgs::apply(SessionSettings& settings) const {
   }
   settings.honesty = options;
   settings.inflate_when_overconfident = !no_inflation;
+}
+
+int run_check(const std::string& calibration_path, const SampleSet& views, const std::string& output, double alpha,
+              std::ostream& out) {
+  const io::CalibrationFile file = io::read_result(calibration_path);
+  if (file.context.setup && *file.context.setup != views.rig.setup) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       std::string("the calibration is ") + to_string(*file.context.setup) + " and the new views " +
+                           to_string(views.rig.setup),
+                       calibration_path, "check with views of the same setup the calibration was made with");
+  }
+  CheckOptions options;
+  options.alpha = alpha;
+  const CalibrationCheck check = check_calibration(io::calibration_of(file), views, options);
+  out << io::check_summary(check);
+  if (!output.empty()) {
+    io::write_file_atomically(output, io::format_check(check, calibration_path));
+    out << "  check written to      " << output << "\n";
+  }
+  return check.changed ? kChanged : kOk;
 }
 
 void add_sim_options(po::options_description& options, SimArgs& a) {

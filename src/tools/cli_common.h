@@ -74,6 +74,15 @@ struct HonestyArgs {
 };
 void add_honesty_options(po::options_description& options, HonestyArgs& args);
 
+/// `handeye check`: exit 0 when the views fit the calibration, 3 when it changed (as
+/// `diff` exits 1 on a difference; 1 and 2 are taken).
+constexpr int kChanged = 3;
+/// The check of `calibration_path` (a result file) against `views` (from a samples
+/// file, or images in handeye_images): refuses another setup, prints the verdict and
+/// the views' table, writes `output` when given, returns kOk or kChanged.
+int run_check(const std::string& calibration_path, const SampleSet& views, const std::string& output, double alpha,
+              std::ostream& out);
+
 /// The options of `sim` common to a samples file and a bag.
 struct SimArgs {
   std::string output, truth, setup_name = "eye_in_hand";

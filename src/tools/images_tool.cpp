@@ -20,6 +20,39 @@ namespace handeye {
 namespace cli {
 namespace {
 
+/// The images' detections as samples, each image's line printed (images and check).
+images::ImageSession detect(const std::string& images_dir, const std::string& poses, const std::string& camera_path,
+                            const std::string& target_path, Setup setup, std::ostream& out, std::ostream& err) {
+  const CameraModel camera = images::read_camera(camera_path);
+  const Target target = io::read_target(target_path);
+  const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(images_dir, poses);
+  out << inputs.size() << " images in " << images_dir << ", target: " << target.describe() << "\n";
+  if (is_half_turn_symmetric(target)) {
+    out << "  note: this board looks the same turned by 180 degrees: each image's pose is one of two candidates, "
+           "decided from the robot's motion (a board with one even and one odd number of inner corners avoids it)\n";
+  }
+  ProgressBar bar(err, "detecting", ::isatty(STDERR_FILENO) && &err == &std::cerr);
+  const auto progress = [&](std::size_t i, std::size_t n, const images::ImageReport&) {
+    bar(static_cast<double>(i + 1) / static_cast<double>(n));
+  };
+  Rig rig;
+  rig.setup = setup;
+  rig.frames = {"base", "effector", "camera", "pattern"};
+  set_target(rig, target);  // where suggested views look, the view-following noise's shape, a symmetric board
+  const images::ImageSession found = images::detect_images(inputs, camera, target, rig, progress);
+  char line[256];
+  for (const images::ImageReport& r : found.images) {
+    if (r.used) {
+      std::snprintf(line, sizeof line, "  %-28s %3d points, reprojection RMS %.3f px, sigma %.3f px, target at %.3f m\n",
+                    r.image.c_str(), r.points, r.rms_px, r.sigma_px, r.distance);
+      out << line;
+    } else {
+      out << "  " << r.image << "  skipped: " << r.why << "\n";
+    }
+  }
+  return found;
+}
+
 int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   std::string images_dir, poses, camera_path, target_path, setup_name, output, samples_out, robust = "auto";
   std::string method = "joint";
@@ -78,33 +111,8 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
     }
   }
   if (output.empty()) output = default_result_path(std::filesystem::path(images_dir).lexically_normal().string());
-  const CameraModel camera = images::read_camera(camera_path);
-  const Target target = io::read_target(target_path);
-  const std::vector<images::ImageWithPose> inputs = images::pair_images_with_poses(images_dir, poses);
-  out << inputs.size() << " images in " << images_dir << ", target: " << target.describe() << "\n";
-  if (is_half_turn_symmetric(target)) {
-    out << "  note: this board looks the same turned by 180 degrees: each image's pose is one of two candidates, "
-           "decided from the robot's motion (a board with one even and one odd number of inner corners avoids it)\n";
-  }
-  ProgressBar bar(err, "detecting", ::isatty(STDERR_FILENO) && &err == &std::cerr);
-  const auto progress = [&](std::size_t i, std::size_t n, const images::ImageReport&) {
-    bar(static_cast<double>(i + 1) / static_cast<double>(n));
-  };
-  Rig rig;
-  rig.setup = setup;
-  rig.frames = {"base", "effector", "camera", "pattern"};
-  set_target(rig, target);  // where suggested views look, the view-following noise's shape, a symmetric board
-  const images::ImageSession found = images::detect_images(inputs, camera, target, rig, progress);
+  const images::ImageSession found = detect(images_dir, poses, camera_path, target_path, setup, out, err);
   char line[256];
-  for (const images::ImageReport& r : found.images) {
-    if (r.used) {
-      std::snprintf(line, sizeof line, "  %-28s %3d points, reprojection RMS %.3f px, sigma %.3f px, target at %.3f m\n",
-                    r.image.c_str(), r.points, r.rms_px, r.sigma_px, r.distance);
-      out << line;
-    } else {
-      out << "  " << r.image << "  skipped: " << r.why << "\n";
-    }
-  }
   const std::size_t used = found.samples.samples.size();
   out << used << " of " << found.images.size() << " images used, pooled pixel sigma " << number_text(found.pixel_sigma)
       << " px\n";
@@ -156,6 +164,38 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   return kOk;
 }
 
+/// `handeye check --images ...`: the new views from images, then the same check as
+/// `handeye check --input` (cli_common.h run_check).
+int check_command(const Args& args, std::ostream& out, std::ostream& err) {
+  std::string calibration, images_dir, poses, camera_path, target_path, output;
+  double alpha = 0.01;
+  po::options_description options("check: a saved calibration against new images");
+  options.add_options()("help,h", "show this help")(
+      "calibration,c", po::value(&calibration)->required(), "the calibration's result file")(
+      "images", po::value(&images_dir)->required(), "folder of new images (sorted by name)")(
+      "poses", po::value(&poses)->required(), "their robot poses, as `handeye images` takes them")(
+      "camera", po::value(&camera_path)->required(), "the camera file")(
+      "target", po::value(&target_path)->required(), "the target file")(
+      "alpha", po::value(&alpha), "the false-alarm rate (default 0.01)")(
+      "output,o", po::value(&output), "write the check (YAML)");
+  po::variables_map vm;
+  if (!parse("check", "--calibration FILE --images DIR --poses DIR_OR_CSV --camera FILE --target FILE [--output FILE]",
+             options, args, vm, out)) {
+    return kOk;
+  }
+  const io::CalibrationFile file = io::read_result(calibration);
+  if (!file.context.setup) {
+    throw HandEyeError(ErrorCode::MissingKey, "the calibration does not say its setup", calibration,
+                       "a samples result has `setup: eye_in_hand|eye_to_hand`: save it again with `handeye solve`");
+  }
+  const images::ImageSession found = detect(images_dir, poses, camera_path, target_path, *file.context.setup, out, err);
+  if (found.samples.samples.empty()) {
+    throw HandEyeError(ErrorCode::NoData, "no new image gives a target pose", images_dir,
+                       "see the skipped images' reasons above; check --target against the printed target");
+  }
+  return run_check(calibration, found.samples, output, alpha, out);
+}
+
 }  // namespace
 }  // namespace cli
 }  // namespace handeye
@@ -163,6 +203,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
 int main(int argc, char** argv) {
   using namespace handeye::cli;
   static const CommandTable table = {
-      {"images", {"calibrate from a folder of images and one robot pose per image", images_command}}};
+      {"images", {"calibrate from a folder of images and one robot pose per image", images_command}},
+      {"check", {"check a saved calibration against new images and their robot poses", check_command}}};
   return run_commands(table, argc, argv, std::cout, std::cerr);
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/object_pose.h"
+#include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/yaml_io.h"
 
@@ -29,6 +30,11 @@ std::string report_summary(const CalibrationReport& report);
 /// variance, and each point's worst-axis 1 sigma (`handeye compose`).
 std::string object_summary(const ObjectPose& object, const std::string& base, const std::string& object_frame,
                            const std::vector<Eigen::Vector3d>& points);
+
+/// `handeye check`: the verdict, each new view's residual against its predicted 1 sigma
+/// (mm, degrees: the calibration's accuracy on views it has not seen), the
+/// estimated change and the advice.
+std::string check_summary(const CalibrationCheck& check);
 
 }  // namespace io
 }  // namespace handeye

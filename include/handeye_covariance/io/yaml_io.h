@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "handeye_covariance/estimation/calibration_report.h"
+#include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
@@ -98,6 +99,12 @@ ResultContext context_of(const MotionSet& motions);
 
 std::string format_result(const Calibration& calibration, const ResultContext& context);
 
+/// A check of a saved calibration (calibration_check.h) as `handeye check --output`
+/// writes it: verdict (consistent | changed), p_value, changed (X | Y | both),
+/// change and change_covariance (ROS order; X's when X or both changed, Y's when Y;
+/// for both also pattern_change and its covariance), each hypothesis, each view.
+std::string format_check(const CalibrationCheck& check, const std::string& calibration_path);
+
 /// The calibration report's data (session/report.h), read by scripts/report.py:
 /// source, setup, frames, per-sample residuals (with the rejected ones and
 /// their reason), the per-axis checks in mm and degrees, the motions' rotation
@@ -115,9 +122,21 @@ struct CalibrationFile {
   PoseWithCovariance T_parent_camera;
   int samples_used = 0;
   std::optional<MeasurementNoise> noise;  // `noise.model` of a samples result: what the covariance assumed
+  NoiseOrigin noise_origin = NoiseOrigin::Given;  // `noise.origin`
+  /// A joint result's Y (`pattern`), Cov(X, Y) (`cross_covariance`), the noise model its
+  /// covariance was computed with (`noise.residual_model`) and the honesty check's
+  /// inflation (1 when none): what a check of the calibration needs.
+  std::optional<PoseWithCovariance> pattern;
+  Matrix6d cross_covariance = Matrix6d::Zero();
+  std::optional<Calibration::ResidualNoise> residual_noise;
+  std::vector<Calibration::NoiseComponent> noise_components;  // `noise.estimated`: how well each number is known
+  double inflation = 1.0;
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
+/// The file as the Calibration a check tests (calibration_check.h): X, Y, their
+/// covariances and cross block, the noise model and the inflation.
+Calibration calibration_of(const CalibrationFile& file);
 
 /// A saved calibration to publish at start-up (publish.launch, the calibration
 /// node): ours (a result file) or easy_handeye's, whose users switch to us:

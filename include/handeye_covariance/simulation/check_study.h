@@ -1,0 +1,72 @@
+// The Monte-Carlo study of the calibration check (estimation/calibration_check.h):
+// false alarms without a change, detection of a planted change of X or Y, and
+// whether the check names the right one. For test_calibration_check and
+// handeye_check_study (BENCHMARKS.md).
+//
+// One trial: a calibration from `calibration_samples` simulated views (the noise
+// estimated from the residuals unless `noise_given`), then `views` new views of the
+// same rig. A change moves X's (or Y's) translation along a random direction u by
+// `multiple` times the combined 1 sigma of the change estimate along u, as the check
+// reports it at these views: 1 / sqrt(u^T Cov(d)^-1 u), so that the planted change's
+// noncentrality is multiple^2 and a 6-dof test at alpha can detect it no more often
+// than the noncentral chi2(6, multiple^2) beyond the chi2(6) 1 - alpha quantile.
+#pragma once
+
+#include "handeye_covariance/estimation/calibration_check.h"
+#include "handeye_covariance/simulation/simulation.h"
+
+namespace handeye {
+
+enum class PlantedChange { None, XTranslation, YTranslation };
+
+struct CheckStudyOptions {
+  Setup setup = Setup::EyeInHand;
+  int calibration_samples = 20;
+  int views = 5;
+  ViewpointOptions viewpoints;  // of the calibration's views and the new ones
+  int checks = 2000;
+  unsigned seed = 1;
+  bool noise_given = false;
+  MeasurementNoise noise;  // default: the `handeye sim` noise (0.5 mm, 0.05 deg camera; 0.05 mm, 0.01 deg robot)
+  PlantedChange change = PlantedChange::None;
+  double multiple = 5.0;
+  CheckOptions check;
+  int bound_draws = 5000;  // of the two-hypothesis bound per check (0: not computed; +-0.4% each)
+};
+
+struct CheckStudyResult {
+  int checks = 0;
+  int changed = 0;             // the check said changed
+  int named_X = 0, named_Y = 0, named_both = 0;  // of those, what it named
+  double mean_chi2_over_dof = 0.0;  // the omnibus chi2 / dof (1 when the noise model holds)
+  /// The bound: P(noncentral chi2(6, multiple^2) > chi2(6) quantile 1 - alpha); alpha without a change.
+  double bound = 0.0;
+  /// The bound for a test that must catch a change of X or of Y (either, in any direction,
+  /// at the same alpha): the Neyman-Pearson power against their even mixture at each
+  /// check's views (two_hypothesis_power_bound), averaged. No test's power against both
+  /// X and Y changes exceeds it.
+  double two_hypothesis_bound = 0.0;
+  double rate() const { return checks ? static_cast<double>(changed) / checks : 0.0; }
+  /// The share of detected checks that named the planted change (X or Y).
+  double named_right() const;
+  PlantedChange planted = PlantedChange::None;
+};
+
+MeasurementNoise check_study_noise();
+
+CheckStudyResult run_check_study(const CheckStudyOptions& options);
+
+/// P(noncentral chi2(dof, noncentrality) > the chi2(dof) 1 - alpha quantile): the power
+/// of the best test of a known-dimension change.
+double chi2_test_power(int dof, double noncentrality, double alpha);
+
+/// The most powerful level-alpha test of "no change" against "X or Y changed by
+/// noncentrality lambda, each with probability 1/2, in a direction uniform in its 6 dof",
+/// at views whose X and Y subspaces have principal cosines `cosines`: its power, by a
+/// seeded Monte-Carlo (the likelihood ratio (g(|u|^2) + g(|v|^2)) / 2, u and v the
+/// whitened residual's projections, g the noncentral chi2(6) density ratio). Any test's
+/// smaller power of the two (X, Y) is at most this average's optimum.
+double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed = 1,
+                                  int draws = 40000);
+
+}  // namespace handeye

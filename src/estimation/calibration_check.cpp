@@ -1,0 +1,393 @@
+#include "handeye_covariance/estimation/calibration_check.h"
+
+#include <algorithm>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
+#include <boost/math/distributions/chi_squared.hpp>
+
+#include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
+
+namespace handeye {
+
+namespace {
+
+using Matrix12d = Eigen::Matrix<double, 12, 12>;
+
+double chi2_upper(double statistic, int dof) {
+  if (dof <= 0) return 1.0;
+  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), std::max(statistic, 0.0)));
+}
+
+double chi2_quantile(int dof, double level) { return boost::math::quantile(boost::math::chi_squared(dof), level); }
+
+/// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters)
+/// to the whitened residual z: the estimate, its covariance and the chi2 drop.
+struct Fit {
+  Eigen::VectorXd value;
+  Eigen::MatrixXd covariance;
+  double drop = 0.0;
+};
+Fit fit_change(const Eigen::MatrixXd& H, const Eigen::VectorXd& z) {
+  const Eigen::MatrixXd information = H.transpose() * H;
+  const Eigen::LDLT<Eigen::MatrixXd> solver(information);
+  const Eigen::VectorXd g = H.transpose() * z;
+  Fit fit;
+  fit.value = solver.solve(g);
+  fit.covariance = solver.solve(Eigen::MatrixXd::Identity(information.rows(), information.cols()));
+  fit.drop = g.dot(fit.value);
+  return fit;
+}
+
+/// An orthonormal basis of H's column space (H has full column rank here).
+Eigen::MatrixXd basis(const Eigen::MatrixXd& H) {
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(H);
+  return qr.householderQ() * Eigen::MatrixXd::Identity(H.rows(), H.cols());
+}
+
+/// One part of the views' noise whose size the calibration estimated: its share of
+/// each view's covariance and the dof of its estimate (a variance estimated from nu dof
+/// is the true one times chi2(nu) / nu). A part the calibration was given, or whose
+/// estimate is exact, has dof 0 and is not drawn.
+struct NoisePart {
+  std::vector<Matrix6d> per_view;
+  double dof = 0.0;
+};
+
+/// The calibration's residual model split into its estimated numbers (joint_estimator.h:
+/// a camera axis, the camera's translation or rotation, the stated noise's scale, the
+/// robot's noise, the view-following scale), each with its dof from its value and 1 sigma
+/// (a sigma s estimated from nu dof has 1 sigma s / sqrt(2 nu); a scale c, c sqrt(2 / nu)).
+/// What no number covers (the stated noise, a full camera matrix's correlations) is the
+/// remainder, known.
+std::vector<NoisePart> noise_parts(const SampleSet& views, const Calibration& calibration) {
+  const Calibration::ResidualNoise& model = *calibration.residual_noise;
+  Calibration::ResidualNoise zero = model;
+  zero.camera_scale = 0.0, zero.camera.setZero(), zero.robot.setZero(), zero.view_scale = 0.0;
+  Calibration only = calibration;
+  only.residual_noise = zero;
+  const std::vector<Matrix6d> base = residual_covariances(views, only);  // the stated robot noise alone
+  std::vector<NoisePart> parts;
+  for (const Calibration::NoiseComponent& c : calibration.noise_components) {
+    if (c.at_bound || c.value <= 0.0 || c.sigma <= 0.0) continue;
+    Calibration::ResidualNoise m = zero;
+    const std::string& name = c.name;
+    const auto axes = [&](int from, int to) {
+      for (int a = from; a < to; ++a) m.camera(a, a) = model.camera(a, a);
+    };
+    static const char* const axis_names[6] = {"camera x", "camera y", "camera z", "camera rx", "camera ry", "camera rz"};
+    bool known = true;
+    if (name == "stated camera noise scale") {
+      m.camera_scale = model.camera_scale;
+    } else if (name == "camera translation") {
+      axes(0, 3);
+    } else if (name == "camera rotation") {
+      axes(3, 6);
+    } else if (name == "robot translation") {
+      m.robot.topLeftCorner<3, 3>() = model.robot.topLeftCorner<3, 3>();
+    } else if (name == "robot rotation") {
+      m.robot.bottomRightCorner<3, 3>() = model.robot.bottomRightCorner<3, 3>();
+    } else if (name == "view-following image noise") {
+      m.view_scale = model.view_scale;
+    } else {
+      known = false;
+      for (int a = 0; a < 6; ++a) {
+        if (name == axis_names[a]) axes(a, a + 1), known = true;
+      }
+    }
+    if (!known) continue;  // a correlation: in the remainder
+    const double ratio = c.value / c.sigma;
+    NoisePart part;
+    part.dof = c.unit.empty() ? 2.0 * ratio * ratio : 0.5 * ratio * ratio;
+    only.residual_noise = m;
+    const std::vector<Matrix6d> with = residual_covariances(views, only);
+    for (std::size_t i = 0; i < with.size(); ++i) part.per_view.push_back(with[i] - base[i]);
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+/// The null distribution of max(|Qx^T z|^2, |Qy^T z|^2), z the whitened residual, when
+/// nothing changed: z = L^-1 e with e ~ N(0, C_true), C_true the predicted C with each
+/// estimated noise part scaled by its draw nu / chi2(nu) (the estimate's own error: what
+/// makes a chi2 test on an estimated variance an F test). Only the projections onto the
+/// two 6-dof subspaces matter: their span U (r <= 12) carries the draws. Seeded.
+class NullDistribution {
+ public:
+  NullDistribution(const Eigen::MatrixXd& Qx, const Eigen::MatrixXd& Qy, const Eigen::MatrixXd& whiten_known,
+                   std::vector<std::pair<Eigen::MatrixXd, double>> whitened_parts)
+      : parts_(std::move(whitened_parts)) {
+    Eigen::MatrixXd both(Qx.rows(), 12);
+    both << Qx, Qy;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(both, Eigen::ComputeThinU);
+    int r = 0;
+    const int most = static_cast<int>(svd.singularValues().size());  // 6 for one view
+    while (r < most && svd.singularValues()(r) > 1e-8 * svd.singularValues()(0)) ++r;
+    U_ = svd.matrixU().leftCols(r);
+    ax_ = Qx.transpose() * U_, ay_ = Qy.transpose() * U_;
+    known_ = U_.transpose() * whiten_known * U_;
+    for (auto& [m, dof] : parts_) m = U_.transpose() * m * U_;
+  }
+
+  /// P(max >= t), (beyond + 1) / (draws + 1): never 0, as a Monte-Carlo p-value should not be.
+  double p_value(double t, const CheckOptions& options) const {
+    std::mt19937_64 rng(options.seed);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    const int r = static_cast<int>(U_.cols());
+    const int per_scale = parts_.empty() ? options.null_draws : 10;  // z draws per drawn noise
+    int beyond = 0, draws = 0;
+    Eigen::VectorXd w(r);
+    while (draws < options.null_draws) {
+      Eigen::MatrixXd K = known_;
+      for (const auto& [m, dof] : parts_) {
+        std::chi_squared_distribution<double> chi2(dof);
+        K += (dof / std::max(chi2(rng), 1e-12)) * m;
+      }
+      const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (K + K.transpose()));
+      for (int j = 0; j < per_scale && draws < options.null_draws; ++j, ++draws) {
+        for (int a = 0; a < r; ++a) w(a) = normal(rng);
+        const Eigen::VectorXd s = llt.matrixL() * w;
+        if (std::max((ax_ * s).squaredNorm(), (ay_ * s).squaredNorm()) >= t) ++beyond;
+      }
+    }
+    return (beyond + 1.0) / (options.null_draws + 1.0);
+  }
+
+ private:
+  Eigen::MatrixXd U_, ax_, ay_, known_;
+  std::vector<std::pair<Eigen::MatrixXd, double>> parts_;
+};
+
+EstimatedChange::Delta delta_of(const Fit& fit, int offset) {
+  EstimatedChange::Delta d;
+  d.value = fit.value.segment<6>(offset);
+  d.covariance = fit.covariance.block<6, 6>(offset, offset);
+  d.covariance = 0.5 * (d.covariance + d.covariance.transpose());
+  return d;
+}
+
+std::string p_text(double p) { return number_text(p, 2); }
+
+std::string change_text(const EstimatedChange::Delta& d) {
+  const Eigen::Vector3d t = d.value.head<3>(), r = d.value.tail<3>();
+  const double t_sigma = std::sqrt(std::max(0.0, t.dot(d.covariance.topLeftCorner<3, 3>() * t)) /
+                                   std::max(t.squaredNorm(), 1e-300));
+  const double r_sigma = std::sqrt(std::max(0.0, r.dot(d.covariance.bottomRightCorner<3, 3>() * r)) /
+                                   std::max(r.squaredNorm(), 1e-300));
+  return number_text(t.norm() * 1e3, 3) + " mm (1 sigma " + number_text(t_sigma * 1e3, 2) + " mm) and " +
+         number_text(r.norm() * 180.0 / M_PI, 3) + " deg (1 sigma " + number_text(r_sigma * 180.0 / M_PI, 2) + " deg)";
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
+  Matrix12d sigma = Matrix12d::Zero();
+  sigma.topLeftCorner<6, 6>() = calibration.pose_covariance;
+  if (calibration.pattern) {
+    sigma.bottomRightCorner<6, 6>() = calibration.pattern->covariance;
+    sigma.topRightCorner<6, 6>() = calibration.cross_covariance;
+    sigma.bottomLeftCorner<6, 6>() = calibration.cross_covariance.transpose();
+  }
+  return 0.5 * (sigma + sigma.transpose());
+}
+
+CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
+  if (!calibration.pattern || !calibration.residual_noise) {
+    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                       "the calibration carries no pattern pose Y or no noise model: a check predicts each new view from "
+                       "X, Y and the noise their covariance was computed with",
+                       "the calibration",
+                       "save it again with this version (`handeye solve`, `handeye images`, the node's /save_calibration): "
+                       "its result file has `pattern`, `cross_covariance` and `noise.residual_model`");
+  }
+  const int k = static_cast<int>(views.samples.size());
+  if (k == 0) {
+    throw HandEyeError(ErrorCode::NoData, "no new view to check the calibration with", "the views",
+                       "take a few views (5 is the figure the check is measured at) the calibration has not seen");
+  }
+  if (!(options.alpha > 0.0 && options.alpha < 1.0) || options.null_draws < 100) {
+    throw HandEyeError(ErrorCode::MalformedFile, "alpha must be in (0, 1) and the null draws at least 100", "check options",
+                       "use alpha = 0.01 (a false alarm in 100 checks)");
+  }
+  const Eigen::Isometry3d& X = calibration.T_parent_camera;
+  const Eigen::Isometry3d& Y = calibration.pattern->pose;
+  // A symmetric target: each view's pose is one of two candidates 180 degrees apart;
+  // the calibration predicts which (a wrong one is off by about pi, far beyond any noise).
+  std::vector<int> turned;
+  SampleSet decided = views;
+  // Views without a stated noise take the calibration's, when it was given (an estimated
+  // noise is in its residual model already).
+  if (!decided.noise && calibration.noise_origin == NoiseOrigin::Given) decided.noise = calibration.noise;
+  const SampleSet* checked = &decided;
+  if (views.rig.symmetric_face) {
+    const Eigen::Isometry3d F = views.rig.face_half_turn();
+    for (std::size_t i = 0; i < decided.samples.size(); ++i) {
+      PoseSample other = decided.samples[i];
+      other.T_camera_pattern = other.T_camera_pattern * F;
+      other.corners = nullptr;  // the corners' order belongs to the detected candidate
+      const double as_detected = joint_residual(views.rig, decided.samples[i], X, Y).error.tail<3>().norm();
+      const double as_turned = joint_residual(views.rig, other, X, Y).error.tail<3>().norm();
+      if (as_turned < as_detected) {
+        decided.samples[i] = other;
+        turned.push_back(static_cast<int>(i));
+      }
+    }
+  }
+  const double inflation = calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
+  const Matrix12d sigma = joint_covariance(calibration);
+  const std::vector<Matrix6d> noise = residual_covariances(*checked, calibration);
+  // The estimated noise parts: the views' noise is the known remainder plus each part
+  // times its true-over-estimated ratio g ~ nu / chi2(nu), whose mean nu / (nu - 2) the
+  // prediction takes (a variance estimated from few dof is more often too small than
+  // too large, for the inverse). nu is floored at kMinimumDof: below it the delta
+  // method's dof says only that the number is poorly known, and an inverse chi2 of
+  // under 5 dof has no variance.
+  constexpr double kMinimumDof = 5.0;
+  std::vector<NoisePart> parts = noise_parts(*checked, calibration);
+  for (NoisePart& part : parts) part.dof = std::max(part.dof, kMinimumDof);
+  const auto expected_ratio = [](double dof) { return dof / (dof - 2.0); };
+
+  const int n = 6 * k;
+  Eigen::VectorXd e(n);
+  Eigen::MatrixXd J(n, 12), C = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < k; ++i) {
+    const std::size_t v = static_cast<std::size_t>(i);
+    const JointResidual r = joint_residual(views.rig, checked->samples[v], X, Y);
+    e.segment<6>(6 * i) = r.error;
+    J.middleRows<6>(6 * i) = r.jacobian;
+    Matrix6d S = noise[v];
+    for (const NoisePart& part : parts) S += (expected_ratio(part.dof) - 1.0) * part.per_view[v];
+    C.block<6, 6>(6 * i, 6 * i) = inflation * S;
+  }
+  C += J * sigma * J.transpose();
+  C = 0.5 * (C + C.transpose());
+  const Eigen::LLT<Eigen::MatrixXd> llt(C);
+  if (llt.info() != Eigen::Success) {
+    throw HandEyeError(ErrorCode::InvalidNoise,
+                       "the new views' predicted residual covariance is not positive definite: neither the views nor the "
+                       "calibration's noise model say how noisy a view is",
+                       "the calibration's noise model",
+                       "give the views' noise (a `noise:` block, or detections with their covariance), or solve the "
+                       "calibration with its noise estimated (no `noise:` block) so that its model carries it");
+  }
+  const auto whiten = [&](const Eigen::MatrixXd& M) {
+    return Eigen::MatrixXd(llt.matrixL().solve(Eigen::MatrixXd(llt.matrixL().solve(M).transpose())).transpose());
+  };
+  const Eigen::VectorXd z = llt.matrixL().solve(e);
+  const Eigen::MatrixXd H = llt.matrixL().solve(J);
+  // Whitened as z is: I = known + sum of E[g] part; the null draws g for each part.
+  std::vector<std::pair<Eigen::MatrixXd, double>> whitened_parts;
+  Eigen::MatrixXd known_white = Eigen::MatrixXd::Identity(n, n);
+  for (const NoisePart& part : parts) {
+    Eigen::MatrixXd block = Eigen::MatrixXd::Zero(n, n);
+    for (int i = 0; i < k; ++i) block.block<6, 6>(6 * i, 6 * i) = inflation * part.per_view[static_cast<std::size_t>(i)];
+    const Eigen::MatrixXd white = whiten(block);
+    known_white -= expected_ratio(part.dof) * white;
+    whitened_parts.emplace_back(white, part.dof);
+  }
+
+  CalibrationCheck check;
+  check.turned = turned;
+  check.alpha = options.alpha;
+  check.dof = n;
+  check.chi2 = z.squaredNorm();
+  check.chi2_p_value = chi2_upper(check.chi2, n);
+  for (int i = 0; i < k; ++i) {
+    CheckedView v;
+    v.residual = e.segment<6>(6 * i);
+    v.predicted_covariance = C.block<6, 6>(6 * i, 6 * i);
+    v.translation_error = v.residual.head<3>().norm();
+    v.rotation_error = v.residual.tail<3>().norm();
+    v.predicted_translation_sigma = std::sqrt(v.predicted_covariance.topLeftCorner<3, 3>().trace());
+    v.predicted_rotation_sigma = std::sqrt(v.predicted_covariance.bottomRightCorner<3, 3>().trace());
+    v.mahalanobis = std::sqrt(std::max(0.0, v.residual.dot(v.predicted_covariance.ldlt().solve(v.residual))));
+    check.views.push_back(v);
+  }
+
+  // The three hypotheses. With one view X and Y cannot be told apart (J_X and J_Y span
+  // the same 6 directions); the fits then share the drop and "both" is singular.
+  const Eigen::MatrixXd Hx = H.leftCols<6>(), Hy = H.rightCols<6>();
+  const Fit fx = fit_change(Hx, z), fy = fit_change(Hy, z);
+  const auto hypothesis = [&](const char* what, const Fit& fit, int dof) {
+    EstimatedChange c;
+    c.what = what;
+    c.chi2_drop = fit.drop;
+    c.dof = dof;
+    c.residual_chi2 = std::max(0.0, check.chi2 - fit.drop);
+    c.residual_p_value = chi2_upper(c.residual_chi2, n - dof);
+    return c;
+  };
+  check.X_alone = hypothesis("X", fx, 6);
+  check.X_alone.X_change = delta_of(fx, 0);
+  check.Y_alone = hypothesis("Y", fy, 6);
+  check.Y_alone.Y_change = delta_of(fy, 0);
+  const bool both_identified = n > 12;
+  if (both_identified) {
+    const Fit fxy = fit_change(H, z);
+    check.both = hypothesis("both", fxy, 12);
+    check.both.X_change = delta_of(fxy, 0);
+    check.both.Y_change = delta_of(fxy, 6);
+  }
+
+  check.statistic = std::max(fx.drop, fy.drop);
+  const Eigen::MatrixXd Qx = basis(Hx), Qy = basis(Hy);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> angles(Qx.transpose() * Qy);
+  check.x_y_cosines = angles.singularValues().head<6>();
+  check.x_y_overlap = check.x_y_cosines(0);
+  check.p_value = NullDistribution(Qx, Qy, known_white, whitened_parts).p_value(check.statistic, options);
+  check.changed = check.p_value < options.alpha;
+  const EstimatedChange& single = fx.drop >= fy.drop ? check.X_alone : check.Y_alone;
+  check.naming_odds = std::exp(std::min(0.5 * std::abs(fx.drop - fy.drop), 690.0));
+  const bool second_explains = both_identified && check.both.chi2_drop - single.chi2_drop > chi2_quantile(6, 1.0 - options.alpha);
+  check.change = second_explains ? check.both : single;
+
+  const std::string p = "p = " + p_text(check.p_value);
+  if (!check.changed) {
+    check.verdict = "consistent (" + p + "): the " + std::to_string(k) +
+                    " new views fit the calibration within its covariance and noise";
+  } else if (check.change.what == "both") {
+    check.verdict = "X and Y both changed (" + p + "): X by " + change_text(*check.change.X_change) + ", Y by " +
+                    change_text(*check.change.Y_change);
+  } else if (check.change.what == "X") {
+    check.verdict = "X changed (" + p + "): the camera moved on its mount by " + change_text(*check.change.X_change);
+  } else {
+    check.verdict = "Y changed (" + p + "): the target moved by " + change_text(*check.change.Y_change);
+  }
+  const bool uncertain_name = check.changed && check.change.what != "both" && check.naming_odds < 19.0;
+  if (uncertain_name) {
+    check.verdict += std::string("; or ") + (check.change.what == "X" ? "Y" : "X") +
+                     " changed instead: these views barely tell which (odds " + number_text(check.naming_odds, 2) + " : 1)";
+  }
+  if (check.changed) {
+    check.advice.push_back(check.change.what == "Y"
+                               ? "the target moved: its pose Y is estimated again in a new session; X may still hold "
+                                 "(calibrate again to be sure)"
+                               : "calibrate again: the published X is off by more than its covariance allows");
+    if (check.change.residual_p_value < options.alpha) {
+      check.advice.push_back("even the estimated change leaves the views " +
+                             number_text(check.change.residual_chi2 / std::max(1, n - check.change.dof), 3) +
+                             "x their expected chi2: a wrong detection or a noisier camera, not only a moved mount");
+    }
+  } else if (check.chi2_p_value < options.alpha) {
+    check.advice.push_back("the views scatter beyond the noise model (chi2 " + number_text(check.chi2, 3) + " on " +
+                           std::to_string(n) + " dof, p = " + p_text(check.chi2_p_value) +
+                           ") but not as a moved X or Y would: look at the view with the largest sigma");
+  }
+  if (uncertain_name || (check.changed && check.x_y_overlap > 0.95)) {
+    check.advice.push_back("to tell a moved camera from a moved target, take the views turned about different axes "
+                           "(rolled about the optical axis and tilted both ways): at these views the two look alike "
+                           "(overlap " + number_text(check.x_y_overlap, 3) + ")");
+  }
+  if (k < 3) {
+    check.advice.push_back("with " + std::to_string(k) +
+                           " view(s) a change of X cannot be told well from one of Y: take 5 views, turned about "
+                           "different axes");
+  }
+  return check;
+}
+
+}  // namespace handeye

@@ -1,0 +1,158 @@
+#include "handeye_covariance/simulation/check_study.h"
+
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/non_central_chi_squared.hpp>
+#include <boost/math/special_functions/bessel.hpp>
+
+#include "handeye_covariance/estimation/joint_estimator.h"
+
+namespace handeye {
+
+namespace {
+
+/// A new view at robot pose `E` of the rig whose true X and Y are given, with the noise.
+PoseSample observe(Rng& rng, const Rig& rig, const Eigen::Isometry3d& E, const Eigen::Isometry3d& X,
+                   const Eigen::Isometry3d& Y, const MeasurementNoise& noise) {
+  PoseSample sample;
+  sample.T_base_effector = perturb(rng, E, noise.robot);
+  sample.T_camera_pattern = perturb(rng, rig.predicted_view(E, X, Y), noise.camera);
+  return sample;
+}
+
+/// log((g(T_X) + g(T_Y)) / 2): the likelihood ratio of "X or Y changed (even odds) by
+/// noncentrality lambda in a direction uniform on the sphere" over "nothing changed".
+double log_change_likelihood_ratio(double T_X, double T_Y, double noncentrality) {
+  // log g(T): the noncentral over the central chi2(6) density at T with the direction
+  // averaged over the sphere, exp(-lambda / 2) Gamma(3) (2 / r)^2 I_2(r), r = sqrt(lambda T).
+  const auto log_g = [&](double T) {
+    const double r = std::sqrt(noncentrality * std::max(T, 0.0));
+    if (r < 1e-4) return -0.5 * noncentrality + r * r / 12.0;  // I_2(r) = r^2 / 8 (1 + r^2 / 12 + ...)
+    // I_2(r) e^-r is bounded: the log stays finite for any r.
+    return -0.5 * noncentrality + r + std::log(8.0 / (r * r) * boost::math::cyl_bessel_i(2, r) * std::exp(-r));
+  };
+  const double a = log_g(T_X), b = log_g(T_Y);
+  return std::max(a, b) + std::log(0.5 * (1.0 + std::exp(-std::abs(a - b))));
+}
+
+Eigen::Vector3d random_direction(Rng& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Vector3d u(normal(rng), normal(rng), normal(rng));
+  return u.normalized();
+}
+
+}  // namespace
+
+MeasurementNoise check_study_noise() {
+  const double deg = M_PI / 180.0, mm = 1e-3;
+  MeasurementNoise noise;
+  noise.camera.rotation = std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.translation = std::pow(0.5 * mm, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.rotation = std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.translation = std::pow(0.05 * mm, 2) * Eigen::Matrix3d::Identity();
+  return noise;
+}
+
+double CheckStudyResult::named_right() const {
+  if (changed == 0) return 0.0;
+  const int right = planted == PlantedChange::XTranslation ? named_X : planted == PlantedChange::YTranslation ? named_Y : 0;
+  return static_cast<double>(right) / changed;
+}
+
+double chi2_test_power(int dof, double noncentrality, double alpha) {
+  const double threshold = boost::math::quantile(boost::math::chi_squared(dof), 1.0 - alpha);
+  if (noncentrality <= 0.0) return alpha;
+  return boost::math::cdf(
+      boost::math::complement(boost::math::non_central_chi_squared(dof, noncentrality), threshold));
+}
+
+double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed, int draws) {
+  const double root_lambda = std::sqrt(noncentrality);
+  const auto log_ratio = [&](const Vector6d& u, const Vector6d& v) {
+    return log_change_likelihood_ratio(u.squaredNorm(), v.squaredNorm(), noncentrality);
+  };
+  const Vector6d c = cosines.cwiseMin(1.0).cwiseMax(0.0);
+  const Vector6d s = (Vector6d::Ones() - c.cwiseProduct(c)).cwiseSqrt();
+  Rng rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const auto gaussian = [&] {
+    Vector6d x;
+    for (int a = 0; a < 6; ++a) x(a) = normal(rng);
+    return x;
+  };
+  // In the principal bases the two projections are u and v = c u + s w (u, w white).
+  std::vector<double> null_ratios(static_cast<std::size_t>(draws));
+  for (double& r : null_ratios) {
+    const Vector6d u = gaussian();
+    r = log_ratio(u, c.cwiseProduct(u) + s.cwiseProduct(gaussian()));
+  }
+  std::sort(null_ratios.begin(), null_ratios.end());
+  const double threshold = null_ratios[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
+  int detected = 0;
+  for (int d = 0; d < draws; ++d) {
+    const Vector6d theta = gaussian().normalized() * root_lambda;
+    Vector6d u = gaussian() + theta;  // X changed: the signal is in u's subspace
+    Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(gaussian());
+    if (d % 2 == 1) std::swap(u, v);  // Y changed: the same with the roles swapped
+    if (log_ratio(u, v) > threshold) ++detected;
+  }
+  return static_cast<double>(detected) / draws;
+}
+
+CheckStudyResult run_check_study(const CheckStudyOptions& options) {
+  const MeasurementNoise noise =
+      options.noise.camera.translation.isZero() ? check_study_noise() : options.noise;
+  const Eigen::Isometry3d X = typical_X(options.setup);
+  CheckStudyResult result;
+  result.planted = options.change;
+  result.bound = chi2_test_power(6, options.change == PlantedChange::None ? 0.0 : options.multiple * options.multiple,
+                                 options.check.alpha);
+  Rng rng(options.seed);
+  for (int trial = 0; trial < options.checks; ++trial) {
+    SimulatedSession session = simulate_session(rng, options.setup, X, options.calibration_samples, noise, options.viewpoints);
+    if (!options.noise_given) session.samples.noise.reset();
+    const Calibration calibration = solve_joint(session.samples);
+    const Rig& rig = session.samples.rig;
+    const Eigen::Isometry3d& Y = session.T_world_pattern;
+
+    SampleSet views;
+    views.rig = rig;
+    if (options.noise_given) views.noise = noise;
+    std::vector<Eigen::Isometry3d> effectors;
+    for (int i = 0; i < options.views; ++i) {
+      effectors.push_back(rig.effector_for_view(X, Y, random_view(rng, options.viewpoints)));
+      views.samples.push_back(observe(rng, rig, effectors.back(), X, Y, noise));
+    }
+    Eigen::Isometry3d X_now = X, Y_now = Y;
+    if (options.change != PlantedChange::None) {
+      // The move along u, in units of the check's own 1 sigma of the change along u.
+      const CalibrationCheck unchanged = check_calibration(calibration, views, options.check);
+      const bool x = options.change == PlantedChange::XTranslation;
+      const Matrix6d& covariance = x ? unchanged.X_alone.X_change->covariance : unchanged.Y_alone.Y_change->covariance;
+      Vector6d u = Vector6d::Zero();
+      u.head<3>() = random_direction(rng);
+      const double sigma = 1.0 / std::sqrt(u.dot(covariance.ldlt().solve(u)));
+      const Eigen::Vector3d move = options.multiple * sigma * u.head<3>();
+      (x ? X_now : Y_now).translation() += move;  // a left perturbation's translation part
+      for (int i = 0; i < options.views; ++i) {
+        views.samples[static_cast<std::size_t>(i)] = observe(rng, rig, effectors[static_cast<std::size_t>(i)], X_now, Y_now, noise);
+      }
+    }
+    const CalibrationCheck check = check_calibration(calibration, views, options.check);
+    ++result.checks;
+    if (options.change != PlantedChange::None && options.bound_draws > 0) {
+      result.two_hypothesis_bound += two_hypothesis_power_bound(check.x_y_cosines, options.multiple * options.multiple,
+                                                                options.check.alpha, options.seed + trial,
+                                                                options.bound_draws) / options.checks;
+    }
+    result.mean_chi2_over_dof += check.chi2 / check.dof / options.checks;
+    if (check.changed) {
+      ++result.changed;
+      if (check.change.what == "X") ++result.named_X;
+      if (check.change.what == "Y") ++result.named_Y;
+      if (check.change.what == "both") ++result.named_both;
+    }
+  }
+  return result;
+}
+
+}  // namespace handeye
