@@ -69,7 +69,11 @@ TEST(CalibrationCheck, FalseAlarmsAtAlpha) {
   print("no change", r);
   EXPECT_LE(r.rate(), 0.015);
   EXPECT_GE(r.rate(), 0.004);  // and not far below it: a check that never fires has no power
-  EXPECT_NEAR(r.mean_chi2_over_dof, 1.0, 0.02);  // the predicted covariance of the new views holds
+  // The predicted covariance of the new views holds: the model's, or larger by the
+  // leave-one-out scale when the calibration's own views scattered more (about half the
+  // calibrations by chance: the prediction is then a few percent wide).
+  EXPECT_GT(r.mean_chi2_over_dof, 0.9);
+  EXPECT_LT(r.mean_chi2_over_dof, 1.02);
 }
 
 // The noise estimated from the calibration's 20 views (no noise block): each estimated
@@ -86,8 +90,10 @@ TEST(CalibrationCheck, FalseAlarmsWithTheNoiseEstimated) {
 // A moved X or Y, 5 and 6 times the check's own 1 sigma of the change along the move.
 // A test of X alone could detect 5 sigma in 92.7% (noncentral chi2(6, 25) beyond
 // chi2(6)'s 99% quantile); one that must catch X or Y at the same alpha no more often
-// than the two-hypothesis bound at these views (about 91%). The check is within 2.5
-// points of that bound at 5 sigma, at least 98% at 6.
+// than the two-hypothesis bound at these views (91.2%). The check reaches 86.5% and
+// 88.5%: the max test costs about 1.5 points, the leave-one-out scale (measured on the
+// calibration's 20 views, what keeps it honest on real sessions) 2 to 3 more. At 6 sigma
+// at least 98%.
 TEST(CalibrationCheck, DetectsAMovedCameraOrTarget) {
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     const bool x = change == PlantedChange::XTranslation;
@@ -95,7 +101,8 @@ TEST(CalibrationCheck, DetectsAMovedCameraOrTarget) {
     print(x ? "X moved 5 sigma" : "Y moved 5 sigma", five);
     EXPECT_NEAR(five.bound, 0.927, 0.001);
     EXPECT_LE(five.rate(), five.bound + 0.02);  // no test beats the bound (by more than the sampling error)
-    EXPECT_GE(five.rate(), five.two_hypothesis_bound - 0.025);
+    EXPECT_GE(five.rate(), five.two_hypothesis_bound - 0.06);
+    EXPECT_GE(five.rate(), 0.85);
     CheckStudyOptions o = study(change, 6.0, 400, x ? 5 : 6);
     o.bound_draws = 0;
     const CheckStudyResult six = run_check_study(o);

@@ -1,6 +1,7 @@
 #include "handeye_covariance/estimation/calibration_check.h"
 
 #include <algorithm>
+#include <functional>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -11,6 +12,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
+#include "handeye_covariance/estimation/outliers.h"
 
 namespace handeye {
 
@@ -184,6 +186,42 @@ std::string change_text(const EstimatedChange::Delta& d) {
 
 }  // namespace
 
+bool prediction_disagrees(const Calibration::Prediction& p) { return p.dof > 0.0 && p.scale > 1.0; }
+
+std::optional<Calibration::Prediction> prediction_check(
+    const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve) {
+  const std::size_t n = samples.samples.size();
+  if (n < 5) return std::nullopt;
+  std::vector<double> d2;  // each view's squared Mahalanobis length over 6
+  for (std::size_t i = 0; i < n; ++i) {
+    SampleSet others = samples, one = samples;
+    others.samples.erase(others.samples.begin() + static_cast<std::ptrdiff_t>(i));
+    one.samples = {samples.samples[i]};
+    Calibration c;
+    try {
+      c = solve(others);
+    } catch (const HandEyeError&) {
+      continue;  // too few turns without it: no prediction from the others
+    }
+    if (!c.pattern || !c.residual_noise) return std::nullopt;  // not a joint calibration
+    const JointResidual r = joint_residual(samples.rig, one.samples[0], c.T_parent_camera, c.pattern->pose);
+    const Matrix6d C = residual_covariances(one, c)[0] + r.jacobian * joint_covariance(c) * r.jacobian.transpose();
+    d2.push_back(r.error.dot(C.ldlt().solve(r.error)) / 6.0);
+  }
+  if (d2.size() < 5) return std::nullopt;
+  const double m = static_cast<double>(d2.size());
+  double mean = 0.0, spread = 0.0;
+  for (double v : d2) mean += v / m;
+  for (double v : d2) spread += (v - mean) * (v - mean) / (m - 1.0);
+  Calibration::Prediction p;
+  p.views = static_cast<int>(d2.size());
+  p.scale = mean;
+  // The mean of m values of chi2(6) / 6 (variance 1 / 3) has 6 m dof; heavier tails fewer.
+  // Its variance is spread / m; a scale s estimated from nu dof has variance 2 s^2 / nu.
+  p.dof = std::min(6.0 * m, 2.0 * mean * mean * m / std::max(spread, 1e-12));
+  return p;
+}
+
 Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
   Matrix12d sigma = Matrix12d::Zero();
   sigma.topLeftCorner<6, 6>() = calibration.pose_covariance;
@@ -195,7 +233,9 @@ Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
   return 0.5 * (sigma + sigma.transpose());
 }
 
-CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
+namespace {
+
+CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
   if (!calibration.pattern || !calibration.residual_noise) {
     throw HandEyeError(ErrorCode::NoiseUnidentifiable,
                        "the calibration carries no pattern pose Y or no noise model: a check predicts each new view from "
@@ -237,7 +277,7 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
       }
     }
   }
-  const double inflation = calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
+  double inflation = calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
   const Matrix12d sigma = joint_covariance(calibration);
   const std::vector<Matrix6d> noise = residual_covariances(*checked, calibration);
   // The estimated noise parts: the views' noise is the known remainder plus each part
@@ -246,10 +286,23 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
   // too large, for the inverse). nu is floored at kMinimumDof: below it the delta
   // method's dof says only that the number is poorly known, and an inverse chi2 of
   // under 5 dof has no variance.
+  // A calibration whose own views, left out in turn, scatter more than it predicts
+  // (prediction_disagrees) replaces all of that: the whole predicted covariance is scaled
+  // by what its views showed, a scale known to its dof, and the honesty check's inflation
+  // is not applied a second time. One whose views scatter less keeps its model: a scale
+  // measured from a few views is not trusted to make the check stricter.
   constexpr double kMinimumDof = 5.0;
-  std::vector<NoisePart> parts = noise_parts(*checked, calibration);
-  for (NoisePart& part : parts) part.dof = std::max(part.dof, kMinimumDof);
   const auto expected_ratio = [](double dof) { return dof / (dof - 2.0); };
+  std::vector<NoisePart> parts;
+  double prediction_scale = 1.0;
+  const bool use_prediction = calibration.prediction && prediction_disagrees(*calibration.prediction);
+  if (use_prediction) {
+    prediction_scale = calibration.prediction->scale;
+    inflation = 1.0;
+  } else {
+    parts = noise_parts(*checked, calibration);
+    for (NoisePart& part : parts) part.dof = std::max(part.dof, kMinimumDof);
+  }
 
   const int n = 6 * k;
   Eigen::VectorXd e(n);
@@ -265,6 +318,8 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
   }
   C += J * sigma * J.transpose();
   C = 0.5 * (C + C.transpose());
+  const Eigen::MatrixXd C_model = C;
+  if (use_prediction) C *= prediction_scale * expected_ratio(std::max(calibration.prediction->dof, kMinimumDof));
   const Eigen::LLT<Eigen::MatrixXd> llt(C);
   if (llt.info() != Eigen::Success) {
     throw HandEyeError(ErrorCode::InvalidNoise,
@@ -288,6 +343,12 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
     const Eigen::MatrixXd white = whiten(block);
     known_white -= expected_ratio(part.dof) * white;
     whitened_parts.emplace_back(white, part.dof);
+  }
+  if (use_prediction) {  // one part: all of C, scaled by the measured prediction
+    const double dof = std::max(calibration.prediction->dof, kMinimumDof);
+    const Eigen::MatrixXd white = whiten(prediction_scale * C_model);
+    known_white -= expected_ratio(dof) * white;
+    whitened_parts.emplace_back(white, dof);
   }
 
   CalibrationCheck check;
@@ -388,6 +449,33 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
                            "different axes");
   }
   return check;
+}
+
+}  // namespace
+
+CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
+  CalibrationCheck check = check_all(calibration, views, options);
+  // One wrong detection is not a moved camera: a view beyond the outlier gate alone
+  // (outliers.h, chi2(6) 0.9999) whose leaving out leaves the others consistent is left
+  // out and named, as the calibration leaves out its own; a real change moves every view.
+  if (!check.changed || views.samples.size() < 2) return check;
+  std::size_t worst = 0;
+  for (std::size_t i = 1; i < check.views.size(); ++i) {
+    if (check.views[i].mahalanobis > check.views[worst].mahalanobis) worst = i;
+  }
+  const double gate = OutlierOptions{}.residual_gate;
+  if (check.views[worst].mahalanobis * check.views[worst].mahalanobis <= gate) return check;
+  SampleSet rest = views;
+  rest.samples.erase(rest.samples.begin() + static_cast<std::ptrdiff_t>(worst));
+  CalibrationCheck without = check_all(calibration, rest, options);
+  if (without.changed) return check;
+  without.views = check.views;  // the table keeps every view, the left-out one marked
+  without.left_out = {static_cast<int>(worst)};
+  without.verdict += "; view " + std::to_string(worst) + " left out: " + number_text(check.views[worst].mahalanobis, 3) +
+                     " sigma off alone, a wrong detection (the others fit)";
+  without.advice.insert(without.advice.begin(), "look at view " + std::to_string(worst) +
+                                                     ": its detection disagrees with the calibration and the other views");
+  return without;
 }
 
 }  // namespace handeye

@@ -1,5 +1,6 @@
 #include "handeye_covariance/io/summary.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -211,9 +212,10 @@ std::string check_summary(const CalibrationCheck& check) {
   text += "  view   error mm  (1 sigma mm)   error deg  (1 sigma deg)   sigma\n";
   for (std::size_t i = 0; i < check.views.size(); ++i) {
     const CheckedView& v = check.views[i];
-    text += line("  %4zu   %8.3f  (%8.3f)     %8.4f  (%8.4f)      %5.2f", i, v.translation_error * 1e3,
-                   v.predicted_translation_sigma * 1e3, v.rotation_error * 180.0 / M_PI,
-                   v.predicted_rotation_sigma * 180.0 / M_PI, v.mahalanobis);
+    const bool left_out = std::find(check.left_out.begin(), check.left_out.end(), static_cast<int>(i)) != check.left_out.end();
+    text += line("  %4zu   %8.3f  (%8.3f)     %8.4f  (%8.4f)      %5.2f%s", i, v.translation_error * 1e3,
+                 v.predicted_translation_sigma * 1e3, v.rotation_error * 180.0 / M_PI,
+                 v.predicted_rotation_sigma * 180.0 / M_PI, v.mahalanobis, left_out ? "  left out" : "");
   }
   text += "  (1 sigma: the error's RMS the calibration predicts for that view, its own noise and X's and Y's "
           "uncertainty; sigma: the view's Mahalanobis length, about 2.3 on average when nothing changed)\n";

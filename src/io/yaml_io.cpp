@@ -871,6 +871,11 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     }
     out << YAML::EndMap;
   }
+  if (const auto& p = calibration.prediction) {  // leave-one-out: how well it predicts a view it has not seen
+    out << YAML::Key << "prediction" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "scale" << YAML::Value
+        << p->scale << YAML::Key << "dof" << YAML::Value << p->dof << YAML::Key << "views" << YAML::Value << p->views
+        << YAML::EndMap;
+  }
   if (calibration.method == Method::Joint) {  // which tests ran on the residuals, and what they chose
     out << YAML::Key << "residual_checks" << YAML::Value << YAML::BeginSeq;
     for (const Calibration::ResidualCheck& c : calibration.residual_checks) {
@@ -951,8 +956,10 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   }
   out << YAML::EndSeq;
   out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;  // humans read these: mm and degrees
-  for (const CheckedView& v : check.views) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "translation_mm" << YAML::Value << v.translation_error * 1e3
+  for (std::size_t i = 0; i < check.views.size(); ++i) {
+    const CheckedView& v = check.views[i];
+    const bool left_out = std::find(check.left_out.begin(), check.left_out.end(), static_cast<int>(i)) != check.left_out.end();
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "left_out" << YAML::Value << left_out << YAML::Key << "translation_mm" << YAML::Value << v.translation_error * 1e3
         << YAML::Key << "predicted_translation_mm" << YAML::Value << v.predicted_translation_sigma * 1e3 << YAML::Key
         << "rotation_deg" << YAML::Value << v.rotation_error * 180.0 / M_PI << YAML::Key << "predicted_rotation_deg"
         << YAML::Value << v.predicted_rotation_sigma * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << v.mahalanobis
@@ -1158,6 +1165,18 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       file.noise_components.push_back(c);
     }
   }
+  if (const YAML::Node prediction = root["prediction"]; prediction && prediction.IsMap()) {
+    const Location at = top / "prediction";
+    const std::string hint = "`prediction` is {scale, dof, views}: the leave-one-out of the calibration's views";
+    Calibration::Prediction p;
+    p.scale = as_finite(require(prediction, "scale", at, hint), at / "scale", "NaN in the prediction scale", hint);
+    p.dof = as_finite(require(prediction, "dof", at, hint), at / "dof", "NaN in the prediction dof", hint);
+    if (prediction["views"]) p.views = as_integer(prediction["views"], at / "views", 0, 1e9, "views");
+    if (!(p.scale > 0.0) || !(p.dof > 0.0)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the prediction scale and dof must be positive", at.str(), hint);
+    }
+    file.prediction = p;
+  }
   if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
     file.inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
                                "the honesty check's inflation is a number >= 1");
@@ -1183,6 +1202,7 @@ Calibration calibration_of(const CalibrationFile& file) {
   c.cross_covariance = file.cross_covariance;
   c.residual_noise = file.residual_noise;
   c.noise_components = file.noise_components;
+  c.prediction = file.prediction;
   c.noise_origin = file.noise_origin;
   if (file.noise) c.noise = *file.noise;
   c.samples_used = file.samples_used;

@@ -1,5 +1,7 @@
 #include "handeye_covariance/session/calibration_session.h"
 
+#include "handeye_covariance/estimation/calibration_check.h"
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -219,6 +221,14 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     h.model_pose_covariance = c.pose_covariance;
     c.honesty = h;
   };
+  {  // how well it predicts a view it has not seen (leave-one-out), for a later check of new views
+    const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
+    if (settings_.method != Method::Corners && c.pattern) {
+      c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
+        return calibrate_decided({kept.generation, others});
+      });
+    }
+  }
   if (settings_.honesty.splits <= 0) {
     not_run("the check is off (honesty_splits: 0)");
     return c;

@@ -110,7 +110,10 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
   for (int trial = 0; trial < options.checks; ++trial) {
     SimulatedSession session = simulate_session(rng, options.setup, X, options.calibration_samples, noise, options.viewpoints);
     if (!options.noise_given) session.samples.noise.reset();
-    const Calibration calibration = solve_joint(session.samples);
+    Calibration calibration = solve_joint(session.samples);
+    if (options.prediction) {
+      calibration.prediction = prediction_check(session.samples, [](const SampleSet& s) { return solve_joint(s); });
+    }
     const Rig& rig = session.samples.rig;
     const Eigen::Isometry3d& Y = session.T_world_pattern;
 

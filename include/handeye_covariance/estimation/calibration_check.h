@@ -35,6 +35,7 @@
 // of X or Y explains the views at all (a wrong detection or a changed noise does not).
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,6 +79,7 @@ struct EstimatedChange {
 
 struct CalibrationCheck {
   std::vector<CheckedView> views;
+  std::vector<int> left_out;  // a view beyond the outlier gate alone whose leaving out left the rest consistent
   std::vector<int> turned;  // a symmetric target: the views whose other candidate the calibration predicts
   double chi2 = 0.0;        // e^T C^-1 e over the new views
   int dof = 0;              // 6 k
@@ -110,6 +112,17 @@ struct CalibrationCheck {
 /// the new samples (the calibration's setup; their own noise when the detector states
 /// one; `views.rig` must be the calibration's setup). Throws NoData for no view.
 CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options = {});
+
+/// Calibration::Prediction of `fitted`, the calibration of `samples` (its kept views,
+/// decided), each view left out in turn and solved by `solve` (as the calibration was).
+/// A left-out set the estimator refuses is skipped; nullopt with fewer than 5 views or
+/// fewer than 5 predictions.
+std::optional<Calibration::Prediction> prediction_check(
+    const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve);
+
+/// Whether the calibration's own views, left out in turn, scattered more than it
+/// predicts (scale > 1): then a check scales its prediction by it, else the model stands.
+bool prediction_disagrees(const Calibration::Prediction& prediction);
 
 /// The 12x12 covariance of (X, Y) of a joint calibration: X's, Y's and the cross block.
 Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration);

@@ -208,6 +208,21 @@ struct Calibration {
   };
   std::optional<Honesty> honesty;
 
+  /// How well the noise model and the covariance predict a view the calibration has not
+  /// seen, measured on its own kept views by leave-one-out (calibration_check.h
+  /// prediction_check): each view predicted from the others' X, Y, covariance and noise
+  /// (estimated again without it). `scale` is the mean of d_i^2 / 6, d_i each view's
+  /// Mahalanobis length under its predicted covariance (1 when the model predicts
+  /// right); `dof` that mean's degrees of freedom from the d_i's own spread (6 n when
+  /// they scatter as chi2(6)). A check of new views (calibration_check.h) scales its
+  /// prediction by it.
+  struct Prediction {
+    double scale = 1.0;
+    double dof = 0.0;
+    int views = 0;
+  };
+  std::optional<Prediction> prediction;
+
   /// Corners: the fit of every image's corners (corners/corner_calibration.h).
   struct CornerFit {
     double pixel_sigma = 0.0;  // px, estimated from the residuals (or given)

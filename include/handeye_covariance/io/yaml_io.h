@@ -130,6 +130,7 @@ struct CalibrationFile {
   Matrix6d cross_covariance = Matrix6d::Zero();
   std::optional<Calibration::ResidualNoise> residual_noise;
   std::vector<Calibration::NoiseComponent> noise_components;  // `noise.estimated`: how well each number is known
+  std::optional<Calibration::Prediction> prediction;  // `prediction`: the leave-one-out scale
   double inflation = 1.0;
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);

@@ -31,6 +31,9 @@ struct CheckStudyOptions {
   PlantedChange change = PlantedChange::None;
   double multiple = 5.0;
   CheckOptions check;
+  /// Each calibration measures its own prediction by leave-one-out (Calibration::prediction),
+  /// as the session does; false: the check draws each estimated noise number instead.
+  bool prediction = true;
   int bound_draws = 5000;  // of the two-hypothesis bound per check (0: not computed; +-0.4% each)
 };
 
