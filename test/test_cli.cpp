@@ -406,6 +406,45 @@ std::string linked_libraries(const std::string& binary) {
 // `handeye solve/noise/compose/suggest/validate/sim` link no ROS library: the bag
 // commands are handeye_bag, which `handeye bag` runs. The rviz plugin links the
 // core and the ROS bridge, not the vision library's OpenCV or libapriltag.
+// The README's "Check a calibration later", as typed: a calibration, 5 later views
+// (exit 0, consistent), 5 views after the camera moved 3 mm on its mount (exit 3, X
+// changed, by about 3 mm), the check file; and what it refuses.
+TEST(Cli, CheckSaysWhetherACalibrationStillHolds) {
+  const std::string session = temp("check_session.yaml"), calibration = temp("check_calibration.yaml"),
+                    later = temp("check_later.yaml"), bumped = temp("check_bumped.yaml"), out = temp("check.yaml");
+  ASSERT_EQ(run("sim --output " + session + " --samples 20 --seed 1").exit_code, 0);
+  ASSERT_EQ(run("solve --input " + session + " --output " + calibration).exit_code, 0);
+  ASSERT_EQ(run("sim --output " + later + " --samples 5 --seed 2").exit_code, 0);
+  const CliRun same = run("check --calibration " + calibration + " --input " + later);
+  EXPECT_EQ(same.exit_code, 0) << same.out << same.err;
+  EXPECT_NE(same.out.find("consistent (p = "), std::string::npos) << same.out;
+  ASSERT_EQ(run("sim --output " + bumped + " --samples 5 --seed 2 --camera-moved-mm 3").exit_code, 0);
+  const CliRun moved = run("check --calibration " + calibration + " --input " + bumped + " --output " + out);
+  EXPECT_EQ(moved.exit_code, 3) << moved.out << moved.err;
+  EXPECT_NE(moved.out.find("X changed (p "), std::string::npos) << moved.out;
+  const YAML::Node check = YAML::LoadFile(out);
+  EXPECT_EQ(check["verdict"].as<std::string>(), "changed");
+  EXPECT_EQ(check["changed"].as<std::string>(), "X");
+  EXPECT_LT(check["p_value"].as<double>(), 0.01);
+  ASSERT_EQ(check["change"].size(), 6u);
+  ASSERT_EQ(check["change_covariance"].size(), 36u);
+  const Eigen::Vector3d t(check["change"][0].as<double>(), check["change"][1].as<double>(), check["change"][2].as<double>());
+  const double sigma = std::sqrt(check["change_covariance"][0].as<double>() + check["change_covariance"][7].as<double>() +
+                                 check["change_covariance"][14].as<double>());
+  EXPECT_NEAR(t.norm(), 3e-3, 3.0 * sigma);  // the 3 mm move, within the check's own 3 sigma
+  EXPECT_EQ(check["views"].size(), 5u);
+
+  // A pose file without Y or a noise model, and no views: refused with the reason, exit 2.
+  const std::string truth = temp("check_truth.yaml");
+  ASSERT_EQ(run("sim --output " + temp("check_t.yaml") + " --samples 5 --truth " + truth).exit_code, 0);
+  const CliRun old = run("check --calibration " + truth + " --input " + later);
+  EXPECT_EQ(old.exit_code, 2);
+  EXPECT_NE(old.err.find("noise model"), std::string::npos) << old.err;
+  const CliRun nothing = run("check --calibration " + calibration);
+  EXPECT_EQ(nothing.exit_code, 2);
+  EXPECT_NE(nothing.err.find("--input"), std::string::npos) << nothing.err;
+}
+
 TEST(Layers, HandeyeLinksNoRosLibraryAndTheRvizPluginNoOpenCv) {
   const std::string handeye = linked_libraries(HANDEYE_CLI);
   for (const char* library : {"libroscpp", "librosbag", "libtf2", "libcv_bridge", "librostime", "libopencv", "libapriltag"}) {

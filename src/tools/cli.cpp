@@ -186,6 +186,10 @@ int sim_command(const Args& args, std::ostream& out, std::ostream& err) {
       "sim: a simulated calibration session with known truth (a samples file; with --output x.bag a rosbag, whose "
       "further options `handeye sim --output x.bag --help` lists)");
   add_sim_options(options, a);
+  double camera_moved_mm = 0.0;
+  options.add_options()("camera-moved-mm", po::value(&camera_moved_mm),
+                        "samples file: the camera moved on its mount by this much along its own x axis since the "
+                        "calibration (same seed's target, X changed): views to try `handeye check` on");
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(options).allow_unregistered().run(), vm);
   if (vm.count("output") && std::filesystem::path(vm["output"].as<std::string>()).extension() == ".bag") {
@@ -201,7 +205,9 @@ int sim_command(const Args& args, std::ostream& out, std::ostream& err) {
   noise.camera.rotation = std::pow(a.rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
   noise.camera.translation = std::pow(a.translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
   Rng rng(a.seed);
-  SimulatedSession session = simulate_session(rng, setup, typical_X(setup), a.samples, noise);
+  Eigen::Isometry3d X = typical_X(setup);
+  X.translation() += X.linear() * Eigen::Vector3d(camera_moved_mm * mm, 0.0, 0.0);  // X' = X T(d): in the camera frame
+  SimulatedSession session = simulate_session(rng, setup, X, a.samples, noise);
   if (a.omit_noise) session.samples.noise.reset();
   io::write_file_atomically(a.output, io::format_samples(session.samples));
   out << "wrote " << a.samples << " simulated " << a.setup_name << " samples to " << a.output << "\n";
