@@ -87,6 +87,56 @@ TEST(Session, AutoSamplesPersistsEachChangeAndMovesTheGeneration) {
   EXPECT_TRUE(resumed.samples()[5].T_camera_pattern.isApprox(session.samples()[5].T_camera_pattern, 1e-15));
 }
 
+// A check of a saved calibration collects its own views through the sampler's rules,
+// leaves the samples and the generation alone, and runs when it has its views: the
+// same rig's views fit, views after the camera moved 3 mm do not (X named).
+TEST(Session, ChecksCollectTheirOwnViewsAndLeaveTheSamplesAlone) {
+  CalibrationSession session(settings());
+  const SimulatedSession sim = simulated(20);
+  for (const Observation& o : observations(sim)) session.observe(o);
+  ASSERT_EQ(session.samples().size(), 20u);
+  const Calibration calibration = session.calibrate_checked(session.snapshot());
+  ASSERT_TRUE(calibration.prediction);
+  const std::uint64_t generation = session.generation();
+
+  Calibration pairs = calibration;
+  pairs.residual_noise.reset();
+  EXPECT_FALSE(session.start_check(pairs).success);
+  EXPECT_FALSE(session.check_state().collecting);
+
+  for (const double moved_mm : {0.0, 3.0}) {
+    ASSERT_TRUE(session.start_check(calibration, 5).success);
+    Rng rng(8);
+    Isometry3d X = typical_X(Setup::EyeInHand);
+    X.translation() += X.linear() * Eigen::Vector3d(moved_mm * 1e-3, 0.0, 0.0);
+    const SimulatedSession later = simulate_session(rng, Setup::EyeInHand, X, 5, test::sim_noise());
+    int taken = 0;
+    std::string last;
+    for (const Observation& o : observations(later)) {
+      if (const auto event = session.observe(o)) {
+        EXPECT_FALSE(event->changed);  // the samples are not touched
+        if (event->success) ++taken;
+        last = event->message;
+      }
+    }
+    EXPECT_EQ(taken, 5);
+    EXPECT_EQ(session.samples().size(), 20u);
+    EXPECT_EQ(session.generation(), generation);
+    const CalibrationSession::CheckState state = session.check_state();
+    EXPECT_FALSE(state.collecting);
+    ASSERT_TRUE(state.result);
+    EXPECT_EQ(state.result->views.size(), 5u);
+    EXPECT_EQ(state.result->changed, moved_mm > 0.0) << state.result->verdict;
+    if (moved_mm > 0.0) EXPECT_EQ(state.result->change.what, "X") << state.result->verdict;
+    EXPECT_NE(last.find(state.result->verdict), std::string::npos) << last;
+  }
+  ASSERT_TRUE(session.start_check(calibration, 5).success);
+  EXPECT_TRUE(session.check_state().collecting);
+  EXPECT_TRUE(session.cancel_check().success);
+  EXPECT_FALSE(session.check_state().collecting);
+  EXPECT_FALSE(session.cancel_check().success);
+}
+
 TEST(Session, ChangesSayWhatHappenedAndRefuseBadRequests) {
   CalibrationSession session(settings());
   const SimulatedSession sim = simulated(5);

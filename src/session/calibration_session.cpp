@@ -92,6 +92,11 @@ SessionEvent CalibrationSession::changed(std::string message) {
 }
 
 std::optional<SessionEvent> CalibrationSession::observe(const Observation& observation) {
+  if (check_) {  // a check collects its own views; the samples wait
+    const std::optional<SampleOutcome> outcome = check_->views.observe(observation);
+    if (!outcome) return std::nullopt;
+    return check_view(*outcome);
+  }
   const std::optional<SampleOutcome> outcome = sampler_.observe(observation);
   if (!outcome) return std::nullopt;
   if (outcome->accepted) return changed(outcome->message);
@@ -99,9 +104,63 @@ std::optional<SessionEvent> CalibrationSession::observe(const Observation& obser
 }
 
 SessionEvent CalibrationSession::take_sample(double now) {
+  if (check_) return check_view(check_->views.take_sample(now));
   const SampleOutcome outcome = sampler_.take_sample(now);
   if (outcome.accepted) return changed(outcome.message);
   return {false, false, outcome.message, ""};
+}
+
+SessionEvent CalibrationSession::start_check(Calibration calibration, int views) {
+  if (views < 1) return {false, false, "a check needs at least one view (5 is the figure it is measured at)", ""};
+  if (!calibration.pattern || !calibration.residual_noise) {
+    return {false, false,
+            "this calibration cannot be checked: it carries no pattern pose or no noise model (save it again with this "
+            "version: /calibrate, then /save_calibration)",
+            ""};
+  }
+  check_ = Check{std::move(calibration), Sampler(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}),
+                 views};
+  return {true, false,
+          "check started: move the robot to " + std::to_string(views) +
+              " new poses (the board in view, still at each); the calibration's samples are not touched",
+          ""};
+}
+
+SessionEvent CalibrationSession::cancel_check() {
+  if (!check_) return {false, false, "no check is collecting views", ""};
+  check_.reset();
+  return {true, false, "check cancelled", ""};
+}
+
+CalibrationSession::CheckState CalibrationSession::check_state() const {
+  CheckState state;
+  state.result = check_result_;
+  if (check_) {
+    state.collecting = true;
+    state.taken = static_cast<int>(check_->views.samples().size());
+    state.needed = check_->needed;
+  }
+  return state;
+}
+
+SessionEvent CalibrationSession::check_view(const SampleOutcome& outcome) {
+  if (!outcome.accepted) return {false, false, "check: " + outcome.message, ""};
+  const int taken = static_cast<int>(check_->views.samples().size());
+  if (taken < check_->needed) {
+    return {true, false, "check: view " + std::to_string(taken) + " of " + std::to_string(check_->needed) + " taken", ""};
+  }
+  SampleSet views;  // as sample_set() is made, from the check's own views
+  views.rig = settings_.rig;
+  views.noise = settings_.noise;
+  views.samples = check_->views.samples();
+  const Calibration calibration = std::move(check_->calibration);
+  check_.reset();
+  try {
+    check_result_ = check_calibration(calibration, with_default_noise(views));
+  } catch (const HandEyeError& e) {
+    return {false, false, std::string("check: ") + e.what(), ""};
+  }
+  return {true, false, "check: " + check_result_->verdict, ""};
 }
 
 SessionEvent CalibrationSession::remove(int index) {

@@ -20,6 +20,7 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/session/sampler.h"
 #include "handeye_covariance/session/session_config.h"
@@ -133,6 +134,21 @@ class CalibrationSession {
   /// Writes the samples with their noise model (the session file's format).
   SessionEvent save(const std::string& path) const;
 
+  // A check of a saved calibration (estimation/calibration_check.h) from new views,
+  // taken as samples are (the sampler's stillness and distinctness rules) into a list
+  // of their own: the session's samples are not touched, its generation does not move.
+
+  /// Begins a check of `calibration` from the next `views` views; an earlier check's
+  /// views are dropped. Refuses a calibration the check cannot use (its reason).
+  SessionEvent start_check(Calibration calibration, int views = 5);
+  SessionEvent cancel_check();
+  struct CheckState {
+    bool collecting = false;
+    int taken = 0, needed = 0;
+    std::optional<CalibrationCheck> result;  // the last finished check
+  };
+  CheckState check_state() const;
+
   // State.
   std::uint64_t generation() const { return generation_; }
   const std::vector<PoseSample>& samples() const { return sampler_.samples(); }
@@ -177,11 +193,20 @@ class CalibrationSession {
 
  private:
   SessionEvent changed(std::string message);
+  /// A view taken for the check (or refused): counts it, and runs the check on the last.
+  SessionEvent check_view(const SampleOutcome& outcome);
   SuggestOptions suggest_options(const std::string& criterion, std::size_t samples) const;
 
   const SessionSettings settings_;
   Sampler sampler_;
   std::uint64_t generation_ = 0;
+  struct Check {
+    Calibration calibration;
+    Sampler views;
+    int needed = 5;
+  };
+  std::optional<Check> check_;                     // collecting
+  std::optional<CalibrationCheck> check_result_;  // the last finished check
 };
 
 }  // namespace handeye
