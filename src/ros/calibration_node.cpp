@@ -77,6 +77,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   status_pub_ = private_node_.advertise<CalibrationStatus>("status", 10, true);
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
   next_pose_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>("next_pose_markers", 1, true);
+  check_pub_ = private_node_.advertise<CalibrationCheckMsg>("check", 1, true);
   estimate_pub_ = private_node_.advertise<geometry_msgs::PoseWithCovarianceStamped>("estimate", 1, true);
   services_ = {
       node_.advertiseService("calibrate", &CalibrationNode::calibrate, this),
@@ -88,6 +89,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
       node_.advertiseService("load_samples", &CalibrationNode::load_samples, this),
       node_.advertiseService("save_calibration", &CalibrationNode::save_calibration, this),
       node_.advertiseService("suggest_pose", &CalibrationNode::suggest_pose, this),
+      node_.advertiseService("check_calibration", &CalibrationNode::check_calibration, this),
   };
 
   detection_node_.setCallbackQueue(&detection_queue_);
@@ -234,6 +236,10 @@ void CalibrationNode::record_handled(const ros::Time& stamp) {
 
 void CalibrationNode::record(const SessionEvent& event, bool appended) {  // lock held
   last_event_ = event.message;
+  if (event.check) {
+    ROS_INFO("%s", event.message.c_str());
+    check_pub_.publish(check_message());
+  }
   if (event.changed && !appended) {  // the analysis describes samples that are gone
     analysis_.reset();
     last_removal_ = session_.generation();
@@ -585,6 +591,65 @@ bool CalibrationNode::save_calibration(SaveCalibration::Request& req, SaveCalibr
       res.message += std::string("; no report: ") + e.what();
     }
   }
+  return true;
+}
+
+Calibration CalibrationNode::calibration_to_check() const {  // lock held
+  if (calibration_) return calibration_->calibration;
+  const std::string& path = config_.calibration_file;
+  if (!std::ifstream(path)) {
+    throw HandEyeError(ErrorCode::IoError, "no calibration to check: none was solved here and none is saved", path,
+                       "calibrate first (/calibrate), or set ~calibration_file to the saved result file");
+  }
+  const io::CalibrationFile file = io::read_result(path);
+  const Rig& rig = config_.rig;
+  if ((file.context.setup && *file.context.setup != rig.setup) ||
+      (!file.context.parent.empty() && file.context.parent != rig.camera_parent_frame()) ||
+      (!file.context.child.empty() && file.context.child != rig.frames.camera)) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "the saved calibration is T_" + file.context.parent + "_" + file.context.child +
+                           ", this node calibrates T_" + rig.camera_parent_frame() + "_" + rig.frames.camera,
+                       path, "check it with the node of its own frames, or set ~calibration_file");
+  }
+  return io::calibration_of(file);
+}
+
+CalibrationCheckMsg CalibrationNode::check_message() const {  // lock held
+  const CalibrationSession::CheckState state = session_.check_state();
+  CalibrationCheckMsg msg;
+  if (state.collecting) {
+    msg.header.stamp = ros::Time::now();
+    msg.state = "collecting";
+    msg.views_taken = state.taken;
+    msg.views_needed = state.needed;
+    msg.text = "collecting views for the check: " + std::to_string(state.taken) + " of " + std::to_string(state.needed) +
+               " (move the robot to new poses, the board in view)";
+  } else if (state.result) {
+    msg = conversions::to_msg(*state.result, ros::Time::now());
+  } else {
+    msg.header.stamp = ros::Time::now();
+    msg.state = "failed";
+    msg.text = last_event_;
+  }
+  return msg;
+}
+
+bool CalibrationNode::check_calibration(CheckCalibration::Request& req, CheckCalibration::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  SessionEvent event;
+  if (req.cancel) {
+    event = session_.cancel_check();
+  } else {
+    try {
+      event = session_.start_check(calibration_to_check(), req.views > 0 ? req.views : 5);
+    } catch (const HandEyeError& e) {
+      event = {false, false, std::string("check not started: ") + e.what(), "", true};
+    }
+  }
+  record(event, false);
+  res.success = event.success;
+  res.message = event.message;
+  res.check = check_message();
   return true;
 }
 

@@ -198,5 +198,34 @@ void set_corners(const TargetCorners& corners, TagDetection& detection) {
   detection.camera_info = to_camera_info(corners.camera);
 }
 
+CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp) {
+  CalibrationCheckMsg msg;
+  msg.header.stamp = stamp;
+  msg.state = check.changed ? "changed" : "consistent";
+  msg.text = check.verdict;
+  msg.views_taken = msg.views_needed = static_cast<int>(check.views.size());
+  msg.p_value = check.p_value;
+  msg.alpha = check.alpha;
+  msg.chi2 = check.chi2;
+  msg.dof = check.dof;
+  if (check.changed) {
+    msg.changed = check.change.what;
+    const EstimatedChange::Delta& d = check.change.X_change ? *check.change.X_change : *check.change.Y_change;
+    for (int k = 0; k < 6; ++k) msg.change[static_cast<std::size_t>(k)] = d.value(k);
+    const std::array<double, 36> c = to_row_major_6x6(d.covariance);
+    std::copy(c.begin(), c.end(), msg.change_covariance.begin());
+  }
+  for (const CheckedView& v : check.views) {
+    msg.view_error_mm.push_back(v.translation_error * 1e3);
+    msg.view_sigma_mm.push_back(v.predicted_translation_sigma * 1e3);
+    msg.view_error_deg.push_back(v.rotation_error * 180.0 / M_PI);
+    msg.view_sigma_deg.push_back(v.predicted_rotation_sigma * 180.0 / M_PI);
+    msg.view_mahalanobis.push_back(v.mahalanobis);
+  }
+  msg.left_out = check.left_out;
+  msg.advice = check.advice;
+  return msg;
+}
+
 }  // namespace conversions
 }  // namespace handeye

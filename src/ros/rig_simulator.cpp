@@ -24,6 +24,9 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <image_transport/image_transport.h>
 #include <ros/ros.h>
+#include <std_msgs/Float64.h>
+
+#include <mutex>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/buffer.h>
@@ -113,6 +116,7 @@ class RigSimulator {
     pattern_msg.pose = conversions::to_pose_msg(trajectory_.T_world_pattern);
     pattern_truth_pub_.publish(pattern_msg);
 
+    bump_sub_ = pn.subscribe("bump_camera_mm", 1, &RigSimulator::on_bump, this);
     const std::string topic = param<std::string>(pn, "detections_topic", "tag_detections");
     if (output_ == "tags") detections_ = node.advertise<TagDetectionArray>(topic, 10);
     if (output_ == "pose_with_covariance") detections_ = node.advertise<geometry_msgs::PoseWithCovarianceStamped>(topic, 10);
@@ -153,7 +157,10 @@ class RigSimulator {
   /// The true T_camera_pattern at `capture`: the rig's own trajectory, or the arm's
   /// effector in TF (none when TF has no pose then, or the face is not whole in view).
   std::optional<Eigen::Isometry3d> view_at(const ros::Time& capture) {
-    if (!robot_from_tf_) return trajectory_.pattern_at(elapsed(capture));
+    if (!robot_from_tf_) {
+      return trajectory_.rig.predicted_view(trajectory_.effector_at(elapsed(capture)), camera_mount(capture),
+                                            trajectory_.T_world_pattern);
+    }
     if (blind_after_ > 0.0 && elapsed(capture) > blind_after_) return std::nullopt;
     geometry_msgs::TransformStamped E;
     try {
@@ -162,9 +169,32 @@ class RigSimulator {
       return std::nullopt;
     }
     const Eigen::Isometry3d P =
-        trajectory_.rig.predicted_view(conversions::to_eigen(E.transform), trajectory_.X, trajectory_.T_world_pattern);
+        trajectory_.rig.predicted_view(conversions::to_eigen(E.transform), camera_mount(capture), trajectory_.T_world_pattern);
     if (motion::view_problem(trajectory_.rig, std::nullopt, P, motion::PlannerOptions{})) return std::nullopt;
     return P;
+  }
+
+  /// X at `capture`: the truth, or after a bump (~bump_camera_mm, a test's fault) the camera
+  /// moved on its mount along its own x axis; ~truth follows it.
+  Eigen::Isometry3d camera_mount(const ros::Time& capture) const {
+    std::lock_guard<std::mutex> lock(bump_mutex_);
+    if (bumped_at_.isZero() || capture < bumped_at_) return trajectory_.X;
+    Eigen::Isometry3d X = trajectory_.X;
+    X.translation() += X.linear() * Eigen::Vector3d(bump_mm_ * 1e-3, 0.0, 0.0);
+    return X;
+  }
+
+  void on_bump(const std_msgs::Float64::ConstPtr& msg) {
+    {
+      std::lock_guard<std::mutex> lock(bump_mutex_);
+      bump_mm_ += msg->data;
+      bumped_at_ = ros::Time::now();
+    }
+    ROS_WARN("rig simulator: the camera moved %.2f mm on its mount (along its x axis)", msg->data);
+    geometry_msgs::PoseStamped truth;
+    truth.header.frame_id = setup_ == Setup::EyeInHand ? effector_ : base_;
+    truth.pose = conversions::to_pose_msg(camera_mount(ros::Time::now()));
+    truth_pub_.publish(truth);
   }
 
   void publish_tf(const ros::TimerEvent&) {
@@ -223,6 +253,10 @@ class RigSimulator {
     }
   }
 
+  mutable std::mutex bump_mutex_;
+  double bump_mm_ = 0.0;
+  ros::Time bumped_at_;
+  ros::Subscriber bump_sub_;
   Rng rng_;
   Setup setup_;
   std::string base_, effector_, camera_, pattern_frame_, output_, camera_link_, detection_frame_;

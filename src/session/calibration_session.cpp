@@ -111,7 +111,7 @@ SessionEvent CalibrationSession::take_sample(double now) {
 }
 
 SessionEvent CalibrationSession::start_check(Calibration calibration, int views) {
-  if (views < 1) return {false, false, "a check needs at least one view (5 is the figure it is measured at)", ""};
+  if (views < 1) return {false, false, "a check needs at least one view (5 is the figure it is measured at)", "", true};
   if (!calibration.pattern || !calibration.residual_noise) {
     return {false, false,
             "this calibration cannot be checked: it carries no pattern pose or no noise model (save it again with this "
@@ -127,9 +127,9 @@ SessionEvent CalibrationSession::start_check(Calibration calibration, int views)
 }
 
 SessionEvent CalibrationSession::cancel_check() {
-  if (!check_) return {false, false, "no check is collecting views", ""};
+  if (!check_) return {false, false, "no check is collecting views", "", true};
   check_.reset();
-  return {true, false, "check cancelled", ""};
+  return {true, false, "check cancelled", "", true};
 }
 
 CalibrationSession::CheckState CalibrationSession::check_state() const {
@@ -144,10 +144,10 @@ CalibrationSession::CheckState CalibrationSession::check_state() const {
 }
 
 SessionEvent CalibrationSession::check_view(const SampleOutcome& outcome) {
-  if (!outcome.accepted) return {false, false, "check: " + outcome.message, ""};
+  if (!outcome.accepted) return {false, false, "check: " + outcome.message, "", true};
   const int taken = static_cast<int>(check_->views.samples().size());
   if (taken < check_->needed) {
-    return {true, false, "check: view " + std::to_string(taken) + " of " + std::to_string(check_->needed) + " taken", ""};
+    return {true, false, "check: view " + std::to_string(taken) + " of " + std::to_string(check_->needed) + " taken", "", true};
   }
   SampleSet views;  // as sample_set() is made, from the check's own views
   views.rig = settings_.rig;
@@ -158,9 +158,9 @@ SessionEvent CalibrationSession::check_view(const SampleOutcome& outcome) {
   try {
     check_result_ = check_calibration(calibration, with_default_noise(views));
   } catch (const HandEyeError& e) {
-    return {false, false, std::string("check: ") + e.what(), ""};
+    return {false, false, std::string("check: ") + e.what(), "", true};
   }
-  return {true, false, "check: " + check_result_->verdict, ""};
+  return {true, false, "check: " + check_result_->verdict, "", true};
 }
 
 SessionEvent CalibrationSession::remove(int index) {
@@ -196,13 +196,13 @@ SessionEvent CalibrationSession::load(const std::string& path) {
     const std::size_t n = loaded.samples.size();
     return replace(loaded.samples, "loaded " + std::to_string(n) + " samples from " + path);
   } catch (const HandEyeError& e) {
-    return {false, false, e.what(), ""};  // the current samples are kept
+    return {false, false, e.what(), "", true};  // the current samples are kept
   }
 }
 
 SessionEvent CalibrationSession::resume() {
   if (settings_.session_file.empty() || !std::filesystem::exists(settings_.session_file)) {
-    return {false, false, "no session file to resume from", ""};
+    return {false, false, "no session file to resume from", "", true};
   }
   SessionEvent event = load(settings_.session_file);
   if (event.success) event.message = "resumed " + std::to_string(samples().size()) + " samples";
@@ -212,9 +212,9 @@ SessionEvent CalibrationSession::resume() {
 SessionEvent CalibrationSession::save(const std::string& path) const {
   try {
     io::write_file_atomically(expand_home(path), io::format_samples(sample_set()));
-    return {true, false, "saved " + std::to_string(samples().size()) + " samples to " + expand_home(path), ""};
+    return {true, false, "saved " + std::to_string(samples().size()) + " samples to " + expand_home(path), "", true};
   } catch (const HandEyeError& e) {
-    return {false, false, e.what(), ""};
+    return {false, false, e.what(), "", true};
   }
 }
 

@@ -58,6 +58,12 @@ class CalibrationNode {
   bool load_samples(LoadSamples::Request&, LoadSamples::Response&);
   bool save_calibration(SaveCalibration::Request&, SaveCalibration::Response&);
   bool suggest_pose(SuggestPose::Request&, SuggestPose::Response&);
+  bool check_calibration(CheckCalibration::Request&, CheckCalibration::Response&);
+  /// The calibration a check tests: the last /calibrate's, else the saved calibration_file
+  /// (read whole: Y, the cross block, the noise model). Throws HandEyeError. Lock held.
+  Calibration calibration_to_check() const;
+  /// ~check: the check's state (collecting) or its finished result. Lock held.
+  CalibrationCheckMsg check_message() const;
 
   /// After a change of the session (lock held): log it, wake the worker, publish
   /// ~status. The last analysis stays on ~status while the worker catches up only
@@ -88,7 +94,7 @@ class CalibrationNode {
   StaticEdges tf_edges_;  // X, and Y with publish_pattern_tf (output_mutex_)
   ros::Subscriber detections_;
   ros::Timer tf_poll_, status_timer_, tf_refresh_;
-  ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_, next_pose_pub_;
+  ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_, next_pose_pub_, check_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Time last_tf_stamp_;     // detection thread only
   // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:

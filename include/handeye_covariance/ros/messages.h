@@ -3,6 +3,8 @@
 
 #include "handeye_covariance/AutoCalibrateAction.h"
 #include "handeye_covariance/Calibrate.h"
+#include "handeye_covariance/CalibrationCheck.h"
+#include "handeye_covariance/CheckCalibration.h"
 #include "handeye_covariance/CalibrationStatus.h"
 #include "handeye_covariance/ListSamples.h"
 #include "handeye_covariance/LoadSamples.h"
@@ -22,6 +24,8 @@ using handeye_covariance::AutoCalibrateGoal;
 using handeye_covariance::AutoCalibrateResult;
 using handeye_covariance::Calibrate;
 using handeye_covariance::CalibrationStatus;
+using handeye_covariance::CheckCalibration;
+using CalibrationCheckMsg = handeye_covariance::CalibrationCheck;
 using handeye_covariance::ListSamples;
 using handeye_covariance::LoadSamples;
 using handeye_covariance::RemoveSample;

@@ -17,6 +17,7 @@
 
 #include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/pose_covariance.h"
+#include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/ros/messages.h"
 
 namespace handeye {
@@ -56,6 +57,9 @@ std::shared_ptr<TargetCorners> to_corners(const TagDetection& detection);
 void set_corners(const TargetCorners& corners, TagDetection& detection);
 
 /// |q| of a message quaternion, to refuse non-unit ones before use.
+/// A finished check (state consistent or changed; mm and degrees for the views' table).
+CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp);
+
 double quaternion_norm(const geometry_msgs::Quaternion& q);
 
 }  // namespace conversions

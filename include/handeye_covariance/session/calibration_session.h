@@ -72,6 +72,7 @@ struct SessionEvent {
   bool changed = false;       // the samples changed (generation() moved on)
   std::string message;        // "accepted sample 4", "removed sample 2", or why not
   std::string persist_error;  // non-empty: the session file could not be written
+  bool check = false;         // an event of the check of a saved calibration (check_state() says more)
 };
 
 /// The samples at one moment, with their noise model: what the computations use.
