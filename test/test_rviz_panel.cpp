@@ -18,6 +18,7 @@
 #include <QTimer>
 
 #include <rviz/visualization_frame.h>
+#include <std_msgs/Float64.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <cstdio>
@@ -83,7 +84,7 @@ QString mm(double value) { return QString::number(value, 'f', 2); }
 QString deg(double value) { return QString::number(value, 'f', 3); }
 
 TEST(RvizPanel, DrivesTheCalibrationNodeAndShowsWhatItsStatusSays) {
-  if (test_case == "motion") GTEST_SKIP() << "the motion case (rviz_panel_motion.test)";
+  if (!test_case.empty()) GTEST_SKIP() << "the " << test_case << " case (rviz_panel_" << test_case << ".test)";
   ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
   test::StatusWatcher status(kNs + "handeye_calibration/status");
   visualization_msgs::MarkerArray next_pose;
@@ -286,6 +287,53 @@ TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
   ASSERT_TRUE(pump_until([&] { return status.latest.target_reached; }, 10.0));
   std::printf("[rviz panel] %s (%d samples)\n", motion->text().toStdString().c_str(), status.latest.samples);
   screenshot("rviz_panel_motion.png");
+  frame.reset();
+}
+
+// Check against the simulated rig (test/rviz_panel_check.test): Calibrate, then the rig's
+// camera moves 3 mm on its mount and Check takes 5 new views: the panel shows the verdict
+// (X changed, in red) and the views' table, each view's error against its predicted 1 sigma.
+TEST(RvizPanel, ChecksTheCalibrationAndShowsABumpedCamera) {
+  if (test_case != "check") GTEST_SKIP() << "needs rviz_panel_check.test";
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
+  test::StatusWatcher status(kNs + "handeye_calibration/status");
+  ros::NodeHandle nh;
+  ros::Publisher bump = nh.advertise<std_msgs::Float64>("/rig_simulator/bump_camera_mm", 1, true);
+  const test::DisplayLock display;
+  std::unique_ptr<rviz::VisualizationFrame> frame;
+  QWidget* panel = nullptr;
+  ASSERT_NO_FATAL_FAILURE(open_rviz(frame, panel));
+  auto* calibrate = panel->findChild<QPushButton*>("calibrate");
+  auto* check = panel->findChild<QPushButton*>("check_calibration");
+  auto* verdict = panel->findChild<QLabel*>("check_label");
+  auto* views = panel->findChild<QTableWidget*>("check_views");
+  auto* reply = panel->findChild<QLabel*>("reply_label");
+  ASSERT_TRUE(calibrate && check && verdict && views && reply);
+  EXPECT_FALSE(views->isVisible());  // no check yet
+
+  ASSERT_TRUE(pump_until([&] { return status.received && status.latest.samples >= 10; }, 90.0))
+      << status.latest.samples << " samples";
+  press(calibrate);
+  ASSERT_TRUE(pump_until([&] { return reply->text().contains("Calibrated"); }, 60.0)) << reply->text().toStdString();
+  const int samples = status.latest.samples;
+
+  std_msgs::Float64 mm;
+  mm.data = 3.0;
+  bump.publish(mm);
+  pump_until([] { return false; }, 0.5);
+  press(check);
+  ASSERT_TRUE(pump_until([&] { return verdict->text().contains("collecting"); }, 10.0)) << verdict->text().toStdString();
+  ASSERT_TRUE(pump_until([&] { return verdict->text().contains("changed") || verdict->text().contains("consistent"); },
+                         60.0))
+      << verdict->text().toStdString();
+  EXPECT_TRUE(verdict->text().contains("X changed")) << verdict->text().toStdString();
+  EXPECT_TRUE(verdict->text().contains("#e05050")) << "a change is shown in red";
+  ASSERT_TRUE(views->isVisible());
+  ASSERT_EQ(views->rowCount(), 5);
+  for (int i = 0; i < 5; ++i) EXPECT_GT(views->item(i, 2)->text().toDouble(), 0.0) << "a predicted 1 sigma per view";
+  EXPECT_LE(status.latest.samples, samples + 1) << "the check's views are not the calibration's samples";
+  std::printf("[rviz panel] %s\n", verdict->text().toStdString().c_str());
+  screenshot("rviz_panel_check.png");
   frame.reset();
 }
 

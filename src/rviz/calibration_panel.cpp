@@ -77,6 +77,7 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   event_label_ = label("event_label");
   reply_label_ = label("reply_label");
   motion_label_ = label("motion_label");
+  check_label_ = label("check_label");
 
   take_button_ = button("Take sample", "take_sample", "Sample the current robot pose and detection (the robot must stand still)");
   remove_button_ = button("Remove selected", "remove_sample", "Remove the sample selected in the table");
@@ -89,6 +90,9 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
                         "Move the arm to the next view the session ranks (planned and checked first) and sample there");
   auto_button_ = button("Auto", "auto_calibrate", "Plan, move and sample until the target object error (Stop stops it)");
   stop_button_ = button("Stop", "stop_motion", "Stop the arm at once (a hold trajectory)");
+  check_button_ = button("Check", "check_calibration",
+                         "Is the calibration still right? Takes 5 new views (as samples are taken) into a list of their "
+                         "own and tests them against X, Y and their covariance: consistent, or X / Y changed");
   auto* buttons = new QGridLayout;
   buttons->addWidget(take_button_, 0, 0);
   buttons->addWidget(remove_button_, 0, 1);
@@ -99,6 +103,7 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   buttons->addWidget(move_button_, 2, 0);
   buttons->addWidget(auto_button_, 2, 1);
   buttons->addWidget(stop_button_, 2, 2);
+  buttons->addWidget(check_button_, 3, 0);
 
   table_ = new QTableWidget(0, 5);
   table_->setObjectName("samples");
@@ -112,6 +117,16 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   table_->setSelectionMode(QAbstractItemView::SingleSelection);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
 
+  check_table_ = new QTableWidget(0, 6);
+  check_table_->setObjectName("check_views");
+  check_table_->setHorizontalHeaderLabels({"view", "mm", "1σ mm", "deg", "1σ deg", "sigma"});
+  check_table_->horizontalHeaderItem(1)->setToolTip("the view's error against what the calibration predicts");
+  check_table_->horizontalHeaderItem(2)->setToolTip("the error's RMS the calibration predicts for this view");
+  check_table_->horizontalHeaderItem(5)->setToolTip("Mahalanobis length (6 dof): about 2.3 on average when nothing changed");
+  check_table_->verticalHeader()->setVisible(false);
+  check_table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  check_table_->setVisible(false);  // until a check has views
+
   auto* layout = new QVBoxLayout;
   layout->addLayout(top);
   layout->addWidget(samples_label_);
@@ -120,6 +135,8 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   layout->addWidget(target_label_);
   layout->addLayout(buttons);
   layout->addWidget(motion_label_);
+  layout->addWidget(check_label_);
+  layout->addWidget(check_table_);
   layout->addWidget(reply_label_);
   layout->addWidget(table_, 1);
   layout->addWidget(event_label_);
@@ -136,6 +153,7 @@ CalibrationPanel::CalibrationPanel(QWidget* parent) : rviz::Panel(parent) {
   connect(move_button_, &QPushButton::clicked, this, &CalibrationPanel::move);
   connect(auto_button_, &QPushButton::clicked, this, &CalibrationPanel::auto_calibrate);
   connect(stop_button_, &QPushButton::clicked, this, &CalibrationPanel::stop_motion);
+  connect(check_button_, &QPushButton::clicked, this, &CalibrationPanel::check_calibration);
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, &CalibrationPanel::check_connection);
   reply_timer_ = new QTimer(this);
@@ -194,11 +212,17 @@ bool CalibrationPanel::set_namespace(const QString& text) {
                                                     motion_label_->setText("<b>Motion</b> " +
                                                                            QString::fromStdString(m->data).toHtmlEscaped());
                                                   });
+  check_sub_ = node_.subscribe<CalibrationCheckMsg>(ns + "handeye_calibration/check", 1,
+                                                   [this](const CalibrationCheckMsg::ConstPtr& c) { on_check(c); });
+  check_table_->setRowCount(0);
+  check_table_->setVisible(false);
   namespace_box_->setEditText(QString::fromStdString(namespace_));
   have_status_ = false;
   status_ = CalibrationStatus();
   table_->setRowCount(0);
-  for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_, motion_label_}) l->clear();
+  for (QLabel* l : {sigma_label_, object_label_, target_label_, event_label_, reply_label_, motion_label_, check_label_}) {
+    l->clear();
+  }
   samples_label_->setText("Waiting for " + QString::fromStdString(namespace_ + kStatusSuffix).toHtmlEscaped() + " ...");
   last_status_ = ros::WallTime::now();
   return true;
@@ -339,7 +363,7 @@ void CalibrationPanel::show_reply(const QString& text, bool success) {
 void CalibrationPanel::set_busy(bool busy) {
   calls_in_flight_ = std::max(0, calls_in_flight_ + (busy ? 1 : -1));
   for (QPushButton* b : {take_button_, remove_button_, calibrate_button_, save_button_, reset_button_, suggest_button_,
-                         move_button_, auto_button_}) {
+                         move_button_, auto_button_, check_button_}) {
     b->setEnabled(calls_in_flight_ == 0);
   }
 }
@@ -351,6 +375,47 @@ QString trigger_reply(const std_srvs::Trigger& s) { return QString::fromStdStrin
 void CalibrationPanel::move() { call<std_srvs::Trigger>("move", {}, trigger_reply); }
 void CalibrationPanel::auto_calibrate() { call<std_srvs::Trigger>("auto_calibrate", {}, trigger_reply); }
 void CalibrationPanel::stop_motion() { call<std_srvs::Trigger>("stop_motion", {}, trigger_reply); }
+
+void CalibrationPanel::check_calibration() {
+  CheckCalibration srv;
+  srv.request.views = 5;
+  call<CheckCalibration>("check_calibration", srv, [](const CheckCalibration& c) {
+    return QString::fromStdString(c.response.message).toHtmlEscaped();
+  });
+}
+
+void CalibrationPanel::on_check(const CalibrationCheckMsg::ConstPtr& c) {
+  const QString text = QString::fromStdString(c->text).toHtmlEscaped();
+  if (c->state == "collecting") {
+    check_label_->setText(QString("<b>Check</b> %1").arg(text));
+    return;
+  }
+  const QString colour = c->state == "changed" ? "#e05050" : c->state == "consistent" ? "#2e9e44" : "#d9822b";
+  QString advice;
+  for (const std::string& a : c->advice) advice += "<br>" + QString::fromStdString(a).toHtmlEscaped();
+  check_label_->setText(QString("<b>Check</b> <span style='color:%1'><b>%2</b></span>: %3%4")
+                            .arg(colour, QString::fromStdString(c->state).toHtmlEscaped(), text, advice));
+  // Any publisher may speak on ~check: lengths are checked, not assumed.
+  const std::size_t n = c->view_error_mm.size();
+  const bool whole = c->view_sigma_mm.size() == n && c->view_error_deg.size() == n && c->view_sigma_deg.size() == n &&
+                     c->view_mahalanobis.size() == n;
+  check_table_->setRowCount(whole ? static_cast<int>(n) : 0);
+  for (std::size_t i = 0; whole && i < n; ++i) {
+    const bool left_out = std::find(c->left_out.begin(), c->left_out.end(), static_cast<int>(i)) != c->left_out.end();
+    const QStringList cells = {QString::number(i) + (left_out ? " (left out)" : ""), mm(c->view_error_mm[i]),
+                               mm(c->view_sigma_mm[i]), deg(c->view_error_deg[i]), deg(c->view_sigma_deg[i]),
+                               QString::number(c->view_mahalanobis[i], 'f', 1)};
+    for (int column = 0; column < cells.size(); ++column) {
+      auto* item = new QTableWidgetItem(cells[column]);
+      if (column > 0) item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
+      // Beyond 4 sigma: chi2(6) above 16, 1.4% of the views when nothing changed.
+      if (c->view_mahalanobis[i] > 4.0) item->setBackground(QColor(120, 40, 40));
+      check_table_->setItem(static_cast<int>(i), column, item);
+    }
+  }
+  check_table_->resizeColumnsToContents();
+  check_table_->setVisible(whole && n > 0);
+}
 
 void CalibrationPanel::take_sample() {
   call<TakeSample>("take_sample", {}, [](const TakeSample& s) {

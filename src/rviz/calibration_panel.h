@@ -56,6 +56,9 @@ class CalibrationPanel : public rviz::Panel {
   void move();
   void auto_calibrate();
   void stop_motion();
+  /// A check of the calibration from 5 new views (/check_calibration); the verdict and
+  /// the views' table follow ~check.
+  void check_calibration();
   /// Once a second: a status that stopped coming, and the namespaces on offer.
   void check_connection();
   /// The replies of finished service calls, shown on rviz's thread.
@@ -66,6 +69,7 @@ class CalibrationPanel : public rviz::Panel {
   /// refuses is not taken: false, with the reason under the buttons.
   bool set_namespace(const QString& ns);
   void on_status(const CalibrationStatus::ConstPtr& status);
+  void on_check(const CalibrationCheckMsg::ConstPtr& check);
   /// Calls `<ns><service>` off rviz's thread; `describe` turns the reply into the
   /// line shown under the buttons.
   template <class Service>
@@ -81,7 +85,7 @@ class CalibrationPanel : public rviz::Panel {
   std::vector<std::shared_ptr<Reply>> pending_;
 
   ros::NodeHandle node_;
-  ros::Subscriber status_sub_, motion_sub_;
+  ros::Subscriber status_sub_, motion_sub_, check_sub_;
   std::string namespace_;  // with a leading and a trailing '/'
   CalibrationStatus status_;
   ros::WallTime last_status_;
@@ -89,10 +93,12 @@ class CalibrationPanel : public rviz::Panel {
   int calls_in_flight_ = 0;
 
   QComboBox* namespace_box_;
-  QLabel *samples_label_, *sigma_label_, *object_label_, *target_label_, *event_label_, *reply_label_, *motion_label_;
+  QLabel *samples_label_, *sigma_label_, *object_label_, *target_label_, *event_label_, *reply_label_, *motion_label_,
+      *check_label_;
   QPushButton *take_button_, *remove_button_, *calibrate_button_, *save_button_, *reset_button_, *suggest_button_;
   QPushButton *move_button_, *auto_button_, *stop_button_;  // Stop is never disabled
-  QTableWidget* table_;
+  QPushButton* check_button_;
+  QTableWidget *table_, *check_table_;  // the samples; the last check's views
   QTimer *timer_, *reply_timer_;
 };
 
