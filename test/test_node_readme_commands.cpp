@@ -64,6 +64,18 @@ TEST(ReadmeCommands, StatusEchoAndCalibrateCallWorkAsTyped) {
   EXPECT_TRUE(contains(save.output, "success: True")) << save.output;
   EXPECT_TRUE(contains(save.output, "report: \"" + dir + "/report/report.html\"")) << save.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/report/residuals.png")) << save.output;
+
+  // "Check a calibration later", in the node: start a check, its state on ~check, cancel it.
+  const Shell check = shell("timeout 30 rosservice call " + ns + "/check_calibration \"{views: 5}\"");
+  ASSERT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_TRUE(contains(check.output, "success: True")) << check.output;
+  const Shell state = shell("timeout 30 rostopic echo -n 1 " + ns + "/handeye_calibration/check");
+  ASSERT_EQ(state.exit_code, 0) << state.output;
+  EXPECT_FALSE(contains(state.output, "Cannot load message class")) << state.output;
+  EXPECT_TRUE(contains(state.output, "state: \"collecting\"")) << state.output;
+  const Shell cancel = shell("timeout 30 rosservice call " + ns + "/check_calibration \"{cancel: true}\"");
+  ASSERT_EQ(cancel.exit_code, 0) << cancel.output;
+  EXPECT_TRUE(contains(cancel.output, "success: True")) << cancel.output;
 }
 
 }  // namespace
