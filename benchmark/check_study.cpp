@@ -19,9 +19,10 @@ namespace {
 using namespace handeye;
 
 void row(const char* what, const CheckStudyResult& r, double multiple) {
-  std::printf("| %s | %.0f | %.1f%% | %.1f%% | %s | %s |\n", what, multiple, 100.0 * r.rate(), 100.0 * r.bound,
-              multiple > 0.0 ? (std::to_string(static_cast<int>(1000.0 * r.two_hypothesis_bound + 0.5) / 10.0).substr(0, 4) + "%").c_str() : "-",
-              multiple > 0.0 && r.changed > 0 ? (std::to_string(static_cast<int>(1000.0 * r.named_right() + 0.5) / 10.0).substr(0, 4) + "%").c_str() : "-");
+  char two[16] = "-", named[16] = "-";
+  if (multiple > 0.0) std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
+  if (multiple > 0.0 && r.changed > 0) std::snprintf(named, sizeof named, "%.1f%%", 100.0 * r.named_right());
+  std::printf("| %s | %.0f | %.1f%% | %.1f%% | %s | %s |\n", what, multiple, 100.0 * r.rate(), 100.0 * r.bound, two, named);
 }
 
 }  // namespace

@@ -320,6 +320,21 @@ std::vector<RealCase> real_cases() {
   };
 }
 
+/// A session on both paths a user has: the images with the detector's covariances
+/// (handeye images), and the same images' poses without a covariance (a detector that
+/// publishes a plain PoseStamped; the target's size known).
+std::vector<std::pair<std::string, SampleSet>> both_paths(const RealCase& c) {
+  Rig rig{c.setup, {"base", "effector", "camera", "pattern"}};
+  set_target(rig, c.target);
+  const images::ImageSession found = images::detect_images(images::pair_images_with_poses(c.dir, c.dir),
+                                                           images::read_camera((c.dir / "camera_info.yaml").string()),
+                                                           c.target, rig);
+  SampleSet poses = found.samples;  // the second path: no covariance anywhere
+  poses.noise.reset();
+  for (PoseSample& s : poses.samples) s.noise.reset(), s.corners.reset();
+  return {{"images", found.samples}, {"poses without a covariance", poses}};
+}
+
 // Every real session on both paths, as a user runs them: the images with the
 // detector's covariances (handeye images), and the same images' poses without a
 // covariance (a detector that publishes a plain PoseStamped; the target's size
@@ -332,16 +347,8 @@ std::vector<RealCase> real_cases() {
 TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
   for (const RealCase& c : real_cases()) {
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
-    Rig rig{c.setup, {"base", "effector", "camera", "pattern"}};
-    set_target(rig, c.target);
-    const images::ImageSession found = images::detect_images(images::pair_images_with_poses(c.dir, c.dir),
-                                                             images::read_camera((c.dir / "camera_info.yaml").string()),
-                                                             c.target, rig);
-    SampleSet poses = found.samples;  // the second path: no covariance anywhere
-    poses.noise.reset();
-    for (PoseSample& s : poses.samples) s.noise.reset(), s.corners.reset();
-    for (const auto& [path, samples] : {std::pair<const char*, const SampleSet*>{"images", &found.samples},
-                                        {"poses without a covariance", &poses}}) {
+    for (const auto& [path, samples_on_path] : both_paths(c)) {
+      const SampleSet* samples = &samples_on_path;
       CalibrationSession session(session_settings(*samples));
       session.replace(samples->samples, c.name);
       const Calibration cal = session.calibrate_checked(session.snapshot());
@@ -353,7 +360,7 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
       std::printf("[honesty, real %s, %s, %zu samples] split-half NEES %.2f against %.2f (5-95%% %.2f to %.2f): ratio "
                   "%.3f, %s; covariance x%.3f; X - published [%.2f %.2f %.2f] mm [%.3f %.3f %.3f] deg, in its sigma "
                   "[%.2f %.2f %.2f %.2f %.2f %.2f]; noise: %s\n",
-                  c.name, path, samples->samples.size(), h.split_half_nees, h.reference_mean, h.reference_low,
+                  c.name, path.c_str(), samples->samples.size(), h.split_half_nees, h.reference_mean, h.reference_low,
                   h.reference_high, h.ratio, h.text.c_str(), h.inflation, error(0) * 1e3, error(1) * 1e3, error(2) * 1e3,
                   error(3) * 180 / M_PI, error(4) * 180 / M_PI, error(5) * 180 / M_PI, error(0) / sigma(0),
                   error(1) / sigma(1), error(2) / sigma(2), error(3) / sigma(3), error(4) / sigma(4), error(5) / sigma(5),
@@ -382,16 +389,8 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
 TEST(RealData, ChecksOfACalibrationOnEverySession) {
   for (const RealCase& c : real_cases()) {
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
-    Rig rig{c.setup, {"base", "effector", "camera", "pattern"}};
-    set_target(rig, c.target);
-    const images::ImageSession found = images::detect_images(images::pair_images_with_poses(c.dir, c.dir),
-                                                             images::read_camera((c.dir / "camera_info.yaml").string()),
-                                                             c.target, rig);
-    SampleSet poses = found.samples;
-    poses.noise.reset();
-    for (PoseSample& s : poses.samples) s.noise.reset(), s.corners.reset();
-    for (const auto& [path, samples] : {std::pair<const char*, const SampleSet*>{"images", &found.samples},
-                                        {"poses without a covariance", &poses}}) {
+    for (const auto& [path, samples_on_path] : both_paths(c)) {
+      const SampleSet* samples = &samples_on_path;
       double inflation = 1.0;
       {
         CalibrationSession whole(session_settings(*samples));
@@ -452,7 +451,7 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       std::printf("[check, real %s, %s, %d samples, %d per check, covariance x%.2f] %d splits: false alarms %.1f%%; "
                   "camera moved 2 mm: detected %.1f%% (%d of %d splits whose 5 sigma <= 2 mm: %.1f%%); detectable change "
                   "(5 sigma along the move, median) %.2f mm\n",
-                  c.name, path, n, k, inflation, splits, 100.0 * alarm_rate, splits ? 100.0 * detected / splits : 0.0,
+                  c.name, path.c_str(), n, k, inflation, splits, 100.0 * alarm_rate, splits ? 100.0 * detected / splits : 0.0,
                   detected_allowed, allowed, allowed ? 100.0 * detected_allowed / allowed : 0.0, median * 1e3);
       EXPECT_GE(splits, 150) << c.name << ", " << path;
       // Not reached on the images of the two 8-view Franka sessions (5.5% and 15%): a
@@ -460,7 +459,7 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       // covariance understates its error beyond the scale the other views fit; their
       // poses without a covariance give 0%. kuka_2's poses: 3.5% (7 of 200). Asserted as
       // reached; the note says so.
-      const bool short_images = n < 10 && std::string(path) == "images";
+      const bool short_images = n < 10 && path == "images";
       EXPECT_LE(alarm_rate, short_images ? 0.2 : 0.04) << c.name << ", " << path;
       if (allowed >= 20) EXPECT_GE(static_cast<double>(detected_allowed) / allowed, 0.9) << c.name << ", " << path;
     }
