@@ -93,23 +93,17 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   };
 
   detection_node_.setCallbackQueue(&detection_queue_);
-  const std::string& topic = config_.detections_topic;
-  using geometry_msgs::PoseStamped;
-  using geometry_msgs::PoseWithCovarianceStamped;
-  if (config_.detection_input == "tags") {
-    detections_ = detection_node_.subscribe(topic, 50, &CalibrationNode::on_tags, this);
-  } else if (config_.detection_input == "pose_with_covariance") {
-    detections_ = detection_node_.subscribe<PoseWithCovarianceStamped>(
-        topic, 50, [this](const PoseWithCovarianceStamped::ConstPtr& msg) { observe(detection_of(*msg)); });
-  } else if (config_.detection_input == "pose") {
-    detections_ = detection_node_.subscribe<PoseStamped>(
-        topic, 50, [this](const PoseStamped::ConstPtr& msg) { observe(detection_of(*msg)); });
-  } else if (config_.detection_input == "tf") {
-    tf_poll_ = detection_node_.createTimer(ros::Duration(1.0 / config_.tf_poll_rate), &CalibrationNode::on_tf_poll, this);
-  } else {
-    throw std::invalid_argument("~detection_input must be tags, pose_with_covariance, pose or tf, not `" +
-                                config_.detection_input + "`");
-  }
+  input_ = std::make_unique<DetectionInput>(
+      detection_node_, config_.detection_input, config_.detections_topic, config_.tag_ids, config_.tf_poll_rate,
+      tf_buffer_, config_.rig.frames, [this](const Detection& d) { observe(d); },
+      [this](const ros::Time& stamp, const std::optional<Refusal>& refusal) {
+        if (refusal) {
+          ROS_WARN_THROTTLE(2.0, "sample refused: %s", refusal->message.c_str());
+          std::lock_guard<std::mutex> lock(mutex_);
+          last_event_ = "refused: " + refusal->message;
+        }
+        record_handled(stamp);
+      });
   status_timer_ = node_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     publish_status();
@@ -152,7 +146,7 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
   const Rig& rig = config_.rig;
   ROS_INFO("handeye calibration (%s): X = T_%s_%s; pattern from %s (%s); %zu samples", to_string(rig.setup),
            rig.camera_parent_frame().c_str(), rig.frames.camera.c_str(), config_.detection_input.c_str(),
-           config_.detection_input == "tf" ? rig.frames.pattern.c_str() : topic.c_str(), session_.samples().size());
+           config_.detection_input == "tf" ? rig.frames.pattern.c_str() : config_.detections_topic.c_str(), session_.samples().size());
   if (session_.settings().rig.symmetric_face) {
     ROS_WARN("the target (%s) looks the same turned by 180 degrees: each view's pose is one of two candidates, "
              "decided from the robot's motion on /calibrate (views that cannot be decided are left out and named). A "
@@ -172,34 +166,6 @@ CalibrationNode::~CalibrationNode() {
 }
 
 // ------------------------------------------------------------------ inputs (detection thread)
-
-void CalibrationNode::on_tags(const TagDetectionArray::ConstPtr& msg) {
-  std::optional<Refusal> refusal;
-  const std::optional<Detection> detection = select_detection(*msg, config_.tag_ids, refusal);
-  if (refusal) {
-    ROS_WARN_THROTTLE(2.0, "sample refused: %s", refusal->message.c_str());
-    std::lock_guard<std::mutex> lock(mutex_);
-    last_event_ = "refused: " + refusal->message;
-  }
-  if (detection) {
-    observe(*detection);
-  } else {
-    record_handled(msg->header.stamp);
-  }
-}
-
-void CalibrationNode::on_tf_poll(const ros::TimerEvent&) {
-  geometry_msgs::TransformStamped latest;
-  try {
-    // The latest camera -> pattern transform; its own stamp is then used for the robot.
-    latest = tf_buffer_.lookupTransform(config_.rig.frames.camera, config_.rig.frames.pattern, ros::Time(0));
-  } catch (const tf2::TransformException&) {
-    return;  // pattern not seen (yet)
-  }
-  if (latest.header.stamp <= last_tf_stamp_) return;  // nothing new
-  last_tf_stamp_ = latest.header.stamp;
-  observe(detection_of(latest));
-}
 
 void CalibrationNode::observe(const Detection& detection) {
   // TF is filled live: wait (up to tf_timeout) for it to reach the detection's stamp.

@@ -26,6 +26,7 @@
 
 #include "handeye_covariance/session/session_config.h"
 #include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/detection_input.h"
 #include "handeye_covariance/ros/observations.h"
 #include "handeye_covariance/ros/static_edges.h"
 #include "handeye_covariance/ros/arm_mover.h"
@@ -42,9 +43,7 @@ class CalibrationNode {
   ~CalibrationNode();
 
  private:
-  // Inputs, on the detection thread: each gives a detection of the pattern (observations.h).
-  void on_tags(const TagDetectionArray::ConstPtr& msg);
-  void on_tf_poll(const ros::TimerEvent&);
+  // Inputs, on the detection thread (detection_input.h): each gives a detection of the pattern.
   void observe(const Detection& detection);
   /// Counts a handled detection and its age (now - stamp) for ~status.
   void record_handled(const ros::Time& stamp);
@@ -92,11 +91,10 @@ class CalibrationNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   StaticEdges tf_edges_;  // X, and Y with publish_pattern_tf (output_mutex_)
-  ros::Subscriber detections_;
-  ros::Timer tf_poll_, status_timer_, tf_refresh_;
+  std::unique_ptr<DetectionInput> input_;
+  ros::Timer status_timer_, tf_refresh_;
   ros::Publisher calibration_pub_, pattern_pub_, estimate_pub_, status_pub_, markers_pub_, next_pose_pub_, check_pub_;
   std::vector<ros::ServiceServer> services_;
-  ros::Time last_tf_stamp_;     // detection thread only
   // /calibrate's outputs (the TF, the result file, calibration_) one call at a time:
   // the spinner has two threads.
   std::mutex output_mutex_;
