@@ -31,17 +31,6 @@ double quantile(std::vector<double> values, double q) {
   return values[k];
 }
 
-/// The node's settings: ~parameters over the defaults, default file names as easy_handeye's.
-SessionConfig read_config(const ros::NodeHandle& private_node) {
-  SessionConfig config;
-  load_session_config(private_node, config);
-  const std::string dir = "~/.ros/handeye_covariance/";
-  if (config.calibration_file.empty()) config.calibration_file = dir + config.name() + ".yaml";
-  if (config.session_file.empty()) config.session_file = dir + config.name() + "_samples.yaml";
-  config.calibration_file = io::expand_home(config.calibration_file);
-  return config;
-}
-
 /// The session's settings, with the corner estimator for method corners.
 SessionSettings node_session_settings(const SessionConfig& config) {
   SessionSettings settings = session_settings(config);
@@ -60,7 +49,7 @@ geometry_msgs::PoseStamped stamped(const Eigen::Isometry3d& E, const std::string
 }  // namespace
 
 CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node)
-    : config_(read_config(private_node)),
+    : config_(node_session_config(private_node)),
       node_(node),
       private_node_(private_node),
       detection_node_(node),

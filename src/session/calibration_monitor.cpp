@@ -62,6 +62,9 @@ std::optional<MonitorVerdict> CalibrationMonitor::observe(const Observation& obs
                   : p < options_.warn_alpha ? MonitorLevel::Warn
                                             : MonitorLevel::Ok;
   verdict.message = verdict.check->verdict;
+  if (verdict.check->changed && verdict.views == options_.window) {
+    verdict.message += " (a window of views that straddles the change names it only once all its views come after it)";
+  }
   latest_ = verdict;
   return verdict;
 }

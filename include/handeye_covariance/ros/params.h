@@ -7,6 +7,7 @@
 
 #include <string>
 
+#include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/session_config.h"
 
 namespace handeye {
@@ -35,6 +36,18 @@ inline void load_session_config(const ros::NodeHandle& nh, SessionConfig& config
       }
     }
   });
+}
+
+/// A node's settings: ~parameters over the defaults, the default file names as
+/// easy_handeye's (~/.ros/handeye_covariance/<namespace>[_samples].yaml).
+inline SessionConfig node_session_config(const ros::NodeHandle& private_node) {
+  SessionConfig config;
+  load_session_config(private_node, config);
+  const std::string dir = "~/.ros/handeye_covariance/";
+  if (config.calibration_file.empty()) config.calibration_file = dir + config.name() + ".yaml";
+  if (config.session_file.empty()) config.session_file = dir + config.name() + "_samples.yaml";
+  config.calibration_file = io::expand_home(config.calibration_file);
+  return config;
 }
 
 }  // namespace handeye

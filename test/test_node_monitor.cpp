@@ -1,0 +1,113 @@
+// Client of monitor.test: the monitor of publish.launch monitor:=true (ros/calibration_monitor_node.h)
+// against the simulated rig. The test writes a calibration of the rig (20 simulated views of its
+// truth, the rig's detection noise, solved as `handeye solve` does), starts publish.launch
+// monitor:=true in a shell as a user types it, and watches /diagnostics: no ERROR over 200
+// still views; after the rig's camera moves 3 mm on its mount, ERROR within 10 still views,
+// and X named on ~check once the window holds only views after the bump. The published TF stays the saved X throughout.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <signal.h>
+#include <std_msgs/Float64.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "handeye_covariance/io/yaml_io.h"
+#include "handeye_covariance/ros/messages.h"
+#include "handeye_covariance/ros/msg_conversion.h"
+#include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/simulation/simulation.h"
+#include "node_test_helpers.h"
+
+namespace handeye {
+namespace {
+
+const std::string kDir = "/tmp/handeye_covariance_rostest_monitor";
+const std::string kFile = kDir + "/calibration.yaml";
+
+/// A calibration of the simulated rig: its truth, its detection noise (0.3 mm, 0.05 deg,
+/// the robot exact), the noise estimated from the views, as `handeye solve` runs it.
+void write_rig_calibration() {
+  Rng rng(11);
+  MeasurementNoise noise;
+  noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  SimulatedSession sim = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, noise);
+  sim.samples.noise.reset();
+  CalibrationSession session(session_settings(sim.samples));
+  session.replace(sim.samples.samples, "the rig's calibration");
+  const Calibration c = session.calibrate_checked(session.snapshot());
+  std::filesystem::create_directories(kDir);
+  io::write_file_atomically(kFile, io::format_result(c, io::context_of(sim.samples)));
+}
+
+TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
+  write_rig_calibration();
+  const std::string launch = "roslaunch handeye_covariance publish.launch monitor:=true calibration_file:=" + kFile +
+                             " still_window:=0.3 > " + kDir + "/launch.log 2>&1 & echo $! > " + kDir + "/launch.pid";
+  ASSERT_EQ(std::system(launch.c_str()), 0);
+
+  ros::NodeHandle nh;
+  diagnostic_msgs::DiagnosticStatus latest;
+  int errors = 0;
+  auto diagnostics = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, [&](const auto& msg) {
+    for (const auto& s : msg->status) {
+      if (s.name.find("calibration check") == std::string::npos) continue;
+      latest = s;
+      errors += s.level == diagnostic_msgs::DiagnosticStatus::ERROR;
+    }
+  });
+  int checks = 0;
+  CalibrationCheckMsg check;
+  auto check_sub = nh.subscribe<CalibrationCheckMsg>("/handeye_eye_on_hand/handeye_monitor/check", 50,
+                                                     [&](const auto& msg) {
+                                                       check = *msg;
+                                                       ++checks;
+                                                     });
+  ros::Publisher bump = nh.advertise<std_msgs::Float64>("/rig_simulator/bump_camera_mm", 1, true);
+  tf2_ros::Buffer tf;
+  tf2_ros::TransformListener listener(tf);
+
+  // A check per still view once the window has 3: 200 of them with the rig unchanged.
+  ASSERT_TRUE(test::wait_for([&] { return checks >= 200; }, 200.0))
+      << checks << " checks; last diagnostic: " << latest.message << " (see " << kDir << "/launch.log)";
+  EXPECT_EQ(errors, 0) << "an ERROR without a change: " << latest.message;
+  std::printf("[monitor] %d checks of an unchanged rig: %d ERROR, last: %s\n", checks, errors, latest.message.c_str());
+  // The published TF is the saved X (the monitor only reads).
+  const Eigen::Isometry3d saved = io::read_result(kFile).T_parent_camera.pose;
+  geometry_msgs::TransformStamped published;
+  ASSERT_NO_THROW(published = tf.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)));
+  EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9));
+
+  std_msgs::Float64 mm;
+  mm.data = 3.0;
+  bump.publish(mm);
+  const int before = checks;
+  ASSERT_TRUE(test::wait_for([&] { return latest.level == diagnostic_msgs::DiagnosticStatus::ERROR || checks >= before + 12; },
+                             30.0));
+  EXPECT_EQ(latest.level, diagnostic_msgs::DiagnosticStatus::ERROR) << latest.message;
+  EXPECT_LE(checks - before, 10) << "still views until ERROR";
+  std::printf("[monitor] the camera moved 3 mm: ERROR after %d still views: %s\n", checks - before,
+              latest.message.c_str());
+  // While the window straddles the bump no single rigid change explains all of it; once
+  // its 10 views are all after it, the check names the camera's mount.
+  const int error_at = checks;
+  ASSERT_TRUE(test::wait_for([&] { return checks >= error_at + 10; }, 30.0));
+  EXPECT_EQ(latest.level, diagnostic_msgs::DiagnosticStatus::ERROR) << latest.message;
+  EXPECT_EQ(check.changed, "X") << check.text;
+  std::printf("[monitor] 10 views later: %s\n", latest.message.c_str());
+  ASSERT_NO_THROW(published = tf.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)));
+  EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9)) << "the monitor never changes the TF";
+
+  std::system(("kill -INT $(cat " + kDir + "/launch.pid)").c_str());
+}
+
+}  // namespace
+}  // namespace handeye
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_monitor");
+  return RUN_ALL_TESTS();
+}
