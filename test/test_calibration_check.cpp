@@ -172,6 +172,20 @@ TEST(CalibrationCheck, RefusesWhatItCannotCheck) {
   } catch (const HandEyeError& e) {
     EXPECT_EQ(e.code(), ErrorCode::NoData);
   }
+  // Views without a noise against a model that has none for them (no stated noise, an
+  // estimated part of zero): their predicted covariance is singular.
+  Calibration silent = calibration;
+  silent.residual_noise = Calibration::ResidualNoise{};
+  silent.noise_origin = NoiseOrigin::EstimatedFromResiduals;
+  SampleSet bare = session.samples;
+  bare.noise.reset();
+  try {
+    check_calibration(silent, bare);
+    ADD_FAILURE() << "views without any noise were checked";
+  } catch (const HandEyeError& e) {
+    EXPECT_EQ(e.code(), ErrorCode::InvalidNoise);
+    EXPECT_NE(std::string(e.what()).find("noise"), std::string::npos);
+  }
   calibration.residual_noise.reset();
   try {
     check_calibration(calibration, session.samples);
