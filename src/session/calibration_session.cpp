@@ -116,14 +116,14 @@ SessionEvent CalibrationSession::start_check(Calibration calibration, int views)
     return {false, false,
             "this calibration cannot be checked: it carries no pattern pose or no noise model (save it again with this "
             "version: /calibrate, then /save_calibration)",
-            ""};
+            "", true};
   }
   check_ = Check{std::move(calibration), Sampler(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}),
                  views};
   return {true, false,
           "check started: move the robot to " + std::to_string(views) +
               " new poses (the board in view, still at each); the calibration's samples are not touched",
-          ""};
+          "", true};
 }
 
 SessionEvent CalibrationSession::cancel_check() {
@@ -196,13 +196,13 @@ SessionEvent CalibrationSession::load(const std::string& path) {
     const std::size_t n = loaded.samples.size();
     return replace(loaded.samples, "loaded " + std::to_string(n) + " samples from " + path);
   } catch (const HandEyeError& e) {
-    return {false, false, e.what(), "", true};  // the current samples are kept
+    return {false, false, e.what(), ""};  // the current samples are kept
   }
 }
 
 SessionEvent CalibrationSession::resume() {
   if (settings_.session_file.empty() || !std::filesystem::exists(settings_.session_file)) {
-    return {false, false, "no session file to resume from", "", true};
+    return {false, false, "no session file to resume from", ""};
   }
   SessionEvent event = load(settings_.session_file);
   if (event.success) event.message = "resumed " + std::to_string(samples().size()) + " samples";
@@ -212,9 +212,9 @@ SessionEvent CalibrationSession::resume() {
 SessionEvent CalibrationSession::save(const std::string& path) const {
   try {
     io::write_file_atomically(expand_home(path), io::format_samples(sample_set()));
-    return {true, false, "saved " + std::to_string(samples().size()) + " samples to " + expand_home(path), "", true};
+    return {true, false, "saved " + std::to_string(samples().size()) + " samples to " + expand_home(path), ""};
   } catch (const HandEyeError& e) {
-    return {false, false, e.what(), "", true};
+    return {false, false, e.what(), ""};
   }
 }
 
