@@ -31,6 +31,14 @@ double quantile(std::vector<double> values, double q) {
   return values[k];
 }
 
+/// A saved calibration of another setup or other frames than this node's (what the
+/// file does not say is taken to agree): the start-up publication and a check refuse it.
+bool is_other_calibration(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent,
+                          const std::string& child) {
+  return (setup && *setup != rig.setup) || (!parent.empty() && parent != rig.camera_parent_frame()) ||
+         (!child.empty() && child != rig.frames.camera);
+}
+
 /// The session's settings, with the corner estimator for method corners.
 SessionSettings node_session_settings(const SessionConfig& config) {
   SessionSettings settings = session_settings(config);
@@ -346,8 +354,7 @@ void CalibrationNode::republish_saved_calibration() {
     return;
   }
   const Rig& rig = config_.rig;
-  if ((stored.setup && *stored.setup != rig.setup) || (!stored.parent.empty() && stored.parent != rig.camera_parent_frame()) ||
-      (!stored.child.empty() && stored.child != rig.frames.camera)) {
+  if (is_other_calibration(rig, stored.setup, stored.parent, stored.child)) {
     ROS_WARN("the saved calibration %s is T_%s_%s (%s), this node calibrates T_%s_%s (%s): not published; "
              "/calibrate replaces it", path.c_str(), stored.parent.c_str(), stored.child.c_str(),
              stored.setup ? to_string(*stored.setup) : "setup not given", rig.camera_parent_frame().c_str(),
@@ -558,9 +565,7 @@ Calibration CalibrationNode::calibration_to_check() const {  // lock held
   }
   const io::CalibrationFile file = io::read_result(path);
   const Rig& rig = config_.rig;
-  if ((file.context.setup && *file.context.setup != rig.setup) ||
-      (!file.context.parent.empty() && file.context.parent != rig.camera_parent_frame()) ||
-      (!file.context.child.empty() && file.context.child != rig.frames.camera)) {
+  if (is_other_calibration(rig, file.context.setup, file.context.parent, file.context.child)) {
     throw HandEyeError(ErrorCode::MalformedFile,
                        "the saved calibration is T_" + file.context.parent + "_" + file.context.child +
                            ", this node calibrates T_" + rig.camera_parent_frame() + "_" + rig.frames.camera,
