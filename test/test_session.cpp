@@ -129,7 +129,9 @@ TEST(Session, ChecksCollectTheirOwnViewsAndLeaveTheSamplesAlone) {
     ASSERT_TRUE(state.result);
     EXPECT_EQ(state.result->views.size(), 5u);
     EXPECT_EQ(state.result->changed, moved_mm > 0.0) << state.result->verdict;
-    if (moved_mm > 0.0) EXPECT_EQ(state.result->change.what, "X") << state.result->verdict;
+    if (moved_mm > 0.0) {
+      EXPECT_EQ(state.result->change.what, "X") << state.result->verdict;
+    }
     EXPECT_NE(last.find(state.result->verdict), std::string::npos) << last;
   }
   ASSERT_TRUE(session.start_check(calibration, 5).success);
