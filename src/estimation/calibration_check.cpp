@@ -186,6 +186,16 @@ std::string change_text(const EstimatedChange::Delta& d) {
 
 }  // namespace
 
+void require_checkable(const Calibration& calibration) {
+  if (calibration.pattern && calibration.residual_noise) return;
+  throw HandEyeError(ErrorCode::NoiseUnidentifiable,
+                     "the calibration carries no pattern pose Y or no noise model: a check predicts each new view from "
+                     "X, Y and the noise their covariance was computed with",
+                     "the calibration",
+                     "save it again with this version (`handeye solve`, `handeye images`, the node's /save_calibration): "
+                     "its result file has `pattern`, `cross_covariance` and `noise.residual_model`");
+}
+
 bool prediction_disagrees(const Calibration::Prediction& p) { return p.dof > 0.0 && p.scale > 1.0; }
 
 std::optional<Calibration::Prediction> prediction_check(
@@ -194,9 +204,9 @@ std::optional<Calibration::Prediction> prediction_check(
   if (n < 5) return std::nullopt;
   std::vector<double> d2;  // each view's squared Mahalanobis length over 6
   for (std::size_t i = 0; i < n; ++i) {
-    SampleSet others = samples, one = samples;
+    SampleSet others = samples;
     others.samples.erase(others.samples.begin() + static_cast<std::ptrdiff_t>(i));
-    one.samples = {samples.samples[i]};
+    const SampleSet one{samples.rig, samples.noise, {samples.samples[i]}};
     Calibration c;
     try {
       c = solve(others);
@@ -236,14 +246,7 @@ Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
 namespace {
 
 CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
-  if (!calibration.pattern || !calibration.residual_noise) {
-    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
-                       "the calibration carries no pattern pose Y or no noise model: a check predicts each new view from "
-                       "X, Y and the noise their covariance was computed with",
-                       "the calibration",
-                       "save it again with this version (`handeye solve`, `handeye images`, the node's /save_calibration): "
-                       "its result file has `pattern`, `cross_covariance` and `noise.residual_model`");
-  }
+  require_checkable(calibration);
   const int k = static_cast<int>(views.samples.size());
   if (k == 0) {
     throw HandEyeError(ErrorCode::NoData, "no new view to check the calibration with", "the views",
@@ -262,7 +265,6 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   // Views without a stated noise take the calibration's, when it was given (an estimated
   // noise is in its residual model already).
   if (!decided.noise && calibration.noise_origin == NoiseOrigin::Given) decided.noise = calibration.noise;
-  const SampleSet* checked = &decided;
   if (views.rig.symmetric_face) {
     const Eigen::Isometry3d F = views.rig.face_half_turn();
     for (std::size_t i = 0; i < decided.samples.size(); ++i) {
@@ -279,7 +281,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   }
   double inflation = calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
   const Matrix12d sigma = joint_covariance(calibration);
-  const std::vector<Matrix6d> noise = residual_covariances(*checked, calibration);
+  const std::vector<Matrix6d> noise = residual_covariances(decided, calibration);
   // The estimated noise parts: the views' noise is the known remainder plus each part
   // times its true-over-estimated ratio g ~ nu / chi2(nu), whose mean nu / (nu - 2) the
   // prediction takes (a variance estimated from few dof is more often too small than
@@ -300,7 +302,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
     prediction_scale = calibration.prediction->scale;
     inflation = 1.0;
   } else {
-    parts = noise_parts(*checked, calibration);
+    parts = noise_parts(decided, calibration);
     for (NoisePart& part : parts) part.dof = std::max(part.dof, kMinimumDof);
   }
 
@@ -309,7 +311,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   Eigen::MatrixXd J(n, 12), C = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < k; ++i) {
     const std::size_t v = static_cast<std::size_t>(i);
-    const JointResidual r = joint_residual(views.rig, checked->samples[v], X, Y);
+    const JointResidual r = joint_residual(views.rig, decided.samples[v], X, Y);
     e.segment<6>(6 * i) = r.error;
     J.middleRows<6>(6 * i) = r.jacobian;
     Matrix6d S = noise[v];

@@ -934,7 +934,7 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   out << YAML::Key << "text" << YAML::Value << check.verdict;
   if (check.changed) {
     out << YAML::Key << "changed" << YAML::Value << check.change.what;
-    const EstimatedChange::Delta& main = check.change.X_change ? *check.change.X_change : *check.change.Y_change;
+    const EstimatedChange::Delta& main = check.change.reported();
     emit_6("change", main.value);  // ROS order, m and rad: the new pose is exp(change) times the saved one
     emit_6x6("change_covariance", main.covariance);
     if (check.change.what == "both") {

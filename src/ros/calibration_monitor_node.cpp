@@ -40,14 +40,14 @@ CalibrationMonitorNode::CalibrationMonitorNode(ros::NodeHandle node, ros::NodeHa
            config_.calibration_file.c_str(), config_.detection_input.c_str(), options_.window);
 }
 
-bool CalibrationMonitorNode::load_calibration() {
+void CalibrationMonitorNode::load_calibration() {
   std::error_code error;
   const auto written = std::filesystem::last_write_time(config_.calibration_file, error);
   if (error) {
     if (!monitor_) problem_ = "no calibration at " + config_.calibration_file + " yet (read again every second)";
-    return monitor_ != nullptr;
+    return;
   }
-  if (monitor_ && written == loaded_) return true;  // a calibration saved again is watched from then on
+  if (monitor_ && written == loaded_) return;  // a calibration saved again is watched from then on
   loaded_ = written;
   monitor_.reset();
   try {
@@ -64,7 +64,6 @@ bool CalibrationMonitorNode::load_calibration() {
     problem_ = e.what();
     ROS_ERROR_THROTTLE(30.0, "monitor: %s", problem_.c_str());
   }
-  return monitor_ != nullptr;
 }
 
 void CalibrationMonitorNode::observe(const Detection& detection) {
@@ -121,7 +120,7 @@ void CalibrationMonitorNode::publish_diagnostics() {  // mutex_ held
       value("chi2_per_dof", number_text(v.check->chi2 / std::max(1, v.check->dof), 3));
       if (v.check->changed) {
         value("changed", v.check->change.what);
-        const auto& d = v.check->change.X_change ? *v.check->change.X_change : *v.check->change.Y_change;
+        const EstimatedChange::Delta& d = v.check->change.reported();
         value("change_mm", number_text(d.value.head<3>().norm() * 1e3, 3));
         value("change_deg", number_text(d.value.tail<3>().norm() * 180.0 / M_PI, 3));
       }

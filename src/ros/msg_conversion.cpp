@@ -210,7 +210,7 @@ CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp
   msg.dof = check.dof;
   if (check.changed) {
     msg.changed = check.change.what;
-    const EstimatedChange::Delta& d = check.change.X_change ? *check.change.X_change : *check.change.Y_change;
+    const EstimatedChange::Delta& d = check.change.reported();
     for (int k = 0; k < 6; ++k) msg.change[static_cast<std::size_t>(k)] = d.value(k);
     const std::array<double, 36> c = to_row_major_6x6(d.covariance);
     std::copy(c.begin(), c.end(), msg.change_covariance.begin());

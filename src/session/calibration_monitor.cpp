@@ -21,12 +21,7 @@ CalibrationMonitor::CalibrationMonitor(Calibration calibration, Rig rig, std::op
       noise_(std::move(noise)),
       options_(options),
       views_(options.sampler, noise_ ? noise_->robot : PoseNoise{}) {
-  if (!calibration_.pattern || !calibration_.residual_noise) {
-    throw HandEyeError(ErrorCode::NoiseUnidentifiable,
-                       "the calibration carries no pattern pose Y or no noise model: the monitor predicts each view from "
-                       "X, Y and the noise their covariance was computed with",
-                       "the calibration file", "save it again with this version (`handeye solve`, the node's /calibrate)");
-  }
+  require_checkable(calibration_);
   if (options_.window < 1 || options_.min_views < 1 || options_.min_views > options_.window ||
       !(options_.error_alpha > 0.0 && options_.error_alpha <= options_.warn_alpha && options_.warn_alpha < 1.0)) {
     throw HandEyeError(ErrorCode::MalformedFile,

@@ -112,11 +112,10 @@ SessionEvent CalibrationSession::take_sample(double now) {
 
 SessionEvent CalibrationSession::start_check(Calibration calibration, int views) {
   if (views < 1) return {false, false, "a check needs at least one view (5 is the figure it is measured at)", "", true};
-  if (!calibration.pattern || !calibration.residual_noise) {
-    return {false, false,
-            "this calibration cannot be checked: it carries no pattern pose or no noise model (save it again with this "
-            "version: /calibrate, then /save_calibration)",
-            "", true};
+  try {
+    require_checkable(calibration);
+  } catch (const HandEyeError& e) {
+    return {false, false, std::string("this calibration cannot be checked: ") + e.what(), "", true};
   }
   check_ = Check{std::move(calibration), Sampler(settings_.sampler, settings_.noise ? settings_.noise->robot : PoseNoise{}),
                  views};

@@ -75,6 +75,8 @@ struct EstimatedChange {
     Matrix6d covariance = Matrix6d::Zero();
   };
   std::optional<Delta> X_change, Y_change;
+  /// The change a verdict reports: X's (X or both), else Y's.
+  const Delta& reported() const { return X_change ? *X_change : *Y_change; }
 };
 
 struct CalibrationCheck {
@@ -119,6 +121,11 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
 /// fewer than 5 predictions.
 std::optional<Calibration::Prediction> prediction_check(
     const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve);
+
+/// Throws NoiseUnidentifiable (with the fix) unless `calibration` carries what a check
+/// predicts views from: Y and the noise model (Calibration::pattern, residual_noise).
+/// The one rule the offline check, the session's check and the monitor share.
+void require_checkable(const Calibration& calibration);
 
 /// Whether the calibration's own views, left out in turn, scattered more than it
 /// predicts (scale > 1): then a check scales its prediction by it, else the model stands.

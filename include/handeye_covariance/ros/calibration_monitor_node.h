@@ -34,8 +34,8 @@ class CalibrationMonitorNode {
  private:
   void observe(const Detection& detection);
   /// Reads the calibration file when the monitor has none yet or the file was written
-  /// again since (the window starts over); false while it cannot.
-  bool load_calibration();  // mutex_ held
+  /// again since (the window starts over); `problem_` says why there is none.
+  void load_calibration();  // mutex_ held
   void publish_diagnostics();  // mutex_ held
 
   SessionConfig config_;
