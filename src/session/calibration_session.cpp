@@ -279,13 +279,13 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     h.model_pose_covariance = c.pose_covariance;
     c.honesty = h;
   };
-  {  // how well it predicts a view it has not seen (leave-one-out), for a later check of new views
-    const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
-    if (settings_.method != Method::Corners && c.pattern) {
-      c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
-        return calibrate_decided({kept.generation, others});
-      });
-    }
+  // The kept samples, as the calibration decided them: what both checks below judge.
+  const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
+  // How well it predicts a view it has not seen (leave-one-out), for a later check of new views.
+  if (settings_.method != Method::Corners && c.pattern) {
+    c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
+      return calibrate_decided({kept.generation, others});
+    });
   }
   if (settings_.honesty.splits <= 0) {
     not_run("the check is off (honesty_splits: 0)");
@@ -295,7 +295,6 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     not_run("method corners: the check solves simulated sessions at the pose level; run it on the joint estimate");
     return c;
   }
-  const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
   if (kept.samples.samples.size() < 8) {
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
     return c;
