@@ -31,7 +31,8 @@ namespace {
 
 /// `handeye bag ...` and `handeye sim --output x.bag ...` run the handeye_bag
 /// program beside this one (it links rosbag), `handeye images ...` handeye_images
-/// (OpenCV, libapriltag): this one links neither.
+/// (OpenCV, libapriltag), `handeye target ...` handeye_target (cairo): this one
+/// links none of them.
 int run_tool(const std::string& program, const std::string& command, const Args& args, std::ostream& out,
              std::ostream& err) {
   std::error_code ec;
@@ -693,6 +694,10 @@ const CommandTable& commands() {
       {"images", {"calibrate from a folder of images (chessboard, ChArUco, ArUco, AprilTag) and one robot pose per image",
                   [](const Args& args, std::ostream& out, std::ostream& err) {
                     return run_tool("handeye_images", "images", args, out, err);
+                  }}},
+      {"target", {"draw a target file at 1:1 to print (PDF, SVG, PNG) with a scale bar; or scale it to the print",
+                  [](const Args& args, std::ostream& out, std::ostream& err) {
+                    return run_tool("handeye_target", "target", args, out, err);
                   }}},
       {"compose", {"the object's pose in the robot base with its covariance: robot pose + X + detection (eq. 68)",
                    compose_command}},

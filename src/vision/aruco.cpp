@@ -168,6 +168,26 @@ std::vector<Eigen::Vector3d> charuco_points(const CharucoTarget& t) {
   return points;
 }
 
+TagLayout charuco_marker_layout(const CharucoTarget& t) {
+  const cv::Ptr<cv::aruco::CharucoBoard> board = charuco_board(t);
+  TagLayout layout;
+  layout.family = t.dictionary;
+  for (std::size_t i = 0; i < board->ids.size(); ++i) {
+    // OpenCV's corners go round the printed marker from its top-left: the tag's
+    // x runs from corner 0 to 1, its y (up on the print) from corner 3 to 0.
+    const std::vector<cv::Point3f>& c = board->objPoints[i];
+    const auto point = [&](int k) { return Eigen::Vector3d(c[k].x, c[k].y, c[k].z); };
+    const Eigen::Vector3d x = (point(1) - point(0)).normalized(), y = (point(0) - point(3)).normalized();
+    TagPlacement tag;
+    tag.id = board->ids[i];
+    tag.size = t.marker;
+    tag.T_pattern_tag.linear() << x, y, x.cross(y);
+    tag.T_pattern_tag.translation() = 0.25 * (point(0) + point(1) + point(2) + point(3));
+    layout.tags.push_back(tag);
+  }
+  return layout;
+}
+
 cv::Mat charuco_image(const CharucoTarget& t, int texels_per_square) {
   cv::Mat image;
   charuco_board(t)->draw(cv::Size(t.columns * texels_per_square, t.rows * texels_per_square), image, 0, 1);

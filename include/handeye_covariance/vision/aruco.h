@@ -74,6 +74,11 @@ void check_charuco(const CharucoTarget& target, const std::string& where);
 /// The board's inner corners in its frame, by id.
 std::vector<Eigen::Vector3d> charuco_points(const CharucoTarget& target);
 
+/// The board's markers as OpenCV lays them out (CharucoBoard's ids and marker
+/// corners), each a TagPlacement in the board's frame; `family` is the dictionary.
+/// The squares that hold no marker are the black ones (what `handeye target` prints).
+TagLayout charuco_marker_layout(const CharucoTarget& target);
+
 /// The board as OpenCV draws it, `texels_per_square` texels to a square, with no
 /// margin: texel (u, v) covers [u, u + 1) x [v, v + 1) / texels_per_square squares.
 cv::Mat charuco_image(const CharucoTarget& target, int texels_per_square);
