@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -47,6 +48,7 @@ struct Seen {
   Eigen::Isometry3d T_camera_page = Eigen::Isometry3d::Identity();
   PointCorrespondences points;
   PatternPose pose;
+  cv::Mat gray;  // the raster
 };
 
 Seen print_and_detect(const Target& target, const std::string& name, const std::string& page = "A4") {
@@ -65,6 +67,7 @@ Seen print_and_detect(const Target& target, const std::string& name, const std::
                               pdf + " " + prefix;
   EXPECT_EQ(run(command), 0) << command;
   const cv::Mat gray = cv::imread(prefix + ".png", cv::IMREAD_GRAYSCALE);
+  seen.gray = gray;
   EXPECT_EQ(gray.cols, w);
   EXPECT_EQ(gray.rows, h);
   // Principal point off the crop's centre: anywhere on the page will do.
@@ -128,14 +131,9 @@ void expect_frame(const Seen& seen, const Eigen::Matrix3d& R_page, const Eigen::
   const double angle = angle_between(detected.linear(), expected.linear());
   const double offset = (detected.translation() - expected.translation()).norm();
   const double scale_error = printed_scale(seen) - 1.0;
-  std::printf("[ figures  ] %-18s ids %-14s %3zu points, frame rotation %.2g mrad, origin off by %.3f mm (in plane "
-              "%.3f mm), scale %+.4f%%\n",
-              name.c_str(), [&] {
-                std::string ids;
-                for (int id : seen.pose.ids) ids += (ids.empty() ? "" : ",") + std::to_string(id);
-                return ids;
-              }().c_str(),
-              seen.points.object.size(), angle * 1e3, offset * 1e3,
+  std::printf("[ figures  ] %-16s %3zu points, frame rotation %.3f mrad, origin off by %.3f mm (in plane "
+              "%.4f mm), square size %+.4f%%\n",
+              name.c_str(), seen.points.object.size(), angle * 1e3, offset * 1e3,
               (detected.translation() - expected.translation()).head<2>().norm() * 1e3, scale_error * 100);
   EXPECT_LT(angle, 2e-3) << name;                 // rad
   EXPECT_LT(offset, 1e-4) << name;                // m, depth included
@@ -147,8 +145,8 @@ TEST(TargetPrinter, ChessboardFrameIsOpenCVsAtTheFirstInnerCorner) {
   const Target target = make_target(ChessboardTarget{9, 6, 0.012});
   const Seen seen = print_and_detect(target, "chessboard_9x6");
   ASSERT_EQ(seen.points.object.size(), 54u);
-  // Half a square of white, then one square, to the first inner corner; x right, y down.
-  const Eigen::Vector2d origin = seen.printed.board_min + Eigen::Vector2d(1.5, 1.5) * 0.012;
+  // One square (white) from the board's top-left corner to the first inner corner; x right, y down.
+  const Eigen::Vector2d origin = seen.printed.board_min + Eigen::Vector2d(0.012, 0.012);
   expect_frame(seen, Eigen::Matrix3d::Identity(), origin, "chessboard 9x6");
 }
 
@@ -161,7 +159,7 @@ TEST(TargetPrinter, EvenChessboardIsOneOfItsTwoHalfTurnCandidates) {
   if (angle_between(seen.pose.T_camera_pattern.linear(), expected.linear()) > 1.0) {
     seen.pose.T_camera_pattern = seen.pose.T_camera_pattern * half_turn(target);
   }
-  expect_frame(seen, Eigen::Matrix3d::Identity(), seen.printed.board_min + Eigen::Vector2d(1.5, 1.5) * 0.012,
+  expect_frame(seen, Eigen::Matrix3d::Identity(), seen.printed.board_min + Eigen::Vector2d(0.012, 0.012),
                "chessboard 8x6");
 }
 
@@ -169,6 +167,14 @@ TEST(TargetPrinter, CharucoFrameIsOpenCVsAtTheBoardsCorner) {
   const Target target = make_target(CharucoTarget{5, 7, 0.020, 0.015, "DICT_5X5_100"});
   const Seen seen = print_and_detect(target, "charuco_5x7");
   EXPECT_EQ(seen.points.object.size(), 4u * 6u);  // every inner corner
+  // Every marker, by the dictionary's own detector.
+  std::vector<int> found;
+  for (const TagCorners& marker : ArucoDetector("DICT_5X5_100").detect(seen.gray)) found.push_back(marker.id);
+  std::vector<int> ids = charuco_marker_layout(target.charuco).ids();
+  std::sort(ids.begin(), ids.end());
+  std::sort(found.begin(), found.end());
+  EXPECT_EQ(found, ids);
+  EXPECT_EQ(ids.size(), 17u);  // the 5 x 7 board's white squares
   expect_frame(seen, Eigen::Matrix3d::Identity(), seen.printed.board_min, "charuco 5x7");
 }
 
@@ -226,8 +232,8 @@ TEST(TargetPrinter, OneAprilTagFrameIsItsCentreFaceUp) {
 
 TEST(TargetPrinter, TagBoardFromConfigFrameIsTheLayouts) {
   const Target target = io::read_target(std::string(HANDEYE_SOURCE_DIR) + "/config/tag_board_2x2.yaml");
-  const Seen seen = print_and_detect(target, "tag_board_2x2", "170x230");
-  EXPECT_EQ(seen.printed.page.name, "170x230 mm");
+  const Seen seen = print_and_detect(target, "tag_board_2x2", "180x230");
+  EXPECT_EQ(seen.printed.page.name, "180x230 mm");
   EXPECT_EQ(seen.pose.ids, (std::vector<int>{0, 1, 2, 3}));
   // The layout's origin is the board's centre (the tags at +-40 mm), y up.
   expect_frame(seen, kFaceUp, 0.5 * (seen.printed.board_min + seen.printed.board_max), "tag board 2x2");

@@ -32,6 +32,7 @@ constexpr double kPoint = kInch / 72;  // m, PDF's unit
 constexpr double kScaleBar = 0.100;    // m
 constexpr double kFontSize = 0.0025;   // m (7 pt)
 constexpr double kLineHeight = 0.0034;
+constexpr double kFooterGap = 0.005;   // white between the board and the footer
 constexpr double kBarHeight = 0.007;   // the scale bar with its ticks and the gap below
 constexpr std::size_t kMaxFileLines = 12;
 
@@ -93,8 +94,8 @@ Board make_board(const Target& target) {
   switch (target.kind) {
     case TargetKind::Chessboard: {
       // (columns + 1) x (rows + 1) squares, the top-left one white (the origin's
-      // outer diagonal square, vision/chessboard.h), half a square of white around
-      // for the detector.
+      // outer diagonal square, vision/chessboard.h). The white the detector needs
+      // around the board is the page's margin and the gap above the footer.
       const ChessboardTarget& t = target.chessboard;
       const double s = t.square;
       for (int r = 0; r <= t.rows; ++r) {
@@ -104,8 +105,7 @@ Board make_board(const Target& target) {
           board.black_squares.emplace_back(min, min + Eigen::Vector2d(s, s));
         }
       }
-      board.extent = Eigen::AlignedBox2d(Eigen::Vector2d(-1.5 * s, -1.5 * s),
-                                         Eigen::Vector2d((t.columns + 0.5) * s, (t.rows + 0.5) * s));
+      board.extent = Eigen::AlignedBox2d(Eigen::Vector2d(-s, -s), Eigen::Vector2d(t.columns * s, t.rows * s));
       break;
     }
     case TargetKind::Charuco: {
@@ -210,7 +210,7 @@ std::vector<std::string> footer_lines(const Target& target, const PrintOptions& 
   return lines;
 }
 
-double footer_height(std::size_t lines) { return kBarHeight + lines * kLineHeight; }
+double footer_height(std::size_t lines) { return kFooterGap + kBarHeight + lines * kLineHeight; }
 
 struct Placement {
   PrintedTarget printed;
@@ -273,11 +273,15 @@ Placement place(const Target& target, const PrintOptions& options) {
 }
 
 /// Draws in page metres: the caller has scaled the context to its surface.
-void draw(cairo_t* cr, const Placement& placement) {
+/// `paper`: paint the page white first (not on a coverage-only surface, where
+/// any paint is ink).
+void draw(cairo_t* cr, const Placement& placement, bool paper) {
   const PrintedTarget& p = placement.printed;
   const Board& board = placement.board;
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  if (paper) {
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    cairo_paint(cr);
+  }
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_save(cr);
   const Eigen::Vector2d offset = p.board_min - board.extent.min();
@@ -308,7 +312,7 @@ void draw(cairo_t* cr, const Placement& placement) {
   // The footer, below the board's space: the scale bar, then the text.
   const double left = placement.margin;
   const double text_width = p.page.width - 2 * placement.margin;
-  const double bar_top = p.page.height - placement.margin - footer_height(placement.footer.size());
+  const double bar_top = p.page.height - placement.margin - footer_height(placement.footer.size()) + kFooterGap;
   cairo_rectangle(cr, left, bar_top + 0.0030, kScaleBar, 0.0008);
   for (int k = 0; k <= 10; ++k) {
     const double tick = (k % 5 == 0) ? 0.003 : 0.0018;
@@ -396,7 +400,7 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, target.describe().c_str());
     Context cr(cairo_create(surface.get()), cairo_destroy);
     cairo_scale(cr.get(), 1.0 / kPoint, 1.0 / kPoint);
-    draw(cr.get(), placement);
+    draw(cr.get(), placement, true);
     cairo_show_page(cr.get());
     cr.reset();
     cairo_surface_finish(surface.get());
@@ -409,7 +413,7 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     cairo_svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_MM);
     Context cr(cairo_create(surface.get()), cairo_destroy);
     cairo_scale(cr.get(), 1e3, 1e3);
-    draw(cr.get(), placement);
+    draw(cr.get(), placement, true);
     cr.reset();
     cairo_surface_finish(surface.get());
     check_status(cairo_surface_status(surface.get()), output);
@@ -422,7 +426,7 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     check_status(cairo_surface_status(surface.get()), output);
     Context cr(cairo_create(surface.get()), cairo_destroy);
     cairo_scale(cr.get(), px_per_m, px_per_m);
-    draw(cr.get(), placement);
+    draw(cr.get(), placement, false);
     cr.reset();
     cairo_surface_flush(surface.get());
     const cv::Mat ink(p.png_height, p.png_width, CV_8UC1, cairo_image_surface_get_data(surface.get()),
