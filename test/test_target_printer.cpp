@@ -265,6 +265,28 @@ TEST(TargetPrinter, PngHasThePagesPixelsAtItsDpi) {
   EXPECT_NEAR(last - first + 1, 0.040 / 0.0254 * 150, 1.5);
 }
 
+TEST(TargetPrinter, ScaleBarIs100mm) {
+  const Target target = make_target(single_tag_layout(1, 0.020, "DICT_4X4_50"));
+  print::PrintOptions options;
+  options.page = print::parse_page("130x100mm");
+  const std::string pdf = scratch("scale_bar.pdf"), prefix = scratch("scale_bar");
+  print::print_target(target, pdf, options);
+  ASSERT_EQ(run("pdftoppm -r 600 -png -gray -singlefile " + pdf + " " + prefix), 0);
+  const cv::Mat ink = cv::imread(prefix + ".png", cv::IMREAD_GRAYSCALE) < 128;
+  ASSERT_FALSE(ink.empty());
+  // The longest black run of any row is the bar (the 20 mm marker is shorter).
+  int longest = 0;
+  for (int v = 0; v < ink.rows; ++v) {
+    int run_length = 0;
+    for (int u = 0; u < ink.cols; ++u) {
+      run_length = ink.at<uint8_t>(v, u) ? run_length + 1 : 0;
+      longest = std::max(longest, run_length);
+    }
+  }
+  std::printf("[ figures  ] scale bar: %.3f mm at 600 dpi\n", longest / kPxPerM * 1e3);
+  EXPECT_NEAR(longest / kPxPerM, 0.100, 1.5 / kPxPerM);  // within a pixel and a half
+}
+
 TEST(TargetPrinter, SvgIsXmlWithThePagesSizeInMm) {
   const Target target = make_target(ChessboardTarget{9, 6, 0.015});
   print::PrintOptions options;

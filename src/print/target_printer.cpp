@@ -314,9 +314,11 @@ void draw(cairo_t* cr, const Placement& placement, bool paper) {
   const double text_width = p.page.width - 2 * placement.margin;
   const double bar_top = p.page.height - placement.margin - footer_height(placement.footer.size()) + kFooterGap;
   cairo_rectangle(cr, left, bar_top + 0.0030, kScaleBar, 0.0008);
+  // Ticks every 10 mm; the end ones inside the bar, so that it is 100 mm end to end.
   for (int k = 0; k <= 10; ++k) {
     const double tick = (k % 5 == 0) ? 0.003 : 0.0018;
-    cairo_rectangle(cr, left + k * 0.010 - 0.0001, bar_top + 0.0038 - tick, 0.0002, tick);
+    const double x = std::clamp(left + k * 0.010 - 0.0001, left, left + kScaleBar - 0.0002);
+    cairo_rectangle(cr, x, bar_top + 0.0038 - tick, 0.0002, tick);
   }
   cairo_fill(cr);
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
