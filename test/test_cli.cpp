@@ -27,7 +27,7 @@ TEST(Cli, HelpListsTheSubcommands) {
   EXPECT_NE(r.out.find("sim"), std::string::npos);
   EXPECT_NE(r.out.find("bag"), std::string::npos);
   // Every command name stands apart from its summary (a fixed width once printed "validateMonte-Carlo").
-  for (const char* name : {"solve", "sim", "bag", "compose", "noise", "suggest", "validate"}) {
+  for (const char* name : {"solve", "sim", "bag", "compose", "noise", "suggest", "validate", "target"}) {
     EXPECT_NE(r.out.find("  " + std::string(name) + "  "), std::string::npos) << name << " in\n" << r.out;
   }
   EXPECT_EQ(run("solve --help").exit_code, 0);
@@ -447,7 +447,8 @@ TEST(Cli, CheckSaysWhetherACalibrationStillHolds) {
 
 TEST(Layers, HandeyeLinksNoRosLibraryAndTheRvizPluginNoOpenCv) {
   const std::string handeye = linked_libraries(HANDEYE_CLI);
-  for (const char* library : {"libroscpp", "librosbag", "libtf2", "libcv_bridge", "librostime", "libopencv", "libapriltag"}) {
+  for (const char* library : {"libroscpp", "librosbag", "libtf2", "libcv_bridge", "librostime", "libopencv", "libapriltag",
+                              "libcairo"}) {
     EXPECT_EQ(handeye.find(library), std::string::npos) << "handeye links " << library << ":\n" << handeye;
   }
   EXPECT_NE(handeye.find("libyaml-cpp"), std::string::npos) << "ldd printed no libraries?\n" << handeye;
