@@ -423,6 +423,14 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     const double px_per_m = options.dpi / kInch;
     p.png_width = static_cast<int>(std::lround(p.page.width * px_per_m));
     p.png_height = static_cast<int>(std::lround(p.page.height * px_per_m));
+    const int largest_side = 32767;  // cairo's image surfaces
+    if (std::max(p.png_width, p.png_height) > largest_side) {
+      const double largest_dpi = std::floor(largest_side / std::max(p.page.width, p.page.height) * kInch);
+      throw HandEyeError(ErrorCode::MalformedFile,
+                         "a " + p.page.name + " page at " + number_text(options.dpi, 6) + " dpi is more than " +
+                             std::to_string(largest_side) + " px a side",
+                         "--dpi", "use at most " + number_text(largest_dpi, 6) + " dpi, or the PDF or SVG (vectors)");
+    }
     // Coverage only (8 bits a pixel, not 32): an A4 page at 600 dpi is 35 MB.
     Surface surface(cairo_image_surface_create(CAIRO_FORMAT_A8, p.png_width, p.png_height), cairo_surface_destroy);
     check_status(cairo_surface_status(surface.get()), output);
