@@ -19,7 +19,7 @@
 // from each marker's centre, and away from the principal point. A shift that
 // every corner shares (a few thousandths of a pixel) biases X once the pixel
 // noise is a few hundredths; this is how libapriltag's shift and ChArUco's were
-// found (README, "Where it falls short"). --distances lo,hi narrows the views.
+// found (docs/how_it_works.md, "Where it falls short"). --distances lo,hi narrows the views.
 //
 // --supersample s (default 5) is the renderer's: each sensor pixel the average of
 // s x s samples. At 3 (the tests' default, for speed) the renderer's own corner

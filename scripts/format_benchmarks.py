@@ -93,7 +93,7 @@ def corners_section():
         "at the pixel sigma the corner fit weighed it with. No estimator's RMS error is under it, so poses /",
         "bound is the least corners / poses can be. The last column: the share of sessions whose images",
         "failed the test of one pixel sigma and were each weighed by their own. The corner fit carries the",
-        "target's geometry error it estimates from the corners (README: the corner estimator). Goals (issue",
+        "target's geometry error it estimates from the corners (docs/how_it_works.md: the corner estimator). Goals (issue",
         "18): corners / poses <= 0.85x, corners / bound <= 1.05x, NEES of X in [5.5, 6.5].",
         "",
         study_file.read_text().strip() if study_file.exists() else "(not run)",

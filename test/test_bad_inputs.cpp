@@ -1,4 +1,4 @@
-// The bad-input table (README, "What can go wrong"): every class of bad input a
+// The bad-input table (docs/troubleshooting.md, "What can go wrong"): every class of bad input a
 // new user produces, through the real `handeye` binary (solve, bag, compose,
 // noise, suggest). Each refusal must exit 2, name the error, say where, say what
 // to do ("Fix:"), and leave the output path as it was: no partial file, and an
@@ -143,7 +143,7 @@ std::string with_detections(const std::string& name, const std::function<void(Ta
 // ------------------------------------------------------------------ the table
 
 struct Case {
-  std::string id;                             // as in the README's test column
+  std::string id;                             // as in docs/troubleshooting.md's test column
   std::function<std::string()> command;       // handeye arguments, without --output
   std::string error;                          // the error's name
   std::vector<std::string> mentions;          // where, and what to do
@@ -338,27 +338,27 @@ TEST(BadInputBag, TfRecordedLateRefusesTheEarlyDetectionsWithTheReasonAndKeepsTh
   EXPECT_LT((late.X.translation() - clean.X.translation()).norm(), 5e-3);
 }
 
-// ------------------------------------------------------------------ the README
+// ------------------------------------------------- docs/troubleshooting.md
 
-/// Every row of the README's "What can go wrong" tables names its test in the
-/// last column as `test/<file>`: `<name>`. A name in this file is a row of the
-/// table above or a TEST of this file; elsewhere the file must hold the name as
-/// a word (a TEST name, or the refusal kind the test checks).
+/// Every row of every table in docs/troubleshooting.md ("What can go wrong")
+/// names its test in the last column as `test/<file>`: `<name>`. A name in this
+/// file is a row of the table above or a TEST of this file; elsewhere the file
+/// must hold the name as a word (a TEST name, or the refusal kind the test checks).
 TEST(BadInputReadme, EveryRowOfWhatCanGoWrongNamesAnExistingTest) {
-  std::ifstream readme(std::string(HANDEYE_SOURCE_DIR) + "/README.md");
-  ASSERT_TRUE(readme.good());
+  std::ifstream page(std::string(HANDEYE_SOURCE_DIR) + "/docs/troubleshooting.md");
+  ASSERT_TRUE(page.good());
   std::set<std::string> table_ids;
   for (const Case& c : refusals()) table_ids.insert(c.id);
   const std::regex test_cell(R"(\| `(test/[A-Za-z0-9_.]+)`: `([A-Za-z0-9_]+)` \|$)");
   std::string line;
-  bool in_section = false;
+  bool titled = false;  // the page is the section: its title, then only its tables
   int rows = 0;
-  while (std::getline(readme, line)) {
-    if (line.rfind("## ", 0) == 0) in_section = line == "## What can go wrong";
-    if (!in_section || line.rfind("| ", 0) != 0 || line.find("| test |") != std::string::npos) continue;
+  while (std::getline(page, line)) {
+    if (line.rfind("# ", 0) == 0) titled = line == "# What can go wrong";
+    if (!titled || line.rfind("| ", 0) != 0 || line.find("| test |") != std::string::npos) continue;
     std::smatch m;
     if (!std::regex_search(line, m, test_cell)) {
-      ADD_FAILURE() << "a README row without a test (last column `test/<file>`: `<name>`): " << line;
+      ADD_FAILURE() << "a row of docs/troubleshooting.md without a test (last column `test/<file>`: `<name>`): " << line;
       continue;
     }
     ++rows;
@@ -371,7 +371,8 @@ TEST(BadInputReadme, EveryRowOfWhatCanGoWrongNamesAnExistingTest) {
       EXPECT_TRUE(std::regex_search(text, std::regex("\\b" + name + "\\b"))) << name << " is not in " << file;
     }
   }
-  EXPECT_GE(rows, 50) << "the section lost rows, or the parser lost the section";
+  EXPECT_TRUE(titled) << "docs/troubleshooting.md lost its title `# What can go wrong`";
+  EXPECT_GE(rows, 50) << "the page lost rows, or the parser lost the page";
 }
 
 }  // namespace

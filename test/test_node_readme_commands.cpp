@@ -1,4 +1,4 @@
-// Client of readme_commands.test: the README's ROS commands (`rostopic echo`,
+// Client of readme_commands.test: the ROS commands of the README and docs/ros.md (`rostopic echo`,
 // `rosservice call`) run as a user types them, in a shell, against the simulated
 // rig. They need Python's message modules for this package's types and for
 // geometry_msgs (scripts/setup installs them); without, rostopic prints
@@ -47,7 +47,7 @@ TEST(ReadmeCommands, StatusEchoAndCalibrateCallWorkAsTyped) {
   EXPECT_TRUE(contains(call.output, "frame_id: \"tool0\"")) << call.output;
   EXPECT_TRUE(contains(call.output, "published_tf: \"tool0 -> camera_optical_frame\"")) << call.output;
 
-  // The latched result, and a service with arguments as the README writes them.
+  // The latched result, and a service with arguments as docs/ros.md writes them.
   const Shell calibration = shell("timeout 30 rostopic echo -n 1 " + ns + "/handeye_calibration/calibration");
   ASSERT_EQ(calibration.exit_code, 0) << calibration.output;
   EXPECT_TRUE(contains(calibration.output, "covariance: [")) << calibration.output;
@@ -56,7 +56,7 @@ TEST(ReadmeCommands, StatusEchoAndCalibrateCallWorkAsTyped) {
   EXPECT_TRUE(contains(suggest.output, "success: True")) << suggest.output;
   EXPECT_TRUE(contains(suggest.output, "predicted_object_error_mm: [")) << suggest.output;
 
-  // The report, as the README asks the node for one (into this test's own directory).
+  // The report, as docs/offline.md asks the node for one (into this test's own directory).
   const std::string dir = test::scratch_directory();
   const Shell save = shell("timeout 60 rosservice call " + ns + "/save_calibration \"{path: '" + dir +
                            "/calibration.yaml', report_directory: '" + dir + "/report'}\"");

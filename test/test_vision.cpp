@@ -410,7 +410,7 @@ TEST(PatternPose, CovarianceIsHonestOnASingleTag) {
 // covariances as the pattern noise of each sample, then the estimator. The X
 // covariance must match X's error over the sessions (6-dof NEES mean near 6),
 // although the estimator keeps only the rotation and translation blocks of
-// each detection covariance (its R-t correlation is dropped, see README).
+// each detection covariance (its R-t correlation is dropped, see docs/troubleshooting.md, "Limits that are not errors").
 TEST(PatternPose, CalibrationFromRenderedImagesIsConsistent) {
   const TagLayout layout = io::read_tag_layout(board_file());
   const CameraModel camera = simulated_camera();

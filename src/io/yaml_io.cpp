@@ -218,7 +218,7 @@ YAML::Node load(const std::string& text, const std::string& source) {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) {
       throw HandEyeError(ErrorCode::MalformedFile, "the file is not a YAML mapping", source,
-                         "see the README section `Files` for the format");
+                         "see docs/file_formats.md for the format");
     }
     return root;
   } catch (const YAML::ParserException& e) {
@@ -608,7 +608,7 @@ Input read_input(const std::string& path) {
   if (root["motions"]) return parse_motions(text, path);
   throw HandEyeError(ErrorCode::MissingKey, "the file has neither a `samples` nor a `motions` list", path,
                      "give a samples file (robot and pattern poses) or a motions file (A, B pairs); "
-                     "see the README section `Files`");
+                     "see docs/file_formats.md");
 }
 
 // ---------------------------------------------------------------- results
@@ -1277,7 +1277,7 @@ StoredCalibration read_stored_calibration(const std::string& path) {
     return parse_stored_calibration(text, path);
   } catch (const YAML::Exception& e) {  // a shape the readers did not foresee: still a named error, never a crash
     throw HandEyeError(ErrorCode::MalformedFile, std::string("unexpected YAML structure: ") + e.what(), path,
-                       "compare the file with one /calibrate wrote (README, \"Files\")");
+                       "compare the file with one /calibrate wrote (docs/file_formats.md)");
   }
 }
 
@@ -1325,7 +1325,7 @@ Target parse_target(const std::string& text, const std::string& source) {
   const Location top{source, ""};
   const std::string kinds = "chessboard, charuco, aruco, aruco_board or apriltag";
   if (root.IsMap() && root["tags"] && !root["type"]) return make_target(parse_tag_layout(text, source));
-  const std::string type = as_text(require(root, "type", top, "write `type: " + kinds + "` (README, \"Targets\")"),
+  const std::string type = as_text(require(root, "type", top, "write `type: " + kinds + "` (docs/targets.md)"),
                                    top / "type");
   const auto length = [&](const char* key, const std::string& hint) {
     const double v = as_double(require(root, key, top, hint), top / key);

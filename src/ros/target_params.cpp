@@ -25,7 +25,7 @@ Target target_from_params(const ros::NodeHandle& pn) {
                                            param<std::string>(pn, "family", "tag36h11")));
   } else {
     throw HandEyeError(ErrorCode::MissingKey, "~target is " + kind + " but no ~target_file is given", where,
-                       "give target_file:=<YAML>, e.g. {type: " + kind + ", ...} (README: Targets)");
+                       "give target_file:=<YAML>, e.g. {type: " + kind + ", ...} (docs/targets.md)");
   }
   if (!kind.empty() && target.kind_name() != kind) {
     throw HandEyeError(ErrorCode::MalformedFile,

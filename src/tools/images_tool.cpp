@@ -72,7 +72,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
       "setup", po::value(&setup_name)->required(), "eye_in_hand or eye_to_hand")(
       "robust", po::value(&robust), "auto (default), on or off, as for solve")(
       "method", po::value(&method), "joint (default): X and the pattern pose from each image's detected pose; corners: "
-                                    "then refined by every corner's reprojection error (README: when to use which)")(
+                                    "then refined by every corner's reprojection error (docs/how_it_works.md: when to use it)")(
       "refine-intrinsics", po::bool_switch(&refine_intrinsics),
       "with --method corners: also refine fx, fy, cx, cy, k1, k2, the camera file as their prior (the pose-level "
       "start then rejects no image: wrong intrinsics make the images disagree)")(

@@ -6,7 +6,7 @@
 //   HANDEYE_FUZZ_TARGET_FILES  fuzz_target_files:  io::parse_target (every target kind, tag layouts)
 //   HANDEYE_FUZZ_CAMERA_FILES  fuzz_camera_files:  io::parse_camera_info and OpenCV's files (cv::FileStorage)
 //   HANDEYE_FUZZ_POSE_FILES    fuzz_pose_files:    io::parse_robot_pose (YAML, JSON, ViSP, 4x4 text) and the CSV table
-// Seeds: test/fuzz/corpus/files. Short runs in ./scripts/test; the long runs in the README.
+// Seeds: test/fuzz/corpus/files. Short runs in ./scripts/test; the long runs in docs/evidence.md.
 #include <cstdint>
 #include <string>
 

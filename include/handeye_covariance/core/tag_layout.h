@@ -7,7 +7,7 @@
 // black square (apriltag's convention), not of the white quiet zone around it.
 // The pattern frame is the layout's own; put its origin near the middle of the
 // board, so that the detector's rotation and translation errors stay nearly
-// uncorrelated (the estimator weights them as independent, see README).
+// uncorrelated (the estimator weights them as independent, see docs/troubleshooting.md, "Limits that are not errors").
 #pragma once
 
 #include <Eigen/Geometry>

@@ -1,4 +1,4 @@
-// The package's file formats (yaml-cpp; no ROS). See README "Files".
+// The package's file formats (yaml-cpp; no ROS). See docs/file_formats.md.
 //
 //  samples file:  setup, frames?, noise? {effector, pattern}, samples: [{effector, pattern, stamp?, noise?}]
 //  motions file:  setup?, noise? {A, B}, motions: [{A, B, noise?}]
