@@ -45,7 +45,7 @@ void write_rig_calibration() {
 TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   write_rig_calibration();
   const std::string launch = "roslaunch handeye_covariance publish.launch monitor:=true calibration_file:=" + kFile +
-                             " still_window:=0.3 > " + kDir + "/launch.log 2>&1 & echo $! > " + kDir + "/launch.pid";
+                             " still_window:=0.15 > " + kDir + "/launch.log 2>&1 & echo $! > " + kDir + "/launch.pid";
   ASSERT_EQ(std::system(launch.c_str()), 0);
 
   ros::NodeHandle nh;
