@@ -374,9 +374,30 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
   }
 }
 
+/// Every k-subset of 0..n-1 once, each as an order whose first k are the subset's, when
+/// there are no more than `most` of them; none otherwise.
+std::vector<std::vector<int>> every_split(int n, int k, int most) {
+  double subsets = 1.0;
+  for (int i = 0; i < k; ++i) subsets = subsets * (n - i) / (i + 1);
+  std::vector<std::vector<int>> orders;
+  if (subsets > most) return orders;
+  std::vector<bool> in_check(static_cast<std::size_t>(n), false);
+  std::fill(in_check.begin(), in_check.begin() + k, true);
+  do {
+    std::vector<int> order;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int i = 0; i < n; ++i) {
+        if (in_check[static_cast<std::size_t>(i)] == (pass == 0)) order.push_back(i);
+      }
+    }
+    orders.push_back(order);
+  } while (std::prev_permutation(in_check.begin(), in_check.end()));
+  return orders;
+}
+
 // The check of a saved calibration (calibration_check.h) on every real session and both
-// paths: 200 random splits into a calibration part and a check part of 5 views (a third
-// of a short session), the calibration as a user gets it (the session's noise model and
+// paths: 200 random splits (each distinct split once where there are fewer) into a
+// calibration part and a check part of 5 views (a third of a short session), the calibration as a user gets it (the session's noise model and
 // its leave-one-out prediction scale, its covariance inflated by the honesty check's
 // factor of the whole session: the splits' own would cost 200 honesty checks). A view
 // beyond the outlier gate alone is left out as a wrong detection, as the check does. Without a change the check says
@@ -402,12 +423,20 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       const int k = std::min(5, n / 3);
       std::mt19937_64 rng(17);
       std::normal_distribution<double> normal(0.0, 1.0);
+      // 200 random splits; or, where a session has fewer distinct ones (8 views, checks
+      // of 2: 28), each of them once: repeating a split would only weight it again.
+      const std::vector<std::vector<int>> distinct = every_split(n, k, 200);
+      const int planned = distinct.empty() ? 200 : static_cast<int>(distinct.size());
       int splits = 0, alarms = 0, allowed = 0, detected_allowed = 0, detected = 0;
       std::vector<double> detectable;
-      for (int split = 0; split < 200; ++split) {
+      for (int split = 0; split < planned; ++split) {
         std::vector<int> order(static_cast<std::size_t>(n));
         std::iota(order.begin(), order.end(), 0);
-        std::shuffle(order.begin(), order.end(), rng);
+        if (distinct.empty()) {
+          std::shuffle(order.begin(), order.end(), rng);
+        } else {
+          order = distinct[static_cast<std::size_t>(split)];
+        }
         SampleSet part = *samples, views = *samples;
         part.samples.clear(), views.samples.clear();
         for (int i = 0; i < n; ++i) {
@@ -448,20 +477,22 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       std::sort(detectable.begin(), detectable.end());
       const double median = detectable.empty() ? 0.0 : detectable[detectable.size() / 2];
       const double alarm_rate = splits ? static_cast<double>(alarms) / splits : 1.0;
-      std::printf("[check, real %s, %s, %d samples, %d per check, covariance x%.2f] %d splits: false alarms %.1f%%; "
+      std::printf("[check, real %s, %s, %d samples, %d per check, covariance x%.2f] %d splits: false alarms %.1f%% (%d); "
                   "camera moved 2 mm: detected %.1f%% (%d of %d splits whose 5 sigma <= 2 mm: %.1f%%); detectable change "
                   "(5 sigma along the move, median) %.2f mm\n",
-                  c.name, path.c_str(), n, k, inflation, splits, 100.0 * alarm_rate, splits ? 100.0 * detected / splits : 0.0,
+                  c.name, path.c_str(), n, k, inflation, splits, 100.0 * alarm_rate, alarms, splits ? 100.0 * detected / splits : 0.0,
                   detected_allowed, allowed, allowed ? 100.0 * detected_allowed / allowed : 0.0, median * 1e3);
-      EXPECT_GE(splits, 150) << c.name << ", " << path;
-      // Not reached on the images of the two 8-view Franka sessions (5.5% and 15%): a
-      // calibration of 6 views and checks of 2, and one image (the 8th) whose detector
-      // covariance understates its error beyond the scale the other views fit; their
-      // poses without a covariance give 0%. kuka_2's poses: 3.5% (7 of 200). Asserted as
-      // reached; the note says so.
+      EXPECT_GE(splits, std::min(150, planned)) << c.name << ", " << path;
+      // Not reached on the images of the two 8-view Franka sessions (1 and 4 of their 28
+      // splits): a calibration of 6 views and checks of 2, where one alarm is 3.6%; the
+      // eye-in-hand session's 4 all hold its 8th image, whose detector covariance
+      // understates its error beyond the scale the other views fit. Their poses without a
+      // covariance: none. kuka_2's poses: 3.5% (7 of 200). Asserted as reached; the note says so.
       const bool short_images = n < 10 && path == "images";
       EXPECT_LE(alarm_rate, short_images ? 0.2 : 0.04) << c.name << ", " << path;
-      if (allowed >= 20) EXPECT_GE(static_cast<double>(detected_allowed) / allowed, 0.9) << c.name << ", " << path;
+      if (allowed >= 20) {
+        EXPECT_GE(static_cast<double>(detected_allowed) / allowed, 0.9) << c.name << ", " << path;
+      }
     }
   }
 }
