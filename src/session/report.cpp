@@ -3,17 +3,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/python_script.h"
 #include "handeye_covariance/io/yaml_io.h"
 
-#include <spawn.h>
-#include <sys/wait.h>
-
-extern char** environ;
 
 namespace handeye {
 
@@ -193,25 +188,12 @@ ReportFiles write_report(const std::string& directory, const CalibrationReport& 
   io::write_file_atomically(dir + "/report.yaml", io::format_report(report, context, source));
   ReportFiles files;
   files.directory = dir;
-  // The figures are matplotlib's (scripts/report.py), run without a shell: the
-  // directory's name is an argument, never parsed.
-  std::string python = "/usr/bin/python3", script = HANDEYE_REPORT_SCRIPT, target = dir;
-  char* argv[] = {python.data(), script.data(), target.data(), nullptr};
-  pid_t pid = 0;
-  int status = 0;
-  const int spawned = ::posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv, environ);
-  if (spawned != 0) {
-    files.problem = "cannot run " + python + ": " + std::strerror(spawned) + " (needs Debian's python3-matplotlib)";
+  // The figures are matplotlib's (scripts/report.py).
+  const std::string problem = run_python_script(HANDEYE_REPORT_SCRIPT, {dir});
+  if (!problem.empty()) {
+    files.problem = problem + " (needs Debian's python3-matplotlib): the YAML files stand, the figures and the page are missing";
   } else {
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      files.problem = python + " " + script + " " + dir + " failed (exit " +
-                      std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
-                      "; needs Debian's python3-matplotlib): the YAML files stand, the figures and the page are missing";
-    } else {
-      files.html = dir + "/report.html";
-    }
+    files.html = dir + "/report.html";
   }
   return files;
 }

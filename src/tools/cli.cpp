@@ -14,6 +14,7 @@
 #include "cli_common.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/python_script.h"
 #include "handeye_covariance/simulation/monte_carlo_study.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
@@ -327,9 +328,9 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
     io::write_file_atomically(out_dir + "/validation.csv", csv.str());
     io::write_file_atomically(out_dir + "/covariances.csv", covariances.str());
     out << "wrote " << out_dir << "/validation.csv and covariances.csv\n";
-    const std::string plot = std::string("/usr/bin/python3 ") + HANDEYE_PLOT_SCRIPT + " " + out_dir;
-    if (std::system(plot.c_str()) != 0) {
-      err << "handeye validate: the plots were not made (needs Debian's python3-matplotlib): " << plot << "\n";
+    const std::string problem = run_python_script(HANDEYE_PLOT_SCRIPT, {out_dir});
+    if (!problem.empty()) {
+      err << "handeye validate: the plots were not made (needs Debian's python3-matplotlib): " << problem << "\n";
       return kInternal;
     }
     out << "wrote the plots to " << out_dir << " (fig2_<protocol>.png, fig3_epsilon.png)\n";
