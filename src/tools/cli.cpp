@@ -61,38 +61,49 @@ int run_bag_tool(const std::string& command, const Args& args, std::ostream& out
   return run_tool("handeye_bag", command, args, out, err);
 }
 
+/// What `handeye solve` and `handeye report` both take for a samples file's session:
+/// declared once (add_session_options), read once (samples_session).
+struct SessionArgs {
+  std::string noise_path, method = "joint", robust = "auto";
+  bool keep_outliers = false;
+};
+
+void add_session_options(po::options_description& options, SessionArgs& a) {
+  options.add_options()(
+      "noise", po::value(&a.noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
+      "keep-outliers", po::bool_switch(&a.keep_outliers), "samples: do not reject wrong detections (they are by default)")(
+      "method", po::value(&a.method),
+      "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
+      "robust", po::value(&a.robust),
+      "joint: auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed; default), on, off");
+}
+
 /// The session `handeye solve` and `handeye report` run on the samples of `input`:
 /// the file's setup, frames and noise (or --noise's), the options' rejection,
 /// method and robust mode, the node's other settings from `config`.
 CalibrationSession samples_session(const SampleSet& samples, const std::string& input, const SessionConfig& config,
-                                   const std::string& noise_path, bool keep_outliers, const std::string& method,
-                                   const std::string& robust, const HonestyArgs& honesty = {}) {
+                                   const SessionArgs& a, const HonestyArgs& honesty = {}) {
   SessionSettings settings = session_settings(samples, config);
   honesty.apply(settings);
-  if (!noise_path.empty()) settings.noise = io::read_noise_file(noise_path);
-  settings.reject_outliers = !keep_outliers;
-  settings.method = method_from_string(method);
-  settings.robust = robust_from_string(robust);
+  if (!a.noise_path.empty()) settings.noise = io::read_noise_file(a.noise_path);
+  settings.reject_outliers = !a.keep_outliers;
+  settings.method = method_from_string(a.method);
+  settings.robust = robust_from_string(a.robust);
   CalibrationSession session(settings);
   session.replace(samples.samples, "read " + input);
   return session;
 }
 
 int solve_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  std::string input, output, noise_path, method = "joint", robust = "auto";
-  bool keep_outliers = false;
+  std::string input, output;
+  SessionArgs session_args;
   HonestyArgs honesty;
   po::options_description options("solve: AX = XB with the covariance of X");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples or motions file (YAML)")(
-      "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
-      "keep-outliers", po::bool_switch(&keep_outliers), "samples: do not reject wrong detections (they are by default)")(
-      "method", po::value(&method),
-      "samples: joint (X and the pattern pose from the poses; default) or pairs (the paper's AX = XB)")(
-      "robust", po::value(&robust),
-      "joint: auto (Huber's loss and the sandwich covariance when the residuals are heavy-tailed; default), on, off")(
       "output,o", po::value(&output),
       "result file (YAML); default: <input stem>_result.yaml in the current directory");
+  add_session_options(options, session_args);
   add_honesty_options(options, honesty);
   po::variables_map vm;
   if (!parse("solve", "--input FILE [--noise FILE] [--output FILE] [--split-check N] [--no-inflation]", options, args, vm,
@@ -103,7 +114,7 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   if (output.empty()) output = default_result_path(input);
 
   io::Input data = io::read_input(input);
-  if (!noise_path.empty() && !std::holds_alternative<SampleSet>(data)) {
+  if (!session_args.noise_path.empty() && !std::holds_alternative<SampleSet>(data)) {
     throw HandEyeError(ErrorCode::MalformedFile, "--noise applies to samples files", input,
                        "put the motions' noise in the motions file's `noise: {A, B}` block");
   }
@@ -112,7 +123,7 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
   if (const SampleSet* samples = std::get_if<SampleSet>(&data)) {
     // Samples go through the session the node and the bag replay use.
     const CalibrationSession session =
-        samples_session(*samples, input, {}, noise_path, keep_outliers, method, robust, honesty);
+        samples_session(*samples, input, {}, session_args, honesty);
     const SessionSnapshot snapshot = session.snapshot();
     calibration = session.calibrate_checked(snapshot);
     context = io::context_of(snapshot.samples);
@@ -133,8 +144,8 @@ int solve_command(const std::vector<std::string>& args, std::ostream& out, std::
 
 int report_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   SessionConfig config;
-  std::string input, output, noise_path, method = "joint", robust = "auto";
-  bool keep_outliers = false;
+  std::string input, output;
+  SessionArgs session_args;
   ReportOptions report_options;
   double target_mm = config.target_tolerance_mm, working_distance = config.working_distance;
   po::options_description options(
@@ -143,10 +154,6 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples file (YAML), e.g. the node's saved session")(
       "output,o", po::value(&output), "directory for report.html, the figures and the YAML; default: <input stem>_report")(
-      "noise", po::value(&noise_path), "a file with a `noise:` block (e.g. from `handeye noise`); replaces the input's")(
-      "keep-outliers", po::bool_switch(&keep_outliers), "do not reject wrong detections (they are by default)")(
-      "method", po::value(&method), "joint (default) or pairs")(
-      "robust", po::value(&robust), "auto (default), on or off: as for solve")(
       "splits", po::value(&report_options.splits), "random halves for the split-half check (default 200; 0: leave it out)")(
       "reference-sessions", po::value(&report_options.reference_sessions),
       "simulated honest sessions the split-half check is judged against (default 100)")(
@@ -154,6 +161,7 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
       ("m along the optical axis for the object's 1 sigma (default " + number_text(working_distance) + ")").c_str())(
       "target-mm", po::value(&target_mm),
       ("the object 1 sigma wanted (default " + number_text(target_mm) + ")").c_str());
+  add_session_options(options, session_args);
   po::variables_map vm;
   if (!parse("report", "--input FILE [--output DIR] [--noise FILE] [--splits N]", options, args, vm, out)) return kOk;
   if (!(working_distance > 0.0) || !(target_mm > 0.0) || report_options.splits < 0 || report_options.reference_sessions < 2) {
@@ -166,7 +174,7 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
   config.target_tolerance_mm = target_mm;
   const SampleSet samples = io::read_samples(input);
   // The session the node, solve and the bag replay use: the same X.
-  const CalibrationSession session = samples_session(samples, input, config, noise_path, keep_outliers, method, robust);
+  const CalibrationSession session = samples_session(samples, input, config, session_args);
   const SessionSnapshot snapshot = session.snapshot();
   const CalibrationReport report = make_report(session, snapshot, report_options);
   out << io::human_summary(report.calibration, io::context_of(snapshot.samples));
