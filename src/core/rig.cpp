@@ -25,13 +25,13 @@ Isometry3d Rig::face_half_turn() const {
   return se3::make_pose(R, centre - R * centre);
 }
 
-Isometry3d Rig::robot_link(const Isometry3d& E) const { return eye_in_hand() ? E.inverse() : E; }
+Isometry3d Rig::robot_link(const Isometry3d& E) const { return link_is_inverse() ? E.inverse() : E; }
 
 Matrix6d Rig::robot_link_jacobian(const Isometry3d& E) const {
-  return eye_in_hand() ? inverse_jacobian(E) : Matrix6d::Identity();
+  return link_is_inverse() ? inverse_jacobian(E) : Matrix6d::Identity();
 }
 
-Isometry3d Rig::effector_for_link(const Isometry3d& V) const { return eye_in_hand() ? V.inverse() : V; }
+Isometry3d Rig::effector_for_link(const Isometry3d& V) const { return link_is_inverse() ? V.inverse() : V; }
 
 Isometry3d Rig::robot_motion(const Isometry3d& E_i, const Isometry3d& E_j) const {
   // eye_in_hand A = E_j^-1 E_i; eye_to_hand A = E_j E_i^-1.

@@ -33,7 +33,7 @@ struct Term {
   Term() {}  // user-provided: a vector of 10^4 terms is not zero-filled before it is written
   Matrix3d RV, RP;
   Vector3d tV, tP;
-  bool link_is_inverse = false;  // V = E^-1 (eye-in-hand)
+  bool link_is_inverse = false;  // Rig::link_is_inverse, kept per term for the hot loop
   bool has_robot = false;
   const Matrix6d* camera_noise = nullptr;
   const Matrix6d* robot_noise = nullptr;
@@ -47,7 +47,7 @@ Term make_term(const Rig& rig, const PoseSample& sample) {
   const Isometry3d V = rig.robot_link(sample.T_base_effector);
   t.RV = V.linear(), t.tV = V.translation();
   t.RP = sample.T_camera_pattern.linear(), t.tP = sample.T_camera_pattern.translation();
-  t.link_is_inverse = rig.eye_in_hand();
+  t.link_is_inverse = rig.link_is_inverse();
   return t;
 }
 

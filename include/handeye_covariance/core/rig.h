@@ -64,6 +64,9 @@ struct Rig {
   /// Y's parent frame: the base (eye_in_hand) or the effector (eye_to_hand).
   const std::string& pattern_parent_frame() const { return eye_in_hand() ? frames.base : frames.effector; }
 
+  /// Which setup inverts E in the loop: V = E^-1 eye_in_hand, V = E eye_to_hand. The
+  /// one statement of it; robot_link, its Jacobian and the solver's terms ask it.
+  bool link_is_inverse() const { return eye_in_hand(); }
   /// V: E^-1 (eye_in_hand) or E (eye_to_hand).
   Eigen::Isometry3d robot_link(const Eigen::Isometry3d& T_base_effector) const;
   /// d V / d E: V's perturbation from E's (ROS order).
