@@ -5,6 +5,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
 
@@ -60,13 +61,13 @@ void check_samples(const SampleSet& samples) {
 }  // namespace
 
 SampleResidual sample_residual(const Rig& rig, const PoseSample& sample, const Isometry3d& X, const Isometry3d& pattern) {
-  // The expected pattern pose P_bar = X^-1 V Y (rig.h).
-  const Isometry3d& E = sample.T_base_effector;
-  const Isometry3d V = rig.robot_link(E);
+  // The joint estimator's residual and its robot Jacobian (one of each, checked
+  // numerically in test_joint_estimator): e = P (-) P_hat with P_hat = X^-1 V Y, so
+  // d e / d xi_E = -d P_hat / d xi_E to first order. eq. (64-65)
+  const JointResidual joint = joint_residual(rig, sample, X, pattern);
   SampleResidual r;
-  // P = exp(e) P_bar, so d e = -d P_bar for the effector's part.
-  r.error = pose_error(sample.T_camera_pattern, rig.predicted_view(E, X, pattern));  // eq. (64-65)
-  r.d_effector = -compose_jacobian_right(X.inverse()) * compose_jacobian_left(V, pattern) * rig.robot_link_jacobian(E);
+  r.error = joint.error;
+  r.d_effector = -joint.d_effector;
   return r;
 }
 
