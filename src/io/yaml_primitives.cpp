@@ -1,3 +1,4 @@
+// The readers and writers the file families share (yaml_primitives.h).
 #include "yaml_primitives.h"
 
 #include <Eigen/SVD>
