@@ -136,23 +136,23 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(huge, "huge"); }).find("camera_matrix.cols must be a whole number"),
             std::string::npos);
   const std::string thrown = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
-                                           "/test/fuzz/corpus/files/regression-opencv-length-error.yaml");
+                                           "/test/fuzz/corpus/target_files/regression-opencv-length-error.yaml");
   const std::string length_error = error_of([&] { images::parse_opencv_camera(thrown, "length"); });
   EXPECT_TRUE(length_error.find("OpenCV cannot read it") != std::string::npos ||
               length_error.find("line ") != std::string::npos)  // refused before OpenCV sees it
       << length_error;
   const std::string nul = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
-                                        "/test/fuzz/corpus/files/regression-opencv-nul-byte.xml");  // OpenCV segfaults on it
+                                        "/test/fuzz/corpus/target_files/regression-opencv-nul-byte.xml");  // OpenCV segfaults on it
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(nul, "nul"); }).find("a NUL byte at offset 14"), std::string::npos);
   // OpenCV's XML parser reads NULL on a cut-short document (the fuzzer's find);
   // tinyxml2 turns it, and a camera.xml cut in half, into a named error.
   const std::string cut = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
-                                        "/test/fuzz/corpus/files/regression-opencv-xml-cut-attribute.xml");
+                                        "/test/fuzz/corpus/target_files/regression-opencv-xml-cut-attribute.xml");
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(cut, "cut"); }).find("not well-formed XML (line 1)"),
             std::string::npos);
   // ... and loops forever on a directive after a document start (the fuzzer's find): refused first.
   const std::string second = io::read_file(std::string(HANDEYE_SOURCE_DIR) +
-                                           "/test/fuzz/corpus/files/regression-opencv-yaml-second-directive.yaml");
+                                           "/test/fuzz/corpus/target_files/regression-opencv-yaml-second-directive.yaml");
   EXPECT_NE(error_of([&] { images::parse_opencv_camera(second, "second"); }).find("line 2 has a '%'"),
             std::string::npos);
   const std::string xml = io::read_file((dir / "camera.xml").string());

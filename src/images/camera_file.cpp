@@ -1,7 +1,7 @@
 // OpenCV's camera files, read from memory (so the fuzzer can drive it without
 // files): XML by cv::FileStorage after tinyxml2's check, YAML and JSON by
 // yaml-cpp. Only opencv_core, tinyxml2 and yaml-cpp: test/sanitize builds this
-// file alone into fuzz_camera_files.
+// file alone into fuzz_target_files.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -69,7 +69,7 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& key, int max_e
 }
 
 /// OpenCV 4.6's XML parser reads past the end of a malformed document (a NULL
-/// dereference on "<?xml versio...=" cut short: test/fuzz/corpus/files/
+/// dereference on "<?xml versio...=" cut short: test/fuzz/corpus/target_files/
 /// regression-opencv-xml-cut-attribute.xml), so an XML file is checked by a real
 /// XML parser first; OpenCV only ever sees well-formed XML.
 void require_well_formed_xml(const std::string& text, const std::string& source, const std::string& hint) {
@@ -84,7 +84,7 @@ void require_well_formed_xml(const std::string& text, const std::string& source,
 
 /// OpenCV 4.6's YAML parser loops forever on some malformed files (a directive
 /// after a document start, "---%YAML:1.0" then "----"; bytes beyond ASCII in a
-/// flow sequence: test/fuzz/corpus/files/regression-opencv-yaml-*), so a YAML
+/// flow sequence: test/fuzz/corpus/target_files/regression-opencv-yaml-*), so a YAML
 /// file is checked first: ASCII outside comments, '%' only in its first line's
 /// %YAML:1.0, and well-formed for yaml-cpp (with that line left out, which is
 /// OpenCV's, not YAML 1.2's). OpenCV then sees only what a YAML parser accepts.
@@ -164,7 +164,7 @@ CameraModel parse_opencv_camera(const std::string& text, const std::string& sour
                            "(write it with cv::FileStorage)";
   CameraModel file;
   // OpenCV 4.6's XML parser dereferences NULL on a NUL byte inside a tag
-  // (test/fuzz/corpus/files/regression-opencv-nul-byte.xml); a camera file is text.
+  // (test/fuzz/corpus/target_files/regression-opencv-nul-byte.xml); a camera file is text.
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
     throw HandEyeError(ErrorCode::MalformedFile, "a NUL byte at offset " + std::to_string(nul) + ": not a text file",
                        source, hint);

@@ -1,7 +1,7 @@
 // A calibration target as printed (no ROS, no OpenCV): a chessboard, a ChArUco
 // board, or markers (one or a board of AprilTags or ArUco markers, a TagLayout
 // whose family names the detector). The vision layer detects each kind
-// (vision/target.h); io reads target files (io/yaml_io.h).
+// (vision/target.h); io reads target files (io/target_file.h).
 //
 // Frames: a chessboard's and a ChArUco board's are OpenCV's (vision/chessboard.h,
 // vision/aruco.h): origin at a corner, x along a row, y down the rows, z into the

@@ -1,0 +1,599 @@
+// Result, report, check and pose files, stored calibrations (result_file.h).
+#include "handeye_covariance/io/result_file.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/io/files.h"
+#include "yaml_primitives.h"
+
+namespace handeye {
+namespace io {
+
+using namespace detail;  // the shared readers and writers (yaml_primitives.h)
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+// ---------------------------------------------------------------- results
+
+ResultContext context_of(const SampleSet& samples) {
+  ResultContext c;
+  c.setup = samples.rig.setup;
+  c.parent = samples.rig.camera_parent_frame();
+  c.child = samples.rig.frames.camera;
+  c.pattern_parent = samples.rig.pattern_parent_frame();
+  c.pattern_child = samples.rig.frames.pattern;
+  return c;
+}
+
+ResultContext context_of(const MotionSet&) { return {}; }
+
+namespace {
+/// The keys every result file has: frames, X, its covariance, the sample count
+/// and easy_handeye's `transformation` block.
+/// `covariance: {rotation, translation, pose}` of a pose.
+void emit_pose_covariance(YAML::Emitter& out, const Matrix6d& covariance) {
+  out << YAML::Key << "covariance" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rotation" << YAML::Value;
+  emit_covariance3(out, covariance.bottomRightCorner<3, 3>());
+  out << YAML::Key << "translation" << YAML::Value;
+  emit_covariance3(out, covariance.topLeftCorner<3, 3>());
+  out << YAML::Key << "pose" << YAML::Value;
+  const auto pose = to_row_major_6x6(covariance);
+  emit_numbers(out, pose.data(), pose.size());
+  out << YAML::EndMap;
+}
+
+void emit_result_head(YAML::Emitter& out, const PoseWithCovariance& X, int samples_used,
+                      const ResultContext& context) {
+  if (context.setup) out << YAML::Key << "setup" << YAML::Value << to_string(*context.setup);
+  out << YAML::Key << "parent" << YAML::Value << context.parent;
+  out << YAML::Key << "child" << YAML::Value << context.child;
+  emit_pose(out, X.pose);
+  emit_pose_covariance(out, X.covariance);
+  out << YAML::Key << "samples_used" << YAML::Value << samples_used;
+
+  Eigen::Quaterniond q(X.pose.linear());
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  out << YAML::Key << "transformation" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "x" << YAML::Value << X.pose.translation().x();
+  out << YAML::Key << "y" << YAML::Value << X.pose.translation().y();
+  out << YAML::Key << "z" << YAML::Value << X.pose.translation().z();
+  out << YAML::Key << "qx" << YAML::Value << q.x() << YAML::Key << "qy" << YAML::Value << q.y();
+  out << YAML::Key << "qz" << YAML::Value << q.z() << YAML::Key << "qw" << YAML::Value << q.w();
+  out << YAML::EndMap;
+}
+}  // namespace
+
+std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& context) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  emit_result_head(out, X, 0, context);
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string format_report(const CalibrationReport& report, const ResultContext& context, const std::string& source) {
+  // Humans read this file: mm and degrees, in ROS order (x, y, z, rx, ry, rz).
+  const auto human = [](const Vector6d& sigma) {
+    std::vector<double> v(6);
+    for (int k = 0; k < 6; ++k) v[static_cast<std::size_t>(k)] = sigma(k) * (k < 3 ? 1e3 : 180.0 / M_PI);
+    return v;
+  };
+  const auto emit_list = [](YAML::Emitter& out, const std::vector<double>& v) { emit_numbers(out, v.data(), v.size()); };
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  out << YAML::Key << "source" << YAML::Value << source;
+  if (context.setup) out << YAML::Key << "setup" << YAML::Value << to_string(*context.setup);
+  out << YAML::Key << "frames" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "parent" << YAML::Value
+      << context.parent << YAML::Key << "camera" << YAML::Value << context.child << YAML::EndMap;
+  out << YAML::Key << "method" << YAML::Value << to_string(report.calibration.method);
+  out << YAML::Key << "advice_sigma" << YAML::Value << report.advice_sigma;
+  out << YAML::Key << "object" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "working_distance_m"
+      << YAML::Value << report.working_distance << YAML::Key << "sigma_mm" << YAML::Value << report.object_sigma * 1e3
+      << YAML::Key << "target_mm" << YAML::Value << report.target_object_sigma * 1e3 << YAML::EndMap;
+
+  out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
+  for (std::size_t i = 0; i < report.fits.size(); ++i) {
+    const SampleFit& f = report.fits[i];
+    const Calibration::Rejected* rejected = rejection_of(report.calibration, static_cast<int>(i));
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << i << YAML::Key << "residual_mm"
+        << YAML::Value << f.translation * 1e3 << YAML::Key << "residual_deg" << YAML::Value
+        << f.rotation * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
+        << YAML::Value << (rejected != nullptr);
+    if (rejected) out << YAML::Key << "reason" << YAML::Value << rejected->reason;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+
+  out << YAML::Key << "checks" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "units" << YAML::Value << "mm, mm, mm, deg, deg, deg (x, y, z, rx, ry, rz)";
+  out << YAML::Key << "predicted_sigma" << YAML::Value;
+  emit_list(out, human(report.predicted_sigma));
+  out << YAML::Key << "leave_one_out_sigma" << YAML::Value;
+  emit_list(out, human(report.leave_one_out_sigma));
+  out << YAML::Key << "leave_one_out_solved" << YAML::Value << report.leave_one_out_solved;
+  out << YAML::Key << "leave_one_out_failed" << YAML::Value << report.leave_one_out_failed;
+  out << YAML::Key << "split_half_sigma" << YAML::Value;
+  emit_list(out, human(report.split_half_sigma));
+  out << YAML::Key << "split_half_splits" << YAML::Value << report.honesty.observed.splits;
+  out << YAML::Key << "split_half_size" << YAML::Value << report.honesty.observed.half_size;
+  out << YAML::Key << "split_half_nees" << YAML::Value << report.honesty.observed.mean_nees;
+  out << YAML::Key << "split_half_nees_translation" << YAML::Value << report.honesty.observed.mean_nees_translation;
+  out << YAML::Key << "split_half_nees_rotation" << YAML::Value << report.honesty.observed.mean_nees_rotation;
+  // The calibrated check: the middle 90% of the splits against an honest covariance on these poses.
+  const HonestyCheck& h = report.honesty;
+  out << YAML::Key << "split_half_nees_middle" << YAML::Value << h.observed.trimmed_mean_nees;
+  out << YAML::Key << "honest_nees" << YAML::Value << h.reference.mean;
+  out << YAML::Key << "honest_nees_band" << YAML::Value << YAML::Flow << YAML::BeginSeq << h.reference.low << h.reference.high
+      << YAML::EndSeq;
+  out << YAML::Key << "honest_sessions" << YAML::Value << h.reference.replicates;
+  out << YAML::Key << "honesty_ratio" << YAML::Value << h.ratio;
+  out << YAML::Key << "honesty" << YAML::Value << (h.ran() ? to_string(h.verdict) : "not run");
+  out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
+  if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
+  out << YAML::EndMap;
+
+  out << YAML::Key << "rotation_axes" << YAML::Value << YAML::BeginSeq;  // camera frame: x, y, z, angle (deg)
+  for (const MotionAxis& m : report.rotation_axes) {
+    emit_list(out, {m.axis.x(), m.axis.y(), m.axis.z(), m.angle * 180.0 / M_PI});
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "turning" << YAML::Value << YAML::BeginMap;  // eigen-decomposition of sum theta^2 a a^T, ascending
+  out << YAML::Key << "eigenvalues_rad2" << YAML::Value;
+  emit_list(out, {report.turning(0), report.turning(1), report.turning(2)});
+  out << YAML::Key << "axes" << YAML::Value << YAML::BeginSeq;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d a = report.turning_axes.col(k);
+    emit_list(out, {a.x(), a.y(), a.z()});
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+
+  out << YAML::Key << "advice" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& a : report.advice) out << a;
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string format_result(const Calibration& calibration, const ResultContext& context) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  emit_result_head(out, {calibration.T_parent_camera, calibration.pose_covariance}, calibration.samples_used, context);
+  out << YAML::Key << "motions_used" << YAML::Value << calibration.motions_used;
+  out << YAML::Key << "method" << YAML::Value << to_string(calibration.method);
+  if (calibration.pattern) {  // Y with the same keys as X, and Cov(X, Y)
+    out << YAML::Key << "pattern" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "parent" << YAML::Value << context.pattern_parent;
+    out << YAML::Key << "child" << YAML::Value << context.pattern_child;
+    emit_pose(out, calibration.pattern->pose);
+    emit_pose_covariance(out, calibration.pattern->covariance);
+    out << YAML::EndMap;
+    out << YAML::Key << "cross_covariance" << YAML::Value;  // 6x6, X's ROS order in rows, Y's in columns
+    const auto cross = to_row_major_6x6(calibration.cross_covariance);
+    emit_numbers(out, cross.data(), cross.size());
+  }
+  if (calibration.corner_fit) {  // method corners: the reprojection fit, per image
+    const Calibration::CornerFit& fit = *calibration.corner_fit;
+    out << YAML::Key << "corners" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "pixel_sigma" << YAML::Value << fit.pixel_sigma;
+    out << YAML::Key << "pixel_sigma_estimated" << YAML::Value << fit.pixel_sigma_estimated;
+    out << YAML::Key << "rms_px" << YAML::Value << fit.rms_px;
+    out << YAML::Key << "corners" << YAML::Value << fit.corners;
+    out << YAML::Key << "robot_poses" << YAML::Value << fit.robot;
+    out << YAML::Key << "target_point_sigma" << YAML::Value << fit.target_point_sigma;  // m, per axis
+    if (!fit.target_points.empty()) out << YAML::Key << "target_points" << YAML::Value << fit.target_points;
+    if (!fit.pixel_noise.empty()) out << YAML::Key << "pixel_noise" << YAML::Value << fit.pixel_noise;
+    out << YAML::Key << "per_image_sigma" << YAML::Value << fit.per_image_sigma;
+    if (!fit.intrinsics.empty()) {  // refined: fx, fy, cx, cy (px), k1, k2, each with its 1 sigma
+      const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2"};
+      out << YAML::Key << "intrinsics" << YAML::Value << YAML::BeginMap;
+      for (std::size_t k = 0; k < fit.intrinsics.size(); ++k) {
+        out << YAML::Key << names[k] << YAML::Value << YAML::Flow << YAML::BeginSeq << fit.intrinsics[k]
+            << fit.intrinsics_sigma[k] << YAML::EndSeq;
+      }
+      out << YAML::EndMap;
+    }
+    out << YAML::Key << "images" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::CornerFit::Image& image : fit.images) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << image.name << YAML::Key << "corners"
+          << YAML::Value << image.corners << YAML::Key << "rms_px" << YAML::Value << image.rms_px << YAML::Key
+          << "sigma_px" << YAML::Value << image.sigma_px << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+
+  const bool samples = context.setup.has_value();
+  out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "origin" << YAML::Value
+      << (calibration.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals");
+  out << YAML::Key << "model" << YAML::Value;
+  emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
+  if (!calibration.noise_model.empty()) out << YAML::Key << "how" << YAML::Value << calibration.noise_model;
+  if (!calibration.noise_components.empty()) {  // joint: each number the residuals estimated, with its 1 sigma
+    out << YAML::Key << "estimated" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::NoiseComponent& c : calibration.noise_components) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "value"
+          << YAML::Value << c.value << YAML::Key << "sigma" << YAML::Value << c.sigma << YAML::Key << "unit" << YAML::Value
+          << c.unit << YAML::Key << "supported" << YAML::Value << !c.at_bound << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!calibration.noise_candidates.empty()) {  // joint: the noise models compared by BIC
+    out << YAML::Key << "candidates" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::NoiseCandidate& c : calibration.noise_candidates) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "numbers"
+          << YAML::Value << c.numbers << YAML::Key << "score" << YAML::Value << c.score << YAML::Key << "fitted" << YAML::Value
+          << c.fitted << YAML::Key << "chosen" << YAML::Value << c.chosen;
+      if (c.fitted) {
+        out << YAML::Key << "log_likelihood" << YAML::Value << c.log_likelihood << YAML::Key << "bic" << YAML::Value << c.bic;
+      }
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (const auto& m = calibration.residual_noise) {
+    // The residual covariance of any view (joint_estimator.h residual_covariances):
+    // S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T.
+    out << YAML::Key << "residual_model" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "camera_scale" << YAML::Value << m->camera_scale;
+    const auto camera = to_row_major_6x6(m->camera), robot = to_row_major_6x6(m->robot);
+    out << YAML::Key << "camera" << YAML::Value;
+    emit_numbers(out, camera.data(), camera.size());
+    out << YAML::Key << "robot" << YAML::Value;
+    emit_numbers(out, robot.data(), robot.size());
+    out << YAML::Key << "view_scale" << YAML::Value << m->view_scale;
+    if (!m->view_points.empty()) {
+      std::vector<double> points;
+      for (const Eigen::Vector3d& p : m->view_points) points.insert(points.end(), {p.x(), p.y(), p.z()});
+      out << YAML::Key << "view_points" << YAML::Value;
+      emit_numbers(out, points.data(), points.size());
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  if (!calibration.turned.empty()) {  // a symmetric target: the views turned to agree with the motion
+    out << YAML::Key << "turned_samples" << YAML::Value << YAML::Flow << calibration.turned;
+  }
+  if (const auto& h = calibration.honesty) {  // the calibrated split-half check (split_check.h)
+    out << YAML::Key << "honesty" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "verdict" << YAML::Value << h->verdict;
+    out << YAML::Key << "text" << YAML::Value << h->text;
+    if (h->verdict != "not run") {
+      out << YAML::Key << "splits" << YAML::Value << h->splits << YAML::Key << "half_size" << YAML::Value << h->half_size;
+      out << YAML::Key << "split_half_nees" << YAML::Value << h->split_half_nees;
+      out << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sessions"
+          << YAML::Value << h->replicates << YAML::Key << "mean" << YAML::Value << h->reference_mean << YAML::Key << "low"
+          << YAML::Value << h->reference_low << YAML::Key << "high" << YAML::Value << h->reference_high << YAML::EndMap;
+      out << YAML::Key << "ratio" << YAML::Value << h->ratio;
+      out << YAML::Key << "inflation" << YAML::Value << h->inflation;
+      if (h->inflation > 1.0) {  // X's covariance as the noise model gave it; the one above is inflated
+        const auto model = to_row_major_6x6(h->model_pose_covariance);
+        out << YAML::Key << "model_covariance" << YAML::Value;
+        emit_numbers(out, model.data(), model.size());
+      }
+    }
+    out << YAML::EndMap;
+  }
+  if (const auto& p = calibration.prediction) {  // leave-one-out: how well it predicts a view it has not seen
+    out << YAML::Key << "prediction" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "scale" << YAML::Value
+        << p->scale << YAML::Key << "dof" << YAML::Value << p->dof << YAML::Key << "views" << YAML::Value << p->views
+        << YAML::EndMap;
+  }
+  if (calibration.method == Method::Joint) {  // which tests ran on the residuals, and what they chose
+    out << YAML::Key << "residual_checks" << YAML::Value << YAML::BeginSeq;
+    for (const Calibration::ResidualCheck& c : calibration.residual_checks) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "test" << YAML::Value << c.test << YAML::Key << "statistic"
+          << YAML::Value << c.statistic << YAML::Key << "bound" << YAML::Value << c.bound << YAML::Key << "passed"
+          << YAML::Value << c.passed << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+    out << YAML::Key << "robust" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "loss" << YAML::Value << calibration.loss;
+    out << YAML::Key << "covariance" << YAML::Value << calibration.covariance_kind;
+    out << YAML::Key << "downweighted" << YAML::Value << calibration.downweighted;
+    out << YAML::Key << "covariance_inflation" << YAML::Value << calibration.covariance_inflation;
+    out << YAML::Key << "pattern_covariance_inflation" << YAML::Value << calibration.pattern_covariance_inflation;
+    out << YAML::EndMap;
+  }
+
+  out << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, stage] : {std::pair<const char*, const StageDiagnostics*>{"rotation", &calibration.rotation_stage},
+                                    {"translation", &calibration.translation_stage}}) {
+    out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "iterations" << YAML::Value << stage->iterations;
+    out << YAML::Key << "stop_reason" << YAML::Value << to_string(stage->stop_reason);
+    out << YAML::Key << "chi2" << YAML::Value << stage->chi2;
+    out << YAML::Key << "dof" << YAML::Value << stage->dof;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << calibration.warnings;
+  out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;  // outliers left out, indices into the input
+  for (const auto& r : calibration.rejected) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << r.index << YAML::Key << "reason"
+        << YAML::Value << r.reason << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+std::string format_check(const CalibrationCheck& check, const std::string& calibration_path) {
+  YAML::Emitter out;
+  new_emitter(out) << YAML::BeginMap;
+  const auto emit_6 = [&](const char* key, const Vector6d& v) {
+    out << YAML::Key << key << YAML::Value;
+    emit_numbers(out, v.data(), 6);
+  };
+  const auto emit_6x6 = [&](const char* key, const Matrix6d& m) {
+    const auto rows = to_row_major_6x6(m);
+    out << YAML::Key << key << YAML::Value;
+    emit_numbers(out, rows.data(), rows.size());
+  };
+  out << YAML::Key << "calibration" << YAML::Value << calibration_path;
+  out << YAML::Key << "verdict" << YAML::Value << (check.changed ? "changed" : "consistent");
+  out << YAML::Key << "p_value" << YAML::Value << check.p_value;
+  out << YAML::Key << "alpha" << YAML::Value << check.alpha;
+  out << YAML::Key << "text" << YAML::Value << check.verdict;
+  if (check.changed) {
+    out << YAML::Key << "changed" << YAML::Value << check.change.what;
+    const EstimatedChange::Delta& main = check.change.reported();
+    emit_6("change", main.value);  // ROS order, m and rad: the new pose is exp(change) times the saved one
+    emit_6x6("change_covariance", main.covariance);
+    if (check.change.what == "both") {
+      emit_6("pattern_change", check.change.Y_change->value);
+      emit_6x6("pattern_change_covariance", check.change.Y_change->covariance);
+    }
+  }
+  out << YAML::Key << "statistic" << YAML::Value << check.statistic;  // max(T_X, T_Y)
+  out << YAML::Key << "chi2" << YAML::Value << check.chi2;
+  out << YAML::Key << "dof" << YAML::Value << check.dof;
+  out << YAML::Key << "chi2_p_value" << YAML::Value << check.chi2_p_value;
+  out << YAML::Key << "hypotheses" << YAML::Value << YAML::BeginSeq;
+  for (const EstimatedChange* h : {&check.X_alone, &check.Y_alone, &check.both}) {
+    if (h->what.empty()) continue;  // both: not identified from one or two views
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "changed" << YAML::Value << h->what << YAML::Key << "chi2_drop"
+        << YAML::Value << h->chi2_drop << YAML::Key << "dof" << YAML::Value << h->dof << YAML::Key << "residual_chi2"
+        << YAML::Value << h->residual_chi2 << YAML::Key << "residual_p_value" << YAML::Value << h->residual_p_value
+        << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;  // humans read these: mm and degrees
+  for (std::size_t i = 0; i < check.views.size(); ++i) {
+    const CheckedView& v = check.views[i];
+    const bool left_out = std::find(check.left_out.begin(), check.left_out.end(), static_cast<int>(i)) != check.left_out.end();
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "left_out" << YAML::Value << left_out << YAML::Key << "translation_mm" << YAML::Value << v.translation_error * 1e3
+        << YAML::Key << "predicted_translation_mm" << YAML::Value << v.predicted_translation_sigma * 1e3 << YAML::Key
+        << "rotation_deg" << YAML::Value << v.rotation_error * 180.0 / M_PI << YAML::Key << "predicted_rotation_deg"
+        << YAML::Value << v.predicted_rotation_sigma * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << v.mahalanobis
+        << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "advice" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& a : check.advice) out << a;
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+namespace {
+/// `covariance: {pose: [36]}` (ROS order, wins when present) or
+/// `{rotation: [9], translation: [9]}` (no cross block).
+Matrix6d read_pose_covariance(const YAML::Node& covariance, const Location& at) {
+  if (!covariance.IsMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`covariance` must be a map", at.str(),
+                       "write covariance: {pose: [36 numbers]} or {rotation: [9], translation: [9]}");
+  }
+  Matrix6d c;
+  if (covariance["pose"]) {
+    c = from_row_major_6x6(as_numbers<36>(covariance["pose"], at / "pose", "6x6 covariance, ROS order"));
+  } else {
+    c = read_covariance(covariance, at).as_pose_covariance();
+  }
+  check_covariance(c, at.str());
+  return c;
+}
+}  // namespace
+
+PoseFile parse_pose_file(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  PoseFile file;
+  if (root["parent"] && root["parent"].IsScalar()) file.parent = root["parent"].Scalar();
+  if (root["child"] && root["child"].IsScalar()) file.child = root["child"].Scalar();
+  file.value.pose = read_pose(root, top);
+  if (const YAML::Node covariance = root["covariance"]) {
+    file.value.covariance = read_pose_covariance(covariance, top / "covariance");
+    file.has_covariance = true;
+  }
+  return file;
+}
+
+PoseFile read_pose_file(const std::string& path) { return parse_pose_file(read_file(path), path); }
+
+namespace {
+CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
+  CalibrationFile file;
+  if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
+  if (root["parent"] && root["parent"].IsScalar()) file.context.parent = root["parent"].Scalar();
+  if (root["child"] && root["child"].IsScalar()) file.context.child = root["child"].Scalar();
+  file.T_parent_camera.pose = read_pose(root, top);
+  const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
+  file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
+  if (root["samples_used"]) file.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
+  // The noise model the calibration used (samples results only).
+  if (const YAML::Node noise = root["noise"];
+      noise && noise.IsMap() && noise["model"] && noise["model"].IsMap() && noise["model"]["effector"]) {
+    file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
+    if (noise["origin"] && noise["origin"].IsScalar() && noise["origin"].Scalar() != "given") {
+      file.noise_origin = NoiseOrigin::EstimatedFromResiduals;
+    }
+  }
+  if (const YAML::Node pattern = root["pattern"]; pattern && pattern.IsMap()) {  // a joint result: Y and Cov(X, Y)
+    const Location at = top / "pattern";
+    PoseWithCovariance Y;
+    Y.pose = read_pose(pattern, at);
+    Y.covariance = read_pose_covariance(require(pattern, "covariance", at, hint), at / "covariance");
+    file.pattern = Y;
+    file.context.pattern_parent = pattern["parent"] && pattern["parent"].IsScalar() ? pattern["parent"].Scalar() : "";
+    file.context.pattern_child = pattern["child"] && pattern["child"].IsScalar() ? pattern["child"].Scalar() : "";
+    file.cross_covariance = from_row_major_6x6(as_numbers<36>(
+        require(root, "cross_covariance", top, "a joint result with `pattern` has `cross_covariance` (36 numbers)"),
+        top / "cross_covariance", "6x6 Cov(X, Y), X's ROS order in rows"));
+  }
+  if (const YAML::Node model = root["noise"] && root["noise"].IsMap() ? root["noise"]["residual_model"] : YAML::Node();
+      model && model.IsMap()) {
+    const Location at = top / "noise" / "residual_model";
+    const std::string model_hint = "`residual_model` is {camera_scale, camera: [36], robot: [36], view_scale, view_points}";
+    Calibration::ResidualNoise m;
+    m.camera_scale = as_finite(require(model, "camera_scale", at, model_hint), at / "camera_scale", "NaN in camera_scale",
+                               model_hint);
+    m.camera = from_row_major_6x6(as_numbers<36>(require(model, "camera", at, model_hint), at / "camera", "6x6, ROS order"));
+    m.robot = from_row_major_6x6(as_numbers<36>(require(model, "robot", at, model_hint), at / "robot", "6x6, ROS order"));
+    check_covariance(m.camera, (at / "camera").str());
+    check_covariance(m.robot, (at / "robot").str());
+    if (model["view_scale"]) m.view_scale = as_finite(model["view_scale"], at / "view_scale", "NaN in view_scale", model_hint);
+    if (model["view_points"]) {
+      const std::vector<double> points = as_number_list(model["view_points"], at / "view_points", "x, y, z of each point");
+      if (points.size() % 3 != 0) {
+        throw HandEyeError(ErrorCode::WrongLength, "`view_points` needs 3 numbers per point", (at / "view_points").str(),
+                           model_hint);
+      }
+      for (std::size_t i = 0; i + 2 < points.size(); i += 3) m.view_points.emplace_back(points[i], points[i + 1], points[i + 2]);
+    }
+    file.residual_noise = m;
+  }
+  if (const YAML::Node estimated = root["noise"] && root["noise"].IsMap() ? root["noise"]["estimated"] : YAML::Node();
+      estimated && estimated.IsSequence()) {  // each estimated noise number with its 1 sigma: how well the noise is known
+    const Location at = top / "noise" / "estimated";
+    const std::string hint = "each entry is {name, value, sigma, unit, supported}";
+    for (std::size_t i = 0; i < estimated.size(); ++i) {
+      const YAML::Node e = estimated[i];
+      Calibration::NoiseComponent c;
+      c.name = as_text(require(e, "name", at[i], hint), at[i] / "name");
+      c.value = as_finite(require(e, "value", at[i], hint), at[i] / "value", "NaN in a noise value", hint);
+      c.sigma = as_finite(require(e, "sigma", at[i], hint), at[i] / "sigma", "NaN in a noise sigma", hint);
+      if (e["unit"]) c.unit = e["unit"].IsNull() ? "" : as_text(e["unit"], at[i] / "unit");
+      if (e["supported"]) c.at_bound = !as_bool(e["supported"], at[i] / "supported");
+      file.noise_components.push_back(c);
+    }
+  }
+  if (const YAML::Node prediction = root["prediction"]; prediction && prediction.IsMap()) {
+    const Location at = top / "prediction";
+    const std::string hint = "`prediction` is {scale, dof, views}: the leave-one-out of the calibration's views";
+    Calibration::Prediction p;
+    p.scale = as_finite(require(prediction, "scale", at, hint), at / "scale", "NaN in the prediction scale", hint);
+    p.dof = as_finite(require(prediction, "dof", at, hint), at / "dof", "NaN in the prediction dof", hint);
+    if (prediction["views"]) p.views = as_integer(prediction["views"], at / "views", 0, 1e9, "views");
+    if (!(p.scale > 0.0) || !(p.dof > 0.0)) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the prediction scale and dof must be positive", at.str(), hint);
+    }
+    file.prediction = p;
+  }
+  if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
+    file.inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
+                               "the honesty check's inflation is a number >= 1");
+  }
+  return file;
+}
+}  // namespace
+
+CalibrationFile parse_result(const std::string& text, const std::string& source) {
+  return read_result_node(load(text, source), Location{source, ""});
+}
+
+CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
+
+Calibration calibration_of(const CalibrationFile& file) {
+  Calibration c;
+  c.method = Method::Joint;
+  c.T_parent_camera = file.T_parent_camera.pose;
+  c.pose_covariance = file.T_parent_camera.covariance;
+  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
+  c.pattern = file.pattern;
+  c.cross_covariance = file.cross_covariance;
+  c.residual_noise = file.residual_noise;
+  c.noise_components = file.noise_components;
+  c.prediction = file.prediction;
+  c.noise_origin = file.noise_origin;
+  if (file.noise) c.noise = *file.noise;
+  c.samples_used = file.samples_used;
+  if (file.inflation > 1.0) {
+    Calibration::Honesty h;
+    h.inflation = file.inflation;
+    h.verdict = "overconfident";
+    c.honesty = h;
+  }
+  return c;
+}
+
+StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source) {
+  const YAML::Node root = load(text, source);
+  const Location top{source, ""};
+  StoredCalibration stored;
+  if (!root["covariance"] && !root["transformation"]) {
+    throw HandEyeError(ErrorCode::MissingKey,
+                       "not a calibration: neither a handeye_covariance result (`covariance`) nor easy_handeye's "
+                       "(`transformation`)",
+                       top.str(), "give the file /calibrate or `handeye solve --output` wrote, or easy_handeye's YAML");
+  }
+  // Ours has `covariance` (and easy_handeye's `transformation` block too); easy_handeye's has only the latter.
+  if (root["covariance"]) {
+    const CalibrationFile file = read_result_node(root, top);
+    stored.setup = file.context.setup;
+    stored.parent = file.context.parent;
+    stored.child = file.context.child;
+    stored.T_parent_camera = file.T_parent_camera;
+    stored.has_covariance = true;
+    stored.format = "handeye_covariance";
+    return stored;
+  }
+  stored.format = "easy_handeye";
+  const std::string hint = "easy_handeye's `transformation` is {x, y, z, qx, qy, qz, qw} in m";
+  const YAML::Node transformation = root["transformation"];
+  const Location at = top / "transformation";
+  const auto number = [&](const char* key) {
+    return as_finite(require(transformation, key, at, hint), at / key, std::string("NaN or Inf in `") + key + "`", hint);
+  };
+  const Eigen::Quaterniond q(number("qw"), number("qx"), number("qy"), number("qz"));
+  const Vector3d t(number("x"), number("y"), number("z"));
+  stored.T_parent_camera.pose =
+      se3::make_pose(checked_unit_quaternion(q, (at / "qx..qw").str()).toRotationMatrix(), t);
+  // The frames: under `parameters`, or at the top level in easy_handeye's older files.
+  const bool nested = root["parameters"] && root["parameters"].IsMap();
+  const YAML::Node parameters = nested ? root["parameters"] : root;
+  const Location where = nested ? top / "parameters" : top;
+  const auto text_of = [&](const char* key) {
+    const YAML::Node node = parameters[key];
+    return node && !node.IsNull() ? as_text(node, where / key) : std::string();
+  };
+  const YAML::Node eye_on_hand = parameters["eye_on_hand"];
+  if (!eye_on_hand || !eye_on_hand.IsScalar()) {
+    throw HandEyeError(ErrorCode::MissingKey, "an easy_handeye calibration without `eye_on_hand: true|false`",
+                       where.str(), "add `eye_on_hand: true` (camera on the robot) or `false` under `parameters`");
+  }
+  bool on_hand = false;
+  if (!YAML::convert<bool>::decode(eye_on_hand, on_hand)) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`eye_on_hand` must be true or false, not `" + eye_on_hand.Scalar() + "`",
+                       (where / "eye_on_hand").str(), "write `eye_on_hand: true` or `eye_on_hand: false`");
+  }
+  stored.setup = setup_from_eye_on_hand(on_hand);
+  stored.parent = text_of(on_hand ? "robot_effector_frame" : "robot_base_frame");
+  stored.child = text_of("tracking_base_frame");
+  return stored;
+}
+
+StoredCalibration read_stored_calibration(const std::string& path) {
+  const std::string text = read_file(path);
+  try {
+    return parse_stored_calibration(text, path);
+  } catch (const YAML::Exception& e) {  // a shape the readers did not foresee: still a named error, never a crash
+    throw HandEyeError(ErrorCode::MalformedFile, std::string("unexpected YAML structure: ") + e.what(), path,
+                       "compare the file with one /calibrate wrote (docs/file_formats.md)");
+  }
+}
+
+}  // namespace io
+}  // namespace handeye
