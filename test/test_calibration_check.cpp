@@ -94,20 +94,24 @@ TEST(CalibrationCheck, FalseAlarmsWithTheNoiseEstimated) {
 // 88.5%: the max test costs about 1.5 points, the leave-one-out scale (measured on the
 // calibration's 20 views, what keeps it honest on real sessions) 2 to 3 more. At 6 sigma
 // at least 98%.
+// 200 checks each (400 until the suite had to fit 20 minutes; the figures at
+// 2 000 are the study's, ./scripts/bench): the bands below are the ones first set at
+// 400, widened by sqrt(2) about the rates measured there (sampling sigma of a rate of
+// 0.9 over 200 checks: 2.1 points).
 TEST(CalibrationCheck, DetectsAMovedCameraOrTarget) {
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     const bool x = change == PlantedChange::XTranslation;
-    const CheckStudyResult five = run_check_study(study(change, 5.0, 400, x ? 3 : 4));
+    const CheckStudyResult five = run_check_study(study(change, 5.0, 200, x ? 3 : 4));
     print(x ? "X moved 5 sigma" : "Y moved 5 sigma", five);
     EXPECT_NEAR(five.bound, 0.927, 0.001);
-    EXPECT_LE(five.rate(), five.bound + 0.02);  // no test beats the bound (by more than the sampling error)
-    EXPECT_GE(five.rate(), five.two_hypothesis_bound - 0.06);
-    EXPECT_GE(five.rate(), 0.85);
-    CheckStudyOptions o = study(change, 6.0, 400, x ? 5 : 6);
+    EXPECT_LE(five.rate(), five.bound + 0.03);  // no test beats the bound (by more than the sampling error)
+    EXPECT_GE(five.rate(), five.two_hypothesis_bound - 0.085);
+    EXPECT_GE(five.rate(), 0.83);
+    CheckStudyOptions o = study(change, 6.0, 200, x ? 5 : 6);
     o.bound_draws = 0;
     const CheckStudyResult six = run_check_study(o);
     print(x ? "X moved 6 sigma" : "Y moved 6 sigma", six);
-    EXPECT_GE(six.rate(), 0.98);
+    EXPECT_GE(six.rate(), 0.975);
   }
 }
 
@@ -116,7 +120,7 @@ TEST(CalibrationCheck, DetectsAMovedCameraOrTarget) {
 TEST(CalibrationCheck, NamesWhatMovedAtDiverseViews) {
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     const bool x = change == PlantedChange::XTranslation;
-    CheckStudyOptions o = diverse(study(change, 5.0, 300, x ? 7 : 8));
+    CheckStudyOptions o = diverse(study(change, 5.0, 200, x ? 7 : 8));  // 300 until the suite had to fit 20 min
     o.bound_draws = 0;
     const CheckStudyResult r = run_check_study(o);
     print(x ? "X moved 5 sigma, diverse views" : "Y moved 5 sigma, diverse views", r);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <functional>
 #include <random>
 #include <utility>
@@ -69,6 +70,15 @@ inline std::pair<double, double> nees_band_under_estimated_sigma(const std::vect
   std::sort(means.begin(), means.end());
   const auto quantile = [&](double p) { return means[static_cast<std::size_t>(p * (means.size() - 1))]; };
   return {quantile((1.0 - coverage) / 2.0), quantile((1.0 + coverage) / 2.0)};
+}
+
+/// The central `coverage` band of the mean of `draws` independent chi2(dim) values
+/// (an honest covariance's NEES with its noise known): chi2(dim x draws) / draws. A
+/// Monte-Carlo test's band follows its number of draws through this.
+inline std::pair<double, double> chi2_mean_band(int draws, int dim, double coverage) {
+  const boost::math::chi_squared sum(static_cast<double>(dim) * draws);
+  return {boost::math::quantile(sum, (1.0 - coverage) / 2.0) / draws,
+          boost::math::quantile(sum, (1.0 + coverage) / 2.0) / draws};
 }
 
 /// `handeye sim`'s default noise: pattern 0.5 mm / 0.05 deg, robot 0.05 mm / 0.01 deg (1 sigma per axis).

@@ -388,7 +388,7 @@ TEST(PatternPose, RefusesUnknownTagsAndBadFits) {
 }
 
 TEST(PatternPose, CovarianceIsHonestOnRenderedBoards) {
-  expect_honest("board 2x2", consistency(make_target(io::read_tag_layout(board_file())), 300, 21));
+  expect_honest("board 2x2", consistency(make_target(io::read_tag_layout(board_file())), 200, 21));
 }
 
 // At 1280 x 720 the quad search runs on the image shrunk by 2 (quad_decimate 0:
@@ -399,7 +399,7 @@ TEST(PatternPose, CovarianceIsHonestOnHighResolutionImages) {
   hd.camera.width = 1280;
   hd.camera.height = 720;
   hd.camera.K << 900.0, 0.0, 639.5, 0.0, 900.0, 359.5, 0.0, 0.0, 1.0;
-  expect_honest("board 2x2 at 1280 x 720", consistency(make_target(io::read_tag_layout(board_file())), 300, 23, hd));
+  expect_honest("board 2x2 at 1280 x 720", consistency(make_target(io::read_tag_layout(board_file())), 200, 23, hd));
 }
 
 TEST(PatternPose, CovarianceIsHonestOnASingleTag) {
