@@ -15,15 +15,6 @@ namespace {
 
 double degrees(double radians) { return radians * 180.0 / M_PI; }
 
-/// Robust sigma of |differences| (half-normal) from their lower quartile,
-/// q25 = 0.3186 sigma: it holds while fewer than 75% of the pairs are bad (the
-/// median breaks at 50%, which 30% bad samples already reach: 1 - 0.7^2 = 51%).
-double robust_sigma(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 4, values.end());
-  return values[values.size() / 4] / 0.3186;
-}
-
 struct PairCheck {
   int i = 0, j = 0;
   double angle_difference = 0.0;           // rad
@@ -140,6 +131,12 @@ const Calibration::Rejected* rejection_of(const Calibration& calibration, int in
     if (r.index == index) return &r;
   }
   return nullptr;
+}
+
+double robust_sigma(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 4), values.end());
+  return values[values.size() / 4] / 0.3186;
 }
 
 double residual_scale(std::vector<double> squared_distances) {

@@ -77,14 +77,6 @@ ScrewDifference difference(const Screw& a, const Screw& b, const HalfTurnOptions
   return d;
 }
 
-/// Robust sigma of |differences| (half-normal) from their lower quartile, as
-/// outliers.cpp: q25 = 0.3186 sigma, which holds while fewer than 75% are bad.
-double robust_sigma(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 4), values.end());
-  return values[values.size() / 4] / 0.3186;
-}
-
 /// One pair i < j under both hypotheses: the two views show the same candidate,
 /// or one of them is turned.
 struct PairFit {
