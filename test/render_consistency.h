@@ -85,7 +85,7 @@ inline Consistency consistency(const Target& target, int frames, std::uint64_t s
 
 // The bar: over many rendered frames the detector's covariance matches
 // its actual error, the NEES mean for rotation and translation within the band of
-// an honest 3-dof covariance over that many frames at 99.95% ([2.53, 3.49] at 300
+// an honest 3-dof covariance over that many frames at 99.95% ([2.53, 3.52] at 300
 // frames, the bar as first set; [2.43, 3.64] at 200).
 inline void expect_printed(const char* name, const Consistency& c) {
   std::printf("%s: %d frames (%d missed%s%s), %.1f points, pixel sigma %.3f px, RMS error %.3f mm %.4f deg, "
