@@ -164,22 +164,22 @@ TEST(ImageFolder, ReadsCameraInfoAndOpenCvCameraFiles) {
 
 TEST(TargetFile, ReadsEveryKindAndNamesBadEntries) {
   const Target chessboard = io::parse_target("{type: chessboard, inner_corners: [9, 6], square: 0.0202}", "t.yaml");
-  EXPECT_EQ(chessboard.kind, TargetKind::Chessboard);
-  EXPECT_EQ(chessboard.chessboard.rows, 6);
+  EXPECT_EQ(chessboard.kind_name(), "chessboard");
+  EXPECT_EQ(chessboard.as<ChessboardTarget>().rows, 6);
   const Target charuco =
       io::parse_target("{type: charuco, squares: [7, 5], square: 0.036, marker: 0.018, dictionary: DICT_6X6_250}", "t.yaml");
-  EXPECT_EQ(charuco.kind, TargetKind::Charuco);
-  EXPECT_EQ(charuco.charuco.dictionary, "DICT_6X6_250");
+  EXPECT_EQ(charuco.kind_name(), "charuco");
+  EXPECT_EQ(charuco.as<CharucoTarget>().dictionary, "DICT_6X6_250");
   const Target aruco = io::parse_target("{type: aruco, dictionary: DICT_4X4_50, id: 7, marker: 0.05}", "t.yaml");
-  ASSERT_EQ(aruco.markers.tags.size(), 1u);
-  EXPECT_EQ(aruco.markers.family, "DICT_4X4_50");
+  ASSERT_EQ(aruco.as<TagLayout>().tags.size(), 1u);
+  EXPECT_EQ(aruco.as<TagLayout>().family, "DICT_4X4_50");
   const Target board = io::parse_target(
       "{type: aruco_board, dictionary: DICT_4X4_50, markers: [4, 3], marker: 0.06, separation: 0.015, first_id: 10}",
       "t.yaml");
-  ASSERT_EQ(board.markers.tags.size(), 12u);
-  EXPECT_EQ(board.markers.tags.back().id, 21);
-  EXPECT_EQ(io::parse_target("{type: apriltag, id: 10, size: 0.048}", "t.yaml").markers.family, "tag36h11");
-  EXPECT_EQ(io::read_target(std::string(HANDEYE_SOURCE_DIR) + "/config/tag_board_2x2.yaml").markers.tags.size(), 4u);
+  ASSERT_EQ(board.as<TagLayout>().tags.size(), 12u);
+  EXPECT_EQ(board.as<TagLayout>().tags.back().id, 21);
+  EXPECT_EQ(io::parse_target("{type: apriltag, id: 10, size: 0.048}", "t.yaml").as<TagLayout>().family, "tag36h11");
+  EXPECT_EQ(io::read_target(std::string(HANDEYE_SOURCE_DIR) + "/config/tag_board_2x2.yaml").as<TagLayout>().tags.size(), 4u);
 
   EXPECT_NE(error_of([] { io::parse_target("{type: checkerboard}", "t.yaml"); }).find("unknown target type"), std::string::npos);
   EXPECT_NE(error_of([] { io::parse_target("{type: chessboard, inner_corners: [9], square: 0.02}", "t.yaml"); })

@@ -21,6 +21,7 @@
 #include <numeric>
 #include <random>
 
+#include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/report.h"

@@ -170,7 +170,7 @@ TEST(TargetPrinter, CharucoFrameIsOpenCVsAtTheBoardsCorner) {
   // Every marker, by the dictionary's own detector.
   std::vector<int> found;
   for (const TagCorners& marker : ArucoDetector("DICT_5X5_100").detect(seen.gray)) found.push_back(marker.id);
-  std::vector<int> ids = charuco_marker_layout(target.charuco).ids();
+  std::vector<int> ids = charuco_marker_layout(target.as<CharucoTarget>()).ids();
   std::sort(ids.begin(), ids.end());
   std::sort(found.begin(), found.end());
   EXPECT_EQ(found, ids);
@@ -364,28 +364,25 @@ TEST(TargetPrinter, MeasuredSquareWritesTheTargetFileScaled) {
     const std::string command = std::string(HANDEYE_TARGET_TOOL) + " target --target " + in + " --measured-square 20.1 --output " + out;
     ASSERT_EQ(run(command), 0) << command;
     const Target before = io::parse_target(c.text, in), after = io::read_target(out);
-    ASSERT_EQ(after.kind, before.kind) << c.name;
+    ASSERT_EQ(after.kind_name(), before.kind_name()) << c.name;
     EXPECT_NEAR(print::nominal_square(after), measured * 1e-3, 1e-12) << c.name;
-    switch (before.kind) {
-      case TargetKind::Chessboard:
-        EXPECT_EQ(after.chessboard.columns, 9);
-        EXPECT_NEAR(after.chessboard.square, before.chessboard.square * factor, 1e-12);
-        break;
-      case TargetKind::Charuco:
-        EXPECT_NEAR(after.charuco.square, before.charuco.square * factor, 1e-12);
-        EXPECT_NEAR(after.charuco.marker, before.charuco.marker * factor, 1e-12);
-        EXPECT_EQ(after.charuco.dictionary, "DICT_5X5_100");
-        break;
-      case TargetKind::Markers:
-        EXPECT_EQ(after.markers.family, before.markers.family) << c.name;
-        ASSERT_EQ(after.markers.ids(), before.markers.ids()) << c.name;
-        for (std::size_t i = 0; i < before.markers.tags.size(); ++i) {
-          const TagPlacement &b = before.markers.tags[i], &a = after.markers.tags[i];
-          EXPECT_NEAR(a.size, b.size * factor, 1e-12) << c.name;
-          EXPECT_LT((a.T_pattern_tag.translation() - b.T_pattern_tag.translation() * factor).norm(), 1e-12) << c.name;
-          EXPECT_LT(angle_between(a.T_pattern_tag.linear(), b.T_pattern_tag.linear()), 1e-12) << c.name;
-        }
-        break;
+    if (const ChessboardTarget* board = before.get<ChessboardTarget>()) {
+      EXPECT_EQ(after.as<ChessboardTarget>().columns, 9);
+      EXPECT_NEAR(after.as<ChessboardTarget>().square, board->square * factor, 1e-12);
+    } else if (const CharucoTarget* charuco = before.get<CharucoTarget>()) {
+      EXPECT_NEAR(after.as<CharucoTarget>().square, charuco->square * factor, 1e-12);
+      EXPECT_NEAR(after.as<CharucoTarget>().marker, charuco->marker * factor, 1e-12);
+      EXPECT_EQ(after.as<CharucoTarget>().dictionary, "DICT_5X5_100");
+    } else {
+      const TagLayout &markers_before = before.as<TagLayout>(), &markers_after = after.as<TagLayout>();
+      EXPECT_EQ(markers_after.family, markers_before.family) << c.name;
+      ASSERT_EQ(markers_after.ids(), markers_before.ids()) << c.name;
+      for (std::size_t i = 0; i < markers_before.tags.size(); ++i) {
+        const TagPlacement &b = markers_before.tags[i], &a = markers_after.tags[i];
+        EXPECT_NEAR(a.size, b.size * factor, 1e-12) << c.name;
+        EXPECT_LT((a.T_pattern_tag.translation() - b.T_pattern_tag.translation() * factor).norm(), 1e-12) << c.name;
+        EXPECT_LT(angle_between(a.T_pattern_tag.linear(), b.T_pattern_tag.linear()), 1e-12) << c.name;
+      }
     }
   }
   // A length in metres (or a print at 50%) is refused, naming the option.

@@ -225,7 +225,7 @@ TEST(ImageRectifier, CornersKeepTheirPlaceThroughTheLensDistortion) {
       cv::remap(raw, resampled, bilinear_x, bilinear_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
       radial(detector.detect(resampled), T, bilinear, n_bilinear);
     }
-    const std::string name = target.kind == TargetKind::Chessboard ? "chessboard" : "AprilTag board";
+    const std::string name = target.kind_name() == "chessboard" ? "chessboard" : "AprilTag board";
     ASSERT_GT(n_ours, 40 * 8) << name;
     ASSERT_GT(n_bilinear, 40 * 8) << name;
     ours /= n_ours;

@@ -4,6 +4,7 @@
 #include <array>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/io/files.h"
 #include "yaml_primitives.h"
@@ -55,69 +56,61 @@ TagLayout read_tag_layout(const std::string& path) { return parse_tag_layout(rea
 
 // ---------------------------------------------------------------- targets
 
+namespace {
+
+/// A target file's keys through the shared readers (yaml_primitives.h), every
+/// refusal with the kind's example as its fix.
+class YamlFields : public TargetFields {
+ public:
+  YamlFields(const YAML::Node& root, const Location& top, std::string hint)
+      : root_(root), top_(top), hint_(std::move(hint)) {}
+
+  bool has(const std::string& key) const override { return static_cast<bool>(root_[key]); }
+  std::string text(const std::string& key) const override { return as_text(node(key), top_ / key); }
+  double number(const std::string& key) const override { return as_double(node(key), top_ / key); }
+  double length(const std::string& key) const override {
+    const double v = number(key);
+    if (!(v > 0.0 && v < 10.0)) refuse(key, "`" + key + "` must be a length in m, above 0 and below 10");
+    return v;
+  }
+  int integer(const std::string& key, double lowest, double highest, const std::string& what) const override {
+    return as_integer(node(key), top_ / key, lowest, highest, what);
+  }
+  std::array<int, 2> pair(const std::string& key, const std::string& what) const override {
+    const YAML::Node n = node(key);
+    if (!n.IsSequence() || n.size() != 2) {
+      throw HandEyeError(ErrorCode::WrongLength, "`" + key + "` must be [columns, rows] (" + what + ")",
+                         (top_ / key).str(), hint_);
+    }
+    return std::array<int, 2>{as_integer(n[0], (top_ / key)[0], 1, 1000, what),
+                              as_integer(n[1], (top_ / key)[1], 1, 1000, what)};
+  }
+  [[noreturn]] void refuse(const std::string& key, const std::string& message) const override {
+    throw HandEyeError(ErrorCode::InvalidLayout, message, (top_ / key).str(), hint_);
+  }
+
+ private:
+  YAML::Node node(const std::string& key) const { return require(root_, key, top_, hint_); }
+
+  YAML::Node root_;
+  Location top_;
+  std::string hint_;
+};
+
+}  // namespace
+
 Target parse_target(const std::string& text, const std::string& source) {
   const YAML::Node root = load(text, source);
   const Location top{source, ""};
-  const std::string kinds = "chessboard, charuco, aruco, aruco_board or apriltag";
   if (root.IsMap() && root["tags"] && !root["type"]) return make_target(parse_tag_layout(text, source));
-  const std::string type = as_text(require(root, "type", top, "write `type: " + kinds + "` (docs/targets.md)"),
+  const std::string type = as_text(require(root, "type", top, "write `type: " + target_file_types() + "` (docs/targets.md)"),
                                    top / "type");
-  const auto length = [&](const char* key, const std::string& hint) {
-    const double v = as_double(require(root, key, top, hint), top / key);
-    if (!(v > 0.0 && v < 10.0)) {
-      throw HandEyeError(ErrorCode::InvalidLayout, std::string("`") + key + "` must be a length in m, above 0 and below 10",
-                         (top / key).str(), hint);
-    }
-    return v;
-  };
-  const auto pair = [&](const char* key, const std::string& what, const std::string& hint) {
-    const YAML::Node node = require(root, key, top, hint);
-    if (!node.IsSequence() || node.size() != 2) {
-      throw HandEyeError(ErrorCode::WrongLength, "`" + std::string(key) + "` must be [columns, rows] (" + what + ")",
-                         (top / key).str(), hint);
-    }
-    return std::array<int, 2>{as_integer(node[0], (top / key)[0], 1, 1000, what),
-                              as_integer(node[1], (top / key)[1], 1, 1000, what)};
-  };
-  const auto name = [&](const char* key, const std::string& hint) { return as_text(require(root, key, top, hint), top / key); };
-  const auto id = [&](const char* key, const std::string& hint) {
-    return as_integer(require(root, key, top, hint), top / key, 0, 1e6, "the marker id");
-  };
-  if (type == "chessboard") {
-    const std::string hint = "e.g. {type: chessboard, inner_corners: [9, 6], square: 0.0236}";
-    const auto corners = pair("inner_corners", "inner corners", hint);
-    return make_target(ChessboardTarget{corners[0], corners[1], length("square", hint)});
+  const TargetKind* kind = find_target_kind_of_type(type);
+  if (!kind) {
+    throw HandEyeError(ErrorCode::InvalidLayout, "unknown target type `" + type + "`", (top / "type").str(),
+                       "use " + target_file_types());
   }
-  if (type == "charuco") {
-    const std::string hint = "e.g. {type: charuco, squares: [7, 5], square: 0.036, marker: 0.018, dictionary: DICT_6X6_250}";
-    const auto squares = pair("squares", "squares", hint);
-    return make_target(CharucoTarget{squares[0], squares[1], length("square", hint), length("marker", hint),
-                                     name("dictionary", hint)});
-  }
-  if (type == "aruco") {
-    const std::string hint = "e.g. {type: aruco, dictionary: DICT_4X4_50, id: 7, marker: 0.05}";
-    const std::string dictionary = name("dictionary", hint);
-    return make_target(single_tag_layout(id("id", hint), length("marker", hint), dictionary));
-  }
-  if (type == "aruco_board") {
-    const std::string hint =
-        "e.g. {type: aruco_board, dictionary: DICT_4X4_50, markers: [4, 3], marker: 0.06, separation: 0.015}";
-    const std::string dictionary = name("dictionary", hint);
-    const auto markers = pair("markers", "markers", hint);
-    const double separation = as_double(require(root, "separation", top, hint), top / "separation");
-    if (!(separation >= 0.0 && separation < 10.0)) {
-      throw HandEyeError(ErrorCode::InvalidLayout, "`separation` must be a length in m, 0 or more", (top / "separation").str(), hint);
-    }
-    const int first = root["first_id"] ? as_integer(root["first_id"], top / "first_id", 0, 1e6, "the first id") : 0;
-    return make_target(aruco_grid_layout(dictionary, markers[0], markers[1], length("marker", hint), separation, first));
-  }
-  if (type == "apriltag") {
-    const std::string hint = "e.g. {type: apriltag, family: tag36h11, id: 10, size: 0.048}";
-    const std::string family = root["family"] ? as_text(root["family"], top / "family") : "tag36h11";
-    return make_target(single_tag_layout(id("id", hint), length("size", hint), family));
-  }
-  throw HandEyeError(ErrorCode::InvalidLayout, "unknown target type `" + type + "`", (top / "type").str(),
-                     "use " + kinds);
+  return kind->parse(type, YamlFields(root, top, kind->example(type)));
 }
 
 Target read_target(const std::string& path) { return parse_target(read_file(path), path); }

@@ -47,99 +47,9 @@ std::string lower(std::string s) {
   return s;
 }
 
-/// One marker as printed: its bitmap centred at `centre` (page-aligned board
-/// coordinates, m), turned by `angle` (rad, x towards y, y down), `cell` m a cell.
-struct PrintedMarker {
-  TagBitmap bitmap;
-  Eigen::Vector2d centre;
-  double angle = 0.0, cell = 0.0;
-};
-
-/// The target in page-aligned board coordinates (x right, y down, m; origin
-/// anywhere): black squares, markers, the drawn extent and the pattern frame in them.
-struct Board {
-  std::vector<Eigen::AlignedBox2d> black_squares;
-  std::vector<PrintedMarker> markers;
-  Eigen::AlignedBox2d extent;
-  Eigen::Isometry3d T_board_pattern = Eigen::Isometry3d::Identity();
-};
-
-void add_markers(const TagLayout& layout, const Eigen::Isometry3d& T_board_pattern, Board& board) {
-  for (const TagPlacement& tag : layout.tags) {
-    const Eigen::Isometry3d T_board_tag = T_board_pattern * tag.T_pattern_tag;
-    // Printed face up: the tag's z (out of its face) points out of the paper, -z here.
-    if (std::abs(T_board_tag.translation().z()) > 1e-6 || T_board_tag.linear()(2, 2) > -1.0 + 1e-6) {
-      throw HandEyeError(ErrorCode::InvalidLayout,
-                         "tag " + std::to_string(tag.id) + " is not in the plane of the first tag, face up",
-                         "target layout", "a layout printed on one page has every tag in one plane, facing the same way");
-    }
-    PrintedMarker marker;
-    marker.bitmap = tag_bitmap(layout.family, tag.id);
-    marker.cell = tag.size / marker.bitmap.width_at_border;
-    marker.centre = T_board_tag.translation().head<2>();
-    marker.angle = std::atan2(T_board_tag.linear()(1, 0), T_board_tag.linear()(0, 0));
-    const double half = 0.5 * marker.cell * marker.bitmap.pixels.cols;
-    const Eigen::Rotation2Dd turn(marker.angle);
-    for (const Eigen::Vector2d& corner : {Eigen::Vector2d(-half, -half), Eigen::Vector2d(half, -half),
-                                         Eigen::Vector2d(half, half), Eigen::Vector2d(-half, half)}) {
-      board.extent.extend(marker.centre + turn * corner);
-    }
-    board.markers.push_back(std::move(marker));
-  }
-}
-
-Board make_board(const Target& target) {
+PrintedBoard make_board(const Target& target) {
   check_target(target, "target");
-  Board board;
-  switch (target.kind) {
-    case TargetKind::Chessboard: {
-      // (columns + 1) x (rows + 1) squares, the top-left one white (the origin's
-      // outer diagonal square, vision/chessboard.h). The white the detector needs
-      // around the board is the page's margin and the gap above the footer.
-      const ChessboardTarget& t = target.chessboard;
-      const double s = t.square;
-      for (int r = 0; r <= t.rows; ++r) {
-        for (int c = 0; c <= t.columns; ++c) {
-          if ((r + c) % 2 == 0) continue;
-          const Eigen::Vector2d min((c - 1) * s, (r - 1) * s);
-          board.black_squares.emplace_back(min, min + Eigen::Vector2d(s, s));
-        }
-      }
-      board.extent = Eigen::AlignedBox2d(Eigen::Vector2d(-s, -s), Eigen::Vector2d(t.columns * s, t.rows * s));
-      break;
-    }
-    case TargetKind::Charuco: {
-      // OpenCV's board frame is the page's (x right, y down); its markers sit in
-      // the white squares, every other square is black.
-      const CharucoTarget& t = target.charuco;
-      const TagLayout markers = charuco_marker_layout(t);
-      std::set<std::pair<int, int>> white;
-      for (const TagPlacement& tag : markers.tags) {
-        const Eigen::Vector3d c = tag.T_pattern_tag.translation();
-        white.emplace(static_cast<int>(std::floor(c.y() / t.square)), static_cast<int>(std::floor(c.x() / t.square)));
-      }
-      for (int r = 0; r < t.rows; ++r) {
-        for (int c = 0; c < t.columns; ++c) {
-          if (white.count({r, c})) continue;
-          const Eigen::Vector2d min(c * t.square, r * t.square);
-          board.black_squares.emplace_back(min, min + Eigen::Vector2d(t.square, t.square));
-        }
-      }
-      board.extent = Eigen::AlignedBox2d(Eigen::Vector2d::Zero(), Eigen::Vector2d(t.columns, t.rows) * t.square);
-      add_markers(markers, Eigen::Isometry3d::Identity(), board);
-      break;
-    }
-    case TargetKind::Markers: {
-      // The first marker upright: its x right, its y up, its z out of the paper.
-      const Eigen::Matrix3d R_board_tag = Eigen::Vector3d(1, -1, -1).asDiagonal();
-      board.T_board_pattern.linear() = R_board_tag * target.markers.tags.front().T_pattern_tag.linear().transpose();
-      const Eigen::Vector3d first = board.T_board_pattern * target.markers.tags.front().T_pattern_tag.translation();
-      board.T_board_pattern.translation().z() = -first.z();  // the tags' plane is the paper
-      add_markers(target.markers, board.T_board_pattern, board);
-      break;
-    }
-  }
-  return board;
+  return print_kind(target.kind_name()).draw(target);
 }
 
 std::vector<std::string> file_lines(const std::string& text) {
@@ -155,48 +65,15 @@ std::vector<std::string> file_lines(const std::string& text) {
   return lines;
 }
 
-std::string sizes_text(const Target& target) {
-  switch (target.kind) {
-    case TargetKind::Chessboard:
-      return "square " + mm(target.chessboard.square, 3);
-    case TargetKind::Charuco:
-      return "square " + mm(target.charuco.square, 3) + ", marker " + mm(target.charuco.marker, 3) +
-             " (black border included), " + target.charuco.dictionary;
-    case TargetKind::Markers:
-      break;
-  }
-  std::set<double> sizes;
-  for (const TagPlacement& tag : target.markers.tags) sizes.insert(tag.size);
-  std::string text = target.markers.family + " ids";
-  for (int id : target.markers.ids()) text += " " + std::to_string(id);
-  text += ", black square";
-  for (double s : sizes) text += " " + mm(s, 3);
-  return text;
-}
-
-std::string frame_text(const Target& target) {
-  switch (target.kind) {
-    case TargetKind::Chessboard:
-      return "frame (OpenCV's): origin at the top-left inner corner, x along a row (right), y down, z into the board";
-    case TargetKind::Charuco:
-      return "frame (OpenCV's): origin at the board's top-left corner, x along a row (right), y down, z into the board";
-    case TargetKind::Markers:
-      break;
-  }
-  return target.markers.tags.size() == 1
-             ? "frame: origin at the marker's centre, x right, y up, z out of the paper"
-             : "frame: the layout's (each marker's x right, y up, z out of the paper; the first marker upright)";
-}
-
 /// The margin's text, top to bottom.
 std::vector<std::string> footer_lines(const Target& target, const PrintOptions& options, const Page& page,
-                                      bool landscape, const Board& board) {
+                                      bool landscape, const PrintedBoard& board) {
   const Eigen::Vector2d size = board.extent.sizes();
   std::vector<std::string> lines = {
       "Print at 100% / \"actual size\" (not \"fit to page\"). The bar above must measure 100 mm: measure it before use.",
-      target.describe() + " (" + sizes_text(target) + "); board " + mm(size.x()) + " x " + mm(size.y()) + ", page " +
+      target.describe() + " (" + target.kind().sizes_text(target) + "); board " + mm(size.x()) + " x " + mm(size.y()) + ", page " +
           page.name + " " + mm(page.width, 0) + " x " + mm(page.height, 0) + (landscape ? ", landscape" : ""),
-      frame_text(target),
+      target.kind().frame_text(target),
       "Measured a square (or marker) not at its size? handeye target --target FILE --measured-square MM --output "
       "measured.yaml",
   };
@@ -214,7 +91,7 @@ double footer_height(std::size_t lines) { return kFooterGap + kBarHeight + lines
 
 struct Placement {
   PrintedTarget printed;
-  Board board;
+  PrintedBoard board;
   std::vector<std::string> footer;
   double margin = 0.0;
 };
@@ -253,7 +130,7 @@ Placement place(const Target& target, const PrintOptions& options) {
     out.footer = footer_lines(target, options, page, landscape, out.board);
     return out;
   }
-  const std::string what = target.kind == TargetKind::Markers ? "marker (black square)" : "square";
+  const std::string what = target.kind().ruler_name();
   const std::string where = options.page.name + " (" + mm(options.page.width, 0) + " x " +
                             mm(options.page.height, 0) + ", " + mm(options.margin, 0) + " margins, " +
                             mm(footer_height(lines), 0) + " for the scale bar and text)";
@@ -277,7 +154,7 @@ Placement place(const Target& target, const PrintOptions& options) {
 /// any paint is ink).
 void draw(cairo_t* cr, const Placement& placement, bool paper) {
   const PrintedTarget& p = placement.printed;
-  const Board& board = placement.board;
+  const PrintedBoard& board = placement.board;
   if (paper) {
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_paint(cr);
@@ -354,6 +231,64 @@ void check_status(cairo_status_t status, const std::string& path) {
 
 }  // namespace
 
+// Each kind's drawing (src/print/targets/; the markers' below), listed once.
+PrintKind chessboard_print();
+PrintKind charuco_print();
+
+namespace {
+
+/// The first marker upright: its x right, its y up, its z out of the paper.
+PrintedBoard markers_board(const Target& target) {
+  const TagLayout& layout = target.as<TagLayout>();
+  PrintedBoard board;
+  const Eigen::Matrix3d R_board_tag = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  board.T_board_pattern.linear() = R_board_tag * layout.tags.front().T_pattern_tag.linear().transpose();
+  const Eigen::Vector3d first = board.T_board_pattern * layout.tags.front().T_pattern_tag.translation();
+  board.T_board_pattern.translation().z() = -first.z();  // the tags' plane is the paper
+  add_markers(layout, board.T_board_pattern, board);
+  return board;
+}
+
+}  // namespace
+
+const std::vector<PrintKind>& print_kinds() {
+  static const std::vector<PrintKind> kinds = {chessboard_print(), charuco_print(), {"aruco", markers_board},
+                                               {"apriltag", markers_board}};
+  return kinds;
+}
+
+const PrintKind& print_kind(const std::string& name) {
+  for (const PrintKind& kind : print_kinds()) {
+    if (kind.name == name) return kind;
+  }
+  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no printed drawing", "printer",
+                     "list its PrintKind in src/print/target_printer.cpp (docs/targets.md, \"Adding a target kind\")");
+}
+
+void add_markers(const TagLayout& layout, const Eigen::Isometry3d& T_board_pattern, PrintedBoard& board) {
+  for (const TagPlacement& tag : layout.tags) {
+    const Eigen::Isometry3d T_board_tag = T_board_pattern * tag.T_pattern_tag;
+    // Printed face up: the tag's z (out of its face) points out of the paper, -z here.
+    if (std::abs(T_board_tag.translation().z()) > 1e-6 || T_board_tag.linear()(2, 2) > -1.0 + 1e-6) {
+      throw HandEyeError(ErrorCode::InvalidLayout,
+                         "tag " + std::to_string(tag.id) + " is not in the plane of the first tag, face up",
+                         "target layout", "a layout printed on one page has every tag in one plane, facing the same way");
+    }
+    PrintedMarker marker;
+    marker.bitmap = tag_bitmap(layout.family, tag.id);
+    marker.cell = tag.size / marker.bitmap.width_at_border;
+    marker.centre = T_board_tag.translation().head<2>();
+    marker.angle = std::atan2(T_board_tag.linear()(1, 0), T_board_tag.linear()(0, 0));
+    const double half = 0.5 * marker.cell * marker.bitmap.pixels.cols;
+    const Eigen::Rotation2Dd turn(marker.angle);
+    for (const Eigen::Vector2d& corner : {Eigen::Vector2d(-half, -half), Eigen::Vector2d(half, -half),
+                                         Eigen::Vector2d(half, half), Eigen::Vector2d(-half, half)}) {
+      board.extent.extend(marker.centre + turn * corner);
+    }
+    board.markers.push_back(std::move(marker));
+  }
+}
+
 Page parse_page(const std::string& text) {
   const std::string name = lower(text);
   if (name == "a4") return Page{"A4", 0.210, 0.297};
@@ -370,14 +305,7 @@ Page parse_page(const std::string& text) {
                      "use A4, Letter, or the paper's width x height in mm, e.g. 297x420");
 }
 
-double nominal_square(const Target& target) {
-  switch (target.kind) {
-    case TargetKind::Chessboard: return target.chessboard.square;
-    case TargetKind::Charuco: return target.charuco.square;
-    case TargetKind::Markers: break;
-  }
-  return target.markers.tags.empty() ? 0.0 : target.markers.tags.front().size;
-}
+double nominal_square(const Target& target) { return target.kind().ruler_length(target); }
 
 PrintedTarget place_target(const Target& target, const PrintOptions& options) { return place(target, options).printed; }
 
@@ -473,7 +401,9 @@ std::string scaled_target_text(const std::string& text, double factor, const std
       for (const char* key : {"size", "x", "y", "z"}) scale(tag, key);
     }
   } else {
-    for (const char* key : {"square", "marker", "separation", "size"}) scale(root, key);
+    for (const std::string& key : find_target_kind_of_type(root["type"].as<std::string>())->length_keys()) {
+      scale(root, key.c_str());
+    }
   }
   YAML::Emitter out;
   out << root;

@@ -94,11 +94,11 @@ void TargetDetectorNode::on_image(const sensor_msgs::Image::ConstPtr& image) {
     if (result.pose) {
       const Target& target = detector_->target();
       TagDetection detection;  // the pattern, as apriltag_ros names a bundle; a board has no tag ids
-      if (target.kind == TargetKind::Markers) {
-        detection.id = target.markers.ids();
-        for (const TagPlacement& tag : target.markers.tags) detection.size.push_back(tag.size);
+      if (const TagLayout* markers = target.get<TagLayout>()) {
+        detection.id = markers->ids();
+        for (const TagPlacement& tag : markers->tags) detection.size.push_back(tag.size);
       } else {
-        detection.size.push_back(target.kind == TargetKind::Chessboard ? target.chessboard.square : target.charuco.square);
+        detection.size.push_back(target.kind().ruler_length(target));  // a board's square
       }
       detection.pose.header = image->header;
       detection.pose.pose = conversions::to_msg(PoseWithCovariance{result.pose->T_camera_pattern, result.pose->covariance});

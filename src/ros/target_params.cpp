@@ -1,6 +1,7 @@
 #include "handeye_covariance/ros/target_params.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/params.h"
 
@@ -11,9 +12,9 @@ Target target_from_params(const ros::NodeHandle& pn) {
   const std::string target_file = param<std::string>(pn, "target_file", "");
   const std::string layout_file = param<std::string>(pn, "layout_file", "");
   const std::string where = pn.getNamespace();
-  if (!kind.empty() && kind != "apriltag" && kind != "chessboard" && kind != "charuco" && kind != "aruco") {
+  if (!kind.empty() && !find_target_kind(kind)) {
     throw HandEyeError(ErrorCode::MalformedFile, "~target is `" + kind + "`", where,
-                       "use chessboard, charuco, aruco or apriltag (and ~target_file for the first three)");
+                       "use " + target_kind_names() + " (and ~target_file for all but apriltag)");
   }
   Target target;
   if (!target_file.empty()) {

@@ -30,20 +30,6 @@ cv::Matx33d to_cv(const Matrix3d& m) {
   return out;
 }
 
-/// A chessboard of `t`, `texels` to a square, with `margin` white squares around:
-/// square (r, c) of the (rows + 1) x (columns + 1) is black when r + c is odd (the
-/// square outside the first inner corner is white: OpenCV's origin, chessboard.h).
-cv::Mat chessboard_texture(const ChessboardTarget& t, int texels, int margin) {
-  cv::Mat board((t.rows + 1 + 2 * margin) * texels, (t.columns + 1 + 2 * margin) * texels, CV_8UC1, cv::Scalar(255));
-  for (int r = 0; r < t.rows + 1; ++r) {
-    for (int c = 0; c < t.columns + 1; ++c) {
-      if ((r + c) % 2 == 0) continue;
-      board(cv::Rect((margin + c) * texels, (margin + r) * texels, texels, texels)).setTo(0);
-    }
-  }
-  return board;
-}
-
 }  // namespace
 
 CameraModel simulated_camera() {
@@ -53,6 +39,54 @@ CameraModel simulated_camera() {
   camera.K << 600.0, 0.0, 319.5, 0.0, 600.0, 239.5, 0.0, 0.0, 1.0;
   camera.distortion = {-0.12, 0.08, 0.0005, -0.0003, 0.0};
   return camera;
+}
+
+// Each kind's drawing (src/simulation/targets/; the markers' below), listed once.
+RenderKind chessboard_render();
+RenderKind charuco_render();
+
+const std::vector<RenderKind>& render_kinds() {
+  const auto markers = [](const Target& target, const RenderOptions& options) {
+    return marker_planes(target.as<TagLayout>(), options);
+  };
+  static const std::vector<RenderKind> kinds = {chessboard_render(), charuco_render(), {"aruco", markers},
+                                                {"apriltag", markers}};
+  return kinds;
+}
+
+const RenderKind& render_kind(const std::string& name) {
+  for (const RenderKind& kind : render_kinds()) {
+    if (kind.name == name) return kind;
+  }
+  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no drawing", "renderer",
+                     "list its RenderKind in src/simulation/pattern_renderer.cpp (docs/targets.md, \"Adding a target kind\")");
+}
+
+TargetPlanes marker_planes(const TagLayout& layout, const RenderOptions& options) {
+  TargetPlanes out;
+  double min_x = INFINITY, max_x = -INFINITY, min_y = INFINITY, max_y = -INFINITY, cell = 0.0;
+  for (const TagPlacement& placement : layout.tags) {
+    const TagBitmap bitmap = tag_bitmap(layout.family, placement.id);
+    cv::Mat upscaled;
+    cv::resize(bitmap.pixels, upscaled, cv::Size(), options.texels_per_cell, options.texels_per_cell, cv::INTER_NEAREST);
+    // libapriltag's bitmap: 0-alpha pixels outside a circle tag's quiet zone read as white here too.
+    cell = placement.size / bitmap.width_at_border;
+    const double width = cell * bitmap.pixels.cols;
+    out.planes.push_back({upscaled, placement.T_pattern_tag, width, width});
+    for (const Vector3d& c : {Vector3d(-0.5, -0.5, 0), Vector3d(0.5, 0.5, 0)}) {
+      const Vector3d p = placement.T_pattern_tag * (c * width);
+      min_x = std::min(min_x, p.x());
+      max_x = std::max(max_x, p.x());
+      min_y = std::min(min_y, p.y());
+      max_y = std::max(max_y, p.y());
+    }
+  }
+  if (planar_z0(layout)) {
+    const double m = options.board_margin_cells * cell;
+    out.board_corners = {Vector3d(min_x - m, min_y - m, 0), Vector3d(max_x + m, min_y - m, 0),
+                         Vector3d(max_x + m, max_y + m, 0), Vector3d(min_x - m, max_y + m, 0)};
+  }
+  return out;
 }
 
 PatternRenderer::PatternRenderer(const TagLayout& layout, const CameraModel& camera, const RenderOptions& options)
@@ -66,72 +100,16 @@ PatternRenderer::PatternRenderer(const Target& target, const CameraModel& camera
     throw HandEyeError(ErrorCode::MalformedFile, "the camera has no image size", "renderer camera",
                        "set width and height");
   }
-  const int texels = std::max(8, options.texels_per_square);
-  switch (target.kind) {
-    case TargetKind::Markers:
-      add_markers(target.markers);
-      break;
-    case TargetKind::Chessboard: {
-      // A whole number of white squares around, at least the margin asked for.
-      const ChessboardTarget& t = target.chessboard;
-      const int margin = std::max(1, static_cast<int>(std::ceil(options.board_margin_squares)));
-      // The texture's centre is the board's face (target_face: the middle of its inner corners).
-      add_plane(chessboard_texture(t, texels, margin), target_face(target),
-                (t.columns + 1 + 2 * margin) * t.square, (t.rows + 1 + 2 * margin) * t.square);
-      break;
-    }
-    case TargetKind::Charuco: {
-      const CharucoTarget& t = target.charuco;
-      // At the printer's resolution, within 8192 texels a side (a large board's
-      // texels are large in metres, but so are its squares in the image).
-      const double dots = options.print_dpi > 0.0 ? std::min(t.square / 0.0254 * options.print_dpi, 8192.0) : 0.0;
-      const int printed = std::max(texels, std::min(static_cast<int>(dots), 8192 / std::max(t.columns, t.rows)));
-      const int margin = std::max(1, static_cast<int>(std::lround(options.board_margin_squares * printed)));
-      cv::Mat board;
-      cv::copyMakeBorder(charuco_image(t, printed), board, margin, margin, margin, margin, cv::BORDER_CONSTANT,
-                         cv::Scalar(255));
-      const double margin_m = t.square * margin / printed;
-      add_plane(board, target_face(target),  // the middle of the squares, the texture's centre
-                t.columns * t.square + 2 * margin_m, t.rows * t.square + 2 * margin_m);
-      break;
-    }
+  TargetPlanes drawn = render_kind(target.kind_name()).draw(target, options);
+  for (PrintedPlane& plane : drawn.planes) {
+    // 0 black, 255 white in every source bitmap.
+    cv::Mat gray;
+    plane.texture.convertTo(gray, CV_32F, (options_.white - options_.black) / 255.0, options_.black);
+    plane.texture = gray;
+    planes_.push_back(std::move(plane));
   }
+  board_corners_ = std::move(drawn.board_corners);
   build_distortion_map();
-}
-
-void PatternRenderer::add_plane(const cv::Mat& texture_8u, const Isometry3d& T_pattern_plane, double width, double height) {
-  Plane plane;
-  // 0 black, 255 white in every source bitmap.
-  texture_8u.convertTo(plane.texture, CV_32F, (options_.white - options_.black) / 255.0, options_.black);
-  plane.T_pattern_plane = T_pattern_plane;
-  plane.width = width;
-  plane.height = height;
-  planes_.push_back(plane);
-}
-
-void PatternRenderer::add_markers(const TagLayout& layout) {
-  double min_x = INFINITY, max_x = -INFINITY, min_y = INFINITY, max_y = -INFINITY, cell = 0.0;
-  for (const TagPlacement& placement : layout.tags) {
-    const TagBitmap bitmap = tag_bitmap(layout.family, placement.id);
-    cv::Mat upscaled;
-    cv::resize(bitmap.pixels, upscaled, cv::Size(), options_.texels_per_cell, options_.texels_per_cell, cv::INTER_NEAREST);
-    // libapriltag's bitmap: 0-alpha pixels outside a circle tag's quiet zone read as white here too.
-    cell = placement.size / bitmap.width_at_border;
-    const double width = cell * bitmap.pixels.cols;
-    add_plane(upscaled, placement.T_pattern_tag, width, width);
-    for (const Vector3d& c : {Vector3d(-0.5, -0.5, 0), Vector3d(0.5, 0.5, 0)}) {
-      const Vector3d p = placement.T_pattern_tag * (c * width);
-      min_x = std::min(min_x, p.x());
-      max_x = std::max(max_x, p.x());
-      min_y = std::min(min_y, p.y());
-      max_y = std::max(max_y, p.y());
-    }
-  }
-  if (planar_z0(layout)) {
-    const double m = options_.board_margin_cells * cell;
-    board_corners_ = {Vector3d(min_x - m, min_y - m, 0), Vector3d(max_x + m, min_y - m, 0),
-                      Vector3d(max_x + m, max_y + m, 0), Vector3d(min_x - m, max_y + m, 0)};
-  }
 }
 
 void PatternRenderer::build_distortion_map() {
@@ -210,7 +188,7 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
     if (visible) cv::fillConvexPoly(canvas, polygon, cv::Scalar(options_.white), cv::LINE_AA, 4);
   }
   const cv::Rect frame(0, 0, canvas.cols, canvas.rows);
-  for (const Plane& plane : planes_) {
+  for (const PrintedPlane& plane : planes_) {
     const Isometry3d T_camera_plane = T_camera_pattern * plane.T_pattern_plane;
     const double W = plane.texture.cols, H_texels = plane.texture.rows;
     // Texel (u, v) (row down) -> plane (x right, y up): centre texels at +-(W-1)/2.

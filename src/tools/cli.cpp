@@ -700,7 +700,7 @@ const CommandTable& commands() {
       {"sim", {"write a simulated session with known truth: a samples file, or a rosbag (--output x.bag)", sim_command}},
       {"bag", {"calibrate from a rosbag (/tf, /tf_static, detections) without a roscore",
                [](const Args& args, std::ostream& out, std::ostream& err) { return run_bag_tool("bag", args, out, err); }}},
-      {"images", {"calibrate from a folder of images (chessboard, ChArUco, ArUco, AprilTag) and one robot pose per image",
+      {"images", {"calibrate from a folder of images of a target (any kind of config/targets/) and one robot pose per image",
                   [](const Args& args, std::ostream& out, std::ostream& err) {
                     return run_tool("handeye_images", "images", args, out, err);
                   }}},

@@ -67,8 +67,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
       "image,tx,ty,tz,qx,qy,qz,qw")(
       "camera", po::value(&camera_path)->required(), "ROS camera_info YAML, or OpenCV's YAML/XML (camera_matrix, "
                                                      "distortion_coefficients)")(
-      "target", po::value(&target_path)->required(), "target file (chessboard, charuco, aruco, aruco_board, apriltag, "
-                                                     "or a tag layout)")(
+      "target", po::value(&target_path)->required(), ("target file (" + target_file_types() + ", or a tag layout)").c_str())(
       "setup", po::value(&setup_name)->required(), "eye_in_hand or eye_to_hand")(
       "robust", po::value(&robust), "auto (default), on or off, as for solve")(
       "method", po::value(&method), "joint (default): X and the pattern pose from each image's detected pose; corners: "

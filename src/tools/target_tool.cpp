@@ -59,7 +59,7 @@ int target_command(const Args& args, std::ostream& out, std::ostream&) {
       "target: draw a target file at 1:1 to print (PDF, SVG or PNG), with a 100 mm scale bar and its parameters");
   options.add_options()("help,h", "show this help")(
       "target", po::value(&target_path)->required(),
-      "target file (chessboard, charuco, aruco, aruco_board, apriltag, or a tag layout), as the detectors read it")(
+      ("target file (" + target_file_types() + ", or a tag layout), as the detectors read it").c_str())(
       "output,o", po::value(&output)->required(),
       "board.pdf or board.svg (vectors: print these), board.png (at --dpi); with --measured-square, the scaled "
       "target file (.yaml)")(

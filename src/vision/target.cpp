@@ -1,55 +1,41 @@
 #include "handeye_covariance/vision/target.h"
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/core/lie.h"
 
 namespace handeye {
 
-void check_target(const Target& target, const std::string& where) {
-  switch (target.kind) {
-    case TargetKind::Chessboard:
-      check_chessboard(target.chessboard, where);
-      return;
-    case TargetKind::Charuco:
-      check_charuco(target.charuco, where);
-      return;
-    case TargetKind::Markers:
-      check_layout(target.markers, where);
-      // Every id must exist in its family or dictionary (the bitmap lookup says which ids do).
-      for (const TagPlacement& tag : target.markers.tags) tag_bitmap(target.markers.family, tag.id);
-      return;
-  }
+// Each kind's part (src/vision/targets/), listed once.
+VisionKind chessboard_vision();
+VisionKind charuco_vision();
+VisionKind aruco_vision();
+VisionKind apriltag_vision();
+
+const std::vector<VisionKind>& vision_kinds() {
+  static const std::vector<VisionKind> kinds = {chessboard_vision(), charuco_vision(), aruco_vision(), apriltag_vision()};
+  return kinds;
 }
 
-TargetDetector::TargetDetector(const Target& target, const TargetDetectorOptions& options)
-    : target_(target), options_(options) {
-  check_target(target, "target");
-  if (target.kind != TargetKind::Markers) return;
-  if (names_aruco_dictionary(target.markers.family)) {
-    aruco_ = std::make_unique<ArucoDetector>(target.markers.family);
-  } else {
-    TagDetectorOptions apriltag = options.apriltag;
-    apriltag.family = target.markers.family;
-    apriltag_ = std::make_unique<TagDetector>(apriltag);
+const VisionKind& vision_kind(const std::string& name) {
+  for (const VisionKind& kind : vision_kinds()) {
+    if (kind.name == name) return kind;
   }
+  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no detector", "vision",
+                     "list its VisionKind in src/vision/target.cpp (docs/targets.md, \"Adding a target kind\")");
 }
 
-TargetDetector::~TargetDetector() = default;
+void check_target(const Target& target, const std::string& where) { vision_kind(target.kind_name()).check(target, where); }
 
-TargetObservation TargetDetector::detect(const cv::Mat& gray) const {
-  switch (target_.kind) {
-    case TargetKind::Chessboard:
-      return detect_chessboard(gray, target_.chessboard);
-    case TargetKind::Charuco:
-      return detect_charuco(gray, target_.charuco, options_.min_charuco_corners);
-    case TargetKind::Markers:
-      break;
-  }
-  const std::vector<TagCorners> tags = aruco_ ? aruco_->detect(gray) : apriltag_->detect(gray);
-  TargetObservation found = tag_correspondences(target_.markers, tags, options_.pose);
+void check_markers(const TagLayout& layout, const std::string& where) {
+  check_layout(layout, where);
+  // Every id must exist in its family or dictionary (the bitmap lookup says which ids do).
+  for (const TagPlacement& tag : layout.tags) tag_bitmap(layout.family, tag.id);
+}
+
+TargetObservation marker_observation(const TagLayout& layout, const std::vector<TagCorners>& tags,
+                                     const PatternPoseOptions& options, const std::string& code) {
+  TargetObservation found = tag_correspondences(layout, tags, options);
   if (!found.points && tags.empty()) {
-    found.refusal = "no " + target_.markers.family + " marker found (is the target in view, and printed with this " +
-                    (aruco_ ? "dictionary" : "family") + "?)";
+    found.refusal = "no " + layout.family + " marker found (is the target in view, and printed with this " + code + "?)";
   } else if (!found.points && found.refusal.rfind("saw 0", 0) == 0) {
     std::string seen;
     for (const TagCorners& t : tags) seen += (seen.empty() ? "" : ", ") + std::to_string(t.id);
@@ -57,6 +43,16 @@ TargetObservation TargetDetector::detect(const cv::Mat& gray) const {
   }
   return found;
 }
+
+TargetDetector::TargetDetector(const Target& target, const TargetDetectorOptions& options) : target_(target) {
+  const VisionKind& kind = vision_kind(target.kind_name());
+  kind.check(target, "target");
+  detector_ = kind.detector(target, options);
+}
+
+TargetDetector::~TargetDetector() = default;
+
+TargetObservation TargetDetector::detect(const cv::Mat& gray) const { return detector_->detect(gray); }
 
 TargetObservation TargetDetector::detect(const cv::Mat& raw_gray, const ImageRectifier& rectifier) const {
   TargetObservation seen = detect(rectifier.rectify(raw_gray));

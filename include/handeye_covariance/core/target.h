@@ -1,62 +1,125 @@
-// A calibration target as printed (no ROS, no OpenCV): a chessboard, a ChArUco
-// board, or markers (one or a board of AprilTags or ArUco markers, a TagLayout
-// whose family names the detector). The vision layer detects each kind
-// (vision/target.h); io reads target files (io/target_file.h).
+// A calibration target as printed (no ROS, no OpenCV): its kind and the kind's
+// own parameters. A kind is a TargetKind (its file keys, description, frame and
+// symmetry), one file per kind in core/targets/, listed once in
+// src/core/target_kinds.cpp. The other layers hold their part of a kind in a
+// table keyed by the kind's name: the detector (vision/target.h), the
+// renderer's drawing (simulation/pattern_renderer.h), the printer's
+// (print/target_printer.h). docs/targets.md, "Adding a target kind".
 //
-// Frames: a chessboard's and a ChArUco board's are OpenCV's (vision/chessboard.h,
-// vision/aruco.h): origin at a corner, x along a row, y down the rows, z into the
-// board. Markers: tag_layout.h.
+// Frames: each kind's own (core/targets/*.h); a face frame (target_face) is
+// common to all.
 #pragma once
 
 #include <Eigen/Geometry>
+#include <any>
+#include <array>
 #include <string>
+#include <vector>
 
 #include "handeye_covariance/core/tag_layout.h"
 
 namespace handeye {
 
-struct ChessboardTarget {
-  int columns = 0, rows = 0;  // inner corners along a row, and along a column
-  double square = 0.0;        // m, the edge of one square
-};
+class TargetKind;
 
-struct CharucoTarget {
-  int columns = 0, rows = 0;  // squares along a row, and along a column
-  double square = 0.0;        // m, a square's edge
-  double marker = 0.0;        // m, a marker's edge (black border included)
-  std::string dictionary = "DICT_6X6_250";
-};
+class Target {
+ public:
+  /// No kind: a placeholder to assign to (kind() throws).
+  Target() = default;
+  Target(const TargetKind& kind, std::any parameters) : kind_(&kind), parameters_(std::move(parameters)) {}
 
-enum class TargetKind { Chessboard, Charuco, Markers };
-
-struct Target {
-  TargetKind kind = TargetKind::Markers;
-  ChessboardTarget chessboard;  // kind Chessboard
-  CharucoTarget charuco;        // kind Charuco
-  /// kind Markers: AprilTags (family: a libapriltag family, e.g. tag36h11) or
-  /// ArUco markers (family: an OpenCV dictionary, e.g. DICT_4X4_50).
-  TagLayout markers;
+  const TargetKind& kind() const;
+  /// The kind's parameters (ChessboardTarget, CharucoTarget, TagLayout, ...);
+  /// as<>() throws std::bad_any_cast for another type, get<>() gives nullptr.
+  template <class Parameters>
+  const Parameters& as() const {
+    return std::any_cast<const Parameters&>(parameters_);
+  }
+  template <class Parameters>
+  const Parameters* get() const {
+    return std::any_cast<Parameters>(&parameters_);
+  }
 
   /// e.g. "chessboard 9 x 6 inner corners, 23.6 mm squares".
   std::string describe() const;
-  /// "chessboard", "charuco", "aruco" (one marker or a board) or "apriltag":
-  /// the names of the node's `target` argument.
+  /// The kind's name: "chessboard", "charuco", "aruco" (one marker or a board),
+  /// "apriltag"; the node's `target` argument.
   std::string kind_name() const;
+
+ private:
+  const TargetKind* kind_ = nullptr;
+  std::any parameters_;
 };
 
-/// A grid board of markers (OpenCV's GridBoard: ids row by row from `first_id`)
-/// as a layout in OpenCV's board frame (the top-left corner of the top-left
-/// marker, x right, y down, z into the board); `family` is the dictionary.
-TagLayout aruco_grid_layout(const std::string& dictionary, int columns, int rows, double marker, double separation,
-                            int first_id = 0);
+/// A target file's keys as a kind reads them. io implements it on yaml-cpp (the
+/// core reads no YAML); each throws HandEyeError naming the file and the key,
+/// with the kind's example (TargetKind::example) as the fix.
+class TargetFields {
+ public:
+  virtual ~TargetFields() = default;
+  virtual bool has(const std::string& key) const = 0;
+  virtual std::string text(const std::string& key) const = 0;
+  virtual double number(const std::string& key) const = 0;
+  /// A length in m, above 0 and below 10.
+  virtual double length(const std::string& key) const = 0;
+  virtual int integer(const std::string& key, double lowest, double highest, const std::string& what) const = 0;
+  /// [columns, rows], each 1 to 1000 (`what`: "inner corners", "squares").
+  virtual std::array<int, 2> pair(const std::string& key, const std::string& what) const = 0;
+  /// Refuses the key's value: HandEyeError(InvalidLayout).
+  [[noreturn]] virtual void refuse(const std::string& key, const std::string& message) const = 0;
+};
 
-/// The name is meant as an OpenCV dictionary (it starts with DICT, any case),
-/// known or not: the ArUco path then names a typo with the known dictionaries.
-bool names_aruco_dictionary(const std::string& name);
+/// One kind of target: everything about it that needs no image library.
+class TargetKind {
+ public:
+  virtual ~TargetKind() = default;
+  /// "chessboard": the node's ~target, and every layer's key for the kind.
+  virtual std::string name() const = 0;
 
-Target make_target(const ChessboardTarget& chessboard);
-Target make_target(const CharucoTarget& charuco);
-Target make_target(const TagLayout& markers);
+  /// The `type:` values of a target file that are this kind ("aruco", "aruco_board").
+  virtual std::vector<std::string> file_types() const = 0;
+  /// A file of that type, for messages: "{type: chessboard, inner_corners: [9, 6], square: 0.0236}".
+  virtual std::string example(const std::string& type) const = 0;
+  virtual Target parse(const std::string& type, const TargetFields& fields) const = 0;
+  /// The file's keys that hold lengths in m (`handeye target --measured-square` scales them).
+  virtual std::vector<std::string> length_keys() const = 0;
+
+  virtual std::string describe(const Target& target) const = 0;
+  /// Its sizes and codes as printed beside it: "square 20.000 mm".
+  virtual std::string sizes_text(const Target& target) const = 0;
+  /// The frame its detector reports, in words (printed beside it).
+  virtual std::string frame_text(const Target& target) const = 0;
+  /// What a ruler measures on the print ("square", "marker (black square)") and its length.
+  virtual std::string ruler_name() const = 0;
+  virtual double ruler_length(const Target& target) const = 0;
+
+  /// T_pattern_face (target_face).
+  virtual Eigen::Isometry3d face(const Target& target) const = 0;
+  /// The detected points' extent about the face (target_face_size).
+  virtual Eigen::Vector2d face_size(const Target& target) const = 0;
+  /// is_half_turn_symmetric.
+  virtual bool half_turn_symmetric(const Target&) const { return false; }
+};
+
+/// Every kind, in the order of src/core/target_kinds.cpp (the one list).
+const std::vector<const TargetKind*>& target_kinds();
+/// The kind of that name, or nullptr.
+const TargetKind* find_target_kind(const std::string& name);
+/// The kind whose files have `type: type`, or nullptr.
+const TargetKind* find_target_kind_of_type(const std::string& type);
+/// "chessboard, charuco, aruco or apriltag", from the list.
+std::string target_kind_names();
+/// "chessboard, charuco, aruco, aruco_board or apriltag", from the list.
+std::string target_file_types();
+/// "a, b or c".
+std::string one_of(const std::vector<std::string>& names);
+
+/// "23.6 mm".
+std::string millimetres(double metres, int decimals = 1);
+
+/// OpenCV's board frames (y down, z into the board) seen as a printed face or a
+/// marker's frame (y up, z out of it): the same plane turned by 180 degrees about x.
+Eigen::Matrix3d opencv_board_to_face();
 
 /// T_pattern_face: a frame at the middle of the target's printed face, x right,
 /// y up, z out of the face towards a camera that sees it (the frame random_view
@@ -99,3 +162,4 @@ void set_target(Rig& rig, const Target& target);
 Eigen::Vector2d target_face_size(const Target& target);
 
 }  // namespace handeye
+

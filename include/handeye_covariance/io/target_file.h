@@ -19,14 +19,16 @@ namespace io {
 TagLayout parse_tag_layout(const std::string& text, const std::string& source);
 TagLayout read_tag_layout(const std::string& path);
 
-/// A calibration target file (its kind by `type`; a file with `tags:` is a layout):
+/// A calibration target file (its kind by `type`, the kinds' list in
+/// core/target.h; a file with `tags:` is a layout). The kinds of today:
 ///   {type: chessboard, inner_corners: [columns, rows], square: 0.0236}
 ///   {type: charuco, squares: [columns, rows], square: 0.036, marker: 0.018, dictionary: DICT_6X6_250}
 ///   {type: aruco, dictionary: DICT_4X4_50, id: 7, marker: 0.05}
 ///   {type: aruco_board, dictionary: DICT_4X4_50, markers: [columns, rows], marker: 0.06, separation: 0.015[, first_id: 0]}
 ///   {type: apriltag, family: tag36h11, id: 10, size: 0.048}
 ///   a tag layout (parse_tag_layout; `family` may be an ArUco dictionary)
-/// Lengths in m. Throws HandEyeError naming the file and key. Whether a
+/// Lengths in m. Throws HandEyeError naming the file and key (an unknown type
+/// with the known ones). Whether a
 /// dictionary or family exists is checked by the detector (vision/target.h).
 Target parse_target(const std::string& text, const std::string& source);
 Target read_target(const std::string& path);

@@ -20,10 +20,47 @@
 #include <Eigen/Geometry>
 #include <string>
 
+#include <vector>
+
 #include "handeye_covariance/core/target.h"
+#include "handeye_covariance/vision/tag_detector.h"
 
 namespace handeye {
 namespace print {
+
+/// One marker as printed: its bitmap centred at `centre` (page-aligned board
+/// coordinates, m), turned by `angle` (rad, x towards y, y down), `cell` m a cell.
+struct PrintedMarker {
+  TagBitmap bitmap;
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double angle = 0.0, cell = 0.0;
+};
+
+/// A target as printed, in page-aligned board coordinates (x right, y down, m;
+/// origin anywhere): black squares, markers, the drawn extent and the pattern
+/// frame in them.
+struct PrintedBoard {
+  std::vector<Eigen::AlignedBox2d> black_squares;
+  std::vector<PrintedMarker> markers;
+  Eigen::AlignedBox2d extent;
+  Eigen::Isometry3d T_board_pattern = Eigen::Isometry3d::Identity();
+};
+
+/// A kind's drawing on paper: one file per kind in src/print/targets/, listed
+/// once in src/print/target_printer.cpp under the core kind's name.
+struct PrintKind {
+  std::string name;  // TargetKind::name
+  PrintedBoard (*draw)(const Target& target) = nullptr;  // a checked target (check_target)
+};
+
+const std::vector<PrintKind>& print_kinds();
+/// Throws HandEyeError(InvalidLayout) when the kind has no drawing.
+const PrintKind& print_kind(const std::string& name);
+
+/// The layout's markers, each face up in the board's plane, into `board`
+/// (its extent grown to hold them). Throws HandEyeError(InvalidLayout) for a
+/// marker out of that plane.
+void add_markers(const TagLayout& layout, const Eigen::Isometry3d& T_board_pattern, PrintedBoard& board);
 
 /// A sheet of paper, m.
 struct Page {
@@ -62,12 +99,12 @@ PrintedTarget place_target(const Target& target, const PrintOptions& options);
 /// (HandEyeError(MalformedFile) for another, IoError when it cannot be written).
 PrintedTarget print_target(const Target& target, const std::string& output, const PrintOptions& options);
 
-/// The length a ruler measures on the print for --measured-square: a
-/// chessboard's or ChArUco board's square, the first marker's black square.
+/// The length a ruler measures on the print for --measured-square (the kind's
+/// ruler_length): a chessboard's or ChArUco board's square, the first marker's black square.
 double nominal_square(const Target& target);
 
 /// The target file `text` (parse_target's format) with every length multiplied
-/// by `factor` (square, marker, separation; a layout's sizes and positions),
+/// by `factor` (its kind's length_keys; a layout's sizes and positions),
 /// the rest as it was. Throws as parse_target does.
 std::string scaled_target_text(const std::string& text, double factor, const std::string& source);
 

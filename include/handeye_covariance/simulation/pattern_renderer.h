@@ -8,6 +8,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "handeye_covariance/simulation/simulation.h"
@@ -33,6 +34,36 @@ struct RenderOptions {
   double board_margin_squares = 0.75;  // white board beyond a chessboard's or ChArUco board's squares
 };
 
+/// A printed rectangle of a target: texel (u, v) (v down) at x right, y up in
+/// the plane's frame, whose origin is the texture's centre.
+struct PrintedPlane {
+  cv::Mat texture;  // CV_8U, 0 black, 255 white
+  Eigen::Isometry3d T_pattern_plane = Eigen::Isometry3d::Identity();
+  double width = 0.0, height = 0.0;  // m
+};
+
+/// A target as the renderer draws it: its planes, and the corners of a white
+/// board behind them (pattern frame; empty for none).
+struct TargetPlanes {
+  std::vector<PrintedPlane> planes;
+  std::vector<Eigen::Vector3d> board_corners;
+};
+
+/// A kind's drawing: one file per kind in src/simulation/targets/, listed once
+/// in src/simulation/pattern_renderer.cpp under the core kind's name.
+struct RenderKind {
+  std::string name;  // TargetKind::name
+  TargetPlanes (*draw)(const Target& target, const RenderOptions& options) = nullptr;
+};
+
+const std::vector<RenderKind>& render_kinds();
+/// Throws HandEyeError(InvalidLayout) when the kind has no drawing.
+const RenderKind& render_kind(const std::string& name);
+
+/// Markers (AprilTag or ArUco) at the layout's placements, on a white board
+/// when they lie in the pattern's z = 0 plane.
+TargetPlanes marker_planes(const TagLayout& layout, const RenderOptions& options);
+
 class PatternRenderer {
  public:
   /// Throws HandEyeError for an invalid camera or target (unknown family or id).
@@ -47,20 +78,11 @@ class PatternRenderer {
   const CameraModel& camera() const { return camera_; }
 
  private:
-  /// A printed rectangle: texel (u, v) (v down) at x right, y up in the plane's
-  /// frame, whose origin is the texture's centre.
-  struct Plane {
-    cv::Mat texture;  // CV_32F, gray levels
-    Eigen::Isometry3d T_pattern_plane;
-    double width = 0.0, height = 0.0;  // m
-  };
-  void add_plane(const cv::Mat& texture_8u, const Eigen::Isometry3d& T_pattern_plane, double width, double height);
-  void add_markers(const TagLayout& layout);
   void build_distortion_map();
 
   CameraModel camera_;
   RenderOptions options_;
-  std::vector<Plane> planes_;
+  std::vector<PrintedPlane> planes_;  // texture CV_32F, gray levels
   std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
   cv::Mat map_x_, map_y_;  // supersampled distorted pixel -> supersampled ideal canvas pixel (margin included)
   int ideal_margin_ = 0;                        // px of ideal image beyond the camera's frame, every side

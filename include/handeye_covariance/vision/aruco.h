@@ -25,7 +25,8 @@
 #include <opencv2/core.hpp>
 
 #include "handeye_covariance/core/tag_layout.h"
-#include "handeye_covariance/core/target.h"
+#include "handeye_covariance/core/targets/charuco.h"
+#include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 #include "handeye_covariance/vision/tag_detector.h"
 

@@ -25,7 +25,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "handeye_covariance/core/target.h"
+#include "handeye_covariance/core/targets/chessboard.h"
 #include "handeye_covariance/vision/pattern_pose.h"
 
 namespace handeye {

@@ -1,12 +1,14 @@
 // The one detector that finds a calibration target of any kind (core/target.h)
 // in an image (no ROS).
-// Every kind ends in the same correspondences (target points, image points, the
+// Each kind's detector is its own (VisionKind, src/vision/targets/); every kind
+// ends in the same correspondences (target points, image points, the
 // detector's corner-noise model) and so in the same PnP (estimate_pose).
 #pragma once
 
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -19,7 +21,8 @@
 
 namespace handeye {
 
-/// Throws HandEyeError(InvalidLayout) naming what is wrong and how to fix it.
+/// Throws HandEyeError(InvalidLayout) naming what is wrong and how to fix it
+/// (the kind's check, vision_kind).
 void check_target(const Target& target, const std::string& where);
 
 struct TargetDetectorOptions {
@@ -27,6 +30,36 @@ struct TargetDetectorOptions {
   PatternPoseOptions pose;            // min_tags and the corner model for marker targets
   int min_charuco_corners = 6;
 };
+
+/// A kind's detector of one target.
+class KindDetector {
+ public:
+  virtual ~KindDetector() = default;
+  /// The target's points in an 8-bit single-channel image, or why not.
+  virtual TargetObservation detect(const cv::Mat& gray) const = 0;
+};
+
+/// A kind's part of the vision layer: one file per kind in src/vision/targets/,
+/// listed once in src/vision/target.cpp under the core kind's name.
+struct VisionKind {
+  std::string name;  // TargetKind::name
+  /// Throws HandEyeError(InvalidLayout) for a target its detector would refuse.
+  void (*check)(const Target& target, const std::string& where) = nullptr;
+  /// For a checked target.
+  std::unique_ptr<KindDetector> (*detector)(const Target& target, const TargetDetectorOptions& options) = nullptr;
+};
+
+const std::vector<VisionKind>& vision_kinds();
+/// Throws HandEyeError(InvalidLayout) when the kind has no detector.
+const VisionKind& vision_kind(const std::string& name);
+
+/// For the marker kinds: check_layout, and every id in its family or dictionary.
+void check_markers(const TagLayout& layout, const std::string& where);
+/// For the marker kinds: the layout's correspondences from the markers found
+/// (tag_correspondences), a refusal naming what was seen; `code` is what the
+/// family is ("family", "dictionary").
+TargetObservation marker_observation(const TagLayout& layout, const std::vector<TagCorners>& tags,
+                                     const PatternPoseOptions& options, const std::string& code);
 
 class TargetDetector {
  public:
@@ -47,9 +80,7 @@ class TargetDetector {
 
  private:
   Target target_;
-  TargetDetectorOptions options_;
-  std::unique_ptr<TagDetector> apriltag_;
-  std::unique_ptr<ArucoDetector> aruco_;
+  std::unique_ptr<KindDetector> detector_;
 };
 
 }  // namespace handeye
