@@ -406,7 +406,7 @@ std::string linked_libraries(const std::string& binary) {
 // `handeye solve/noise/compose/suggest/validate/sim` link no ROS library: the bag
 // commands are handeye_bag, which `handeye bag` runs. The rviz plugin links the
 // core and the ROS bridge, not the vision library's OpenCV or libapriltag.
-// docs/offline.md's "Check a calibration later", as typed: a calibration, 5 later views
+// docs/checking.md's "Offline (handeye check)", as typed: a calibration, 5 later views
 // (exit 0, consistent), 5 views after the camera moved 3 mm on its mount (exit 3, X
 // changed, by about 3 mm), the check file; and what it refuses.
 TEST(Cli, CheckSaysWhetherACalibrationStillHolds) {

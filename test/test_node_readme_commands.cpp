@@ -1,4 +1,4 @@
-// Client of readme_commands.test: the ROS commands of the README and docs/ros.md (`rostopic echo`,
+// Client of readme_commands.test: the ROS commands of the README, docs/ros.md and docs/checking.md (`rostopic echo`,
 // `rosservice call`) run as a user types them, in a shell, against the simulated
 // rig. They need Python's message modules for this package's types and for
 // geometry_msgs (scripts/setup installs them); without, rostopic prints

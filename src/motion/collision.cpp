@@ -72,7 +72,7 @@ std::vector<Obstacle> parse_obstacles(const std::string& text, const std::string
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw HandEyeError(ErrorCode::MalformedFile, std::string("not YAML: ") + e.what(), where,
-                       "see docs/ros.md, 'Let the robot move itself', for the obstacles file's format");
+                       "see docs/motion.md for the obstacles file's format");
   }
   if (!root || !root["obstacles"] || !root["obstacles"].IsSequence())
     throw HandEyeError(ErrorCode::MissingKey, "no 'obstacles' list", where,

@@ -1,6 +1,6 @@
 // Collision checks for the view planner: the arm's own geometry (self-collision)
 // and declared obstacles, by FCL on primitives. What is not declared is not
-// checked: docs/ros.md says so ('Let the robot move itself').
+// checked: docs/motion.md says so.
 //
 // Padding: every moving shape of the arm is grown by `padding` (m). A joint-space
 // path sampled so that no point of the arm moves more than 2 * padding between
