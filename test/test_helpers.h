@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <boost/math/distributions/chi_squared.hpp>
 #include <functional>
 #include <random>
 #include <utility>
@@ -49,37 +48,14 @@ inline Vector6d pose_perturbation(const Eigen::Isometry3d& perturbed, const Eige
 /// this is the chi2 band; for 12 views of one marker (nu = 24) it is wider. By
 /// seeded Monte-Carlo, 200 000 draws of the mean (100 beyond each end of a 99.9%
 /// band). A model: the estimator's own chi2 gate, which re-fits a noise scale when
-/// s^2 comes out small, is not in it.
-inline std::pair<double, double> nees_band_under_estimated_sigma(const std::vector<int>& dof, int dim, double coverage) {
-  Rng rng(20261123);
-  std::chi_squared_distribution<double> error(dim);
-  struct Session {
-    std::chi_squared_distribution<double> pooled;  // RSS / sigma^2, chi2(nu)
-    double scale;  // covariance_variance / sigma^2 = pooled x scale: nu / (nu - 2) / nu, capped as production
-  };
-  std::vector<Session> sessions;
-  for (const int dof_k : dof) {
-    const double nu = std::max(dof_k, 1), capped = std::max(nu, 3.0);  // as PixelNoise::covariance_variance
-    sessions.push_back({std::chi_squared_distribution<double>(nu), capped / (capped - 2.0) / nu});
-  }
-  std::vector<double> means(200000);
-  for (double& mean : means) {
-    mean = 0.0;
-    for (Session& s : sessions) mean += error(rng) / (s.pooled(rng) * s.scale) / static_cast<double>(sessions.size());
-  }
-  std::sort(means.begin(), means.end());
-  const auto quantile = [&](double p) { return means[static_cast<std::size_t>(p * (means.size() - 1))]; };
-  return {quantile((1.0 - coverage) / 2.0), quantile((1.0 + coverage) / 2.0)};
-}
+/// s^2 comes out small, is not in it. (test_helpers.cpp)
+std::pair<double, double> nees_band_under_estimated_sigma(const std::vector<int>& dof, int dim, double coverage);
 
 /// The central `coverage` band of the mean of `draws` independent chi2(dim) values
 /// (an honest covariance's NEES with its noise known): chi2(dim x draws) / draws. A
-/// Monte-Carlo test's band follows its number of draws through this.
-inline std::pair<double, double> chi2_mean_band(int draws, int dim, double coverage) {
-  const boost::math::chi_squared sum(static_cast<double>(dim) * draws);
-  return {boost::math::quantile(sum, (1.0 - coverage) / 2.0) / draws,
-          boost::math::quantile(sum, (1.0 + coverage) / 2.0) / draws};
-}
+/// Monte-Carlo test's band follows its number of draws through this. (test_helpers.cpp:
+/// boost's chi2 quantiles are compiled once, not in every test that includes this.)
+std::pair<double, double> chi2_mean_band(int draws, int dim, double coverage);
 
 /// `handeye sim`'s default noise: pattern 0.5 mm / 0.05 deg, robot 0.05 mm / 0.01 deg (1 sigma per axis).
 inline MeasurementNoise sim_noise() {
