@@ -52,13 +52,20 @@ TEST(CalibrationCheck, OneViewsPValueIsChiSquaredSix) {
   for (unsigned seed = 10; seed < 20; ++seed) {
     Rng draw(seed);
     SimulatedSession more = simulate_session(draw, Setup::EyeInHand, typical_X(Setup::EyeInHand), 1, check_study_noise());
-    const CalibrationCheck check = check_calibration(calibration, more.samples);
+    CheckOptions every_draw;  // all 40 000 draws, not stopped at the 500th beyond the statistic
+    every_draw.null_exceedances = every_draw.null_draws;
+    const CalibrationCheck check = check_calibration(calibration, more.samples, every_draw);
     EXPECT_NEAR(check.x_y_overlap, 1.0, 1e-6);
     EXPECT_NEAR(check.X_alone.chi2_drop, check.chi2, 1e-6 * check.chi2);
     EXPECT_NEAR(check.Y_alone.chi2_drop, check.chi2, 1e-6 * check.chi2);
     const double exact = 1.0 - boost_chi2_cdf(6, check.chi2);  // the ratio is monotone in the one drop
     // 40 000 draws: the p-value's 1 sigma is sqrt(p (1 - p) / 40 000) <= 0.0025.
     EXPECT_NEAR(check.p_value, exact, 0.01) << check.statistic;
+    // As a check draws by default (sequentially: 500 draws beyond, p = 500 / draws, whose
+    // relative 1 sigma is about sqrt((1 - p) / 500)), within 4 of its sigma.
+    const double p = check_calibration(calibration, more.samples).p_value;
+    EXPECT_NEAR(p, exact, 4.0 * std::max(std::sqrt(exact * (1.0 - exact) / 40000.0), exact * std::sqrt((1.0 - exact) / 500.0)))
+        << check.statistic;
   }
 }
 
@@ -148,12 +155,14 @@ TEST(CalibrationCheck, TheResultFileCarriesTheCheck) {
     const Calibration calibration = solve_joint(session.samples);
     SimulatedSession more = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 5, check_study_noise());
     if (!given) more.samples.noise.reset();
-    const CalibrationCheck direct = check_calibration(calibration, more.samples);
+    CheckOptions every_draw;  // the p-values to 0.0025 (40 000 draws, none stopped early)
+    every_draw.null_exceedances = every_draw.null_draws;
+    const CalibrationCheck direct = check_calibration(calibration, more.samples, every_draw);
     const io::CalibrationFile file =
         io::parse_result(io::format_result(calibration, io::context_of(session.samples)), "result.yaml");
     const Calibration read = io::calibration_of(file);
     EXPECT_EQ(read.noise_components.size(), calibration.noise_components.size());
-    const CalibrationCheck again = check_calibration(read, more.samples);
+    const CalibrationCheck again = check_calibration(read, more.samples, every_draw);
     EXPECT_NEAR(again.statistic, direct.statistic, 1e-6 * direct.statistic) << given;
     // The Monte-Carlo null draws in a basis of the views' subspaces that rounding may turn:
     // the same p-value within its sampling error.
