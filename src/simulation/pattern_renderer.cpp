@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -158,6 +159,24 @@ void PatternRenderer::build_distortion_map() {
   cv::resize(map_y, map_y_, cv::Size(camera_.width * s, camera_.height * s), 0, 0, cv::INTER_LINEAR);
   map_x_ = map_x_ * s + 0.5 * (s - 1);  // ideal pixel -> supersampled canvas pixel
   map_y_ = map_y_ * s + 0.5 * (s - 1);
+  // Which canvas pixels each tile of the distorted image reads (bilinear: the pixel at
+  // the map's floor and the next), so that a render remaps only the tiles that can see
+  // the target.
+  map_tiles_.clear();
+  constexpr int kTile = 32;
+  for (int y = 0; y < map_x_.rows; y += kTile) {
+    for (int x = 0; x < map_x_.cols; x += kTile) {
+      MapTile tile;
+      tile.distorted = cv::Rect(x, y, std::min(kTile, map_x_.cols - x), std::min(kTile, map_x_.rows - y));
+      double x_min, x_max, y_min, y_max;
+      cv::minMaxLoc(map_x_(tile.distorted), &x_min, &x_max);
+      cv::minMaxLoc(map_y_(tile.distorted), &y_min, &y_max);
+      const int left = static_cast<int>(std::floor(x_min)), top = static_cast<int>(std::floor(y_min));
+      tile.reads = cv::Rect(left, top, static_cast<int>(std::floor(x_max)) + 2 - left,
+                            static_cast<int>(std::floor(y_max)) + 2 - top);
+      map_tiles_.push_back(tile);
+    }
+  }
 }
 
 cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) const {
@@ -170,7 +189,13 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
   K(1, 2) += ideal_margin_;
   const Matrix3d KS = S * K;
   const int width = camera_.width + 2 * ideal_margin_, height = camera_.height + 2 * ideal_margin_;
-  cv::Mat canvas(height * s, width * s, CV_32F, cv::Scalar(options_.background));
+  // The supersampled images are about 12 MB each for a 640 x 480 camera: kept per thread,
+  // not allocated (and page-faulted in) for every render.
+  thread_local cv::Mat canvas, distorted;
+  canvas.create(height * s, width * s, CV_32F);
+  canvas.setTo(cv::Scalar(options_.background));
+  const cv::Rect frame(0, 0, canvas.cols, canvas.rows);
+  cv::Rect drawn;  // what differs from the background
 
   const auto project = [&](const Vector3d& p_camera) {
     const Vector3d h = KS * p_camera;
@@ -185,9 +210,12 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
       const cv::Point2f q = project(p);
       polygon.emplace_back(cvRound(q.x * 16), cvRound(q.y * 16));  // 4 fractional bits
     }
-    if (visible) cv::fillConvexPoly(canvas, polygon, cv::Scalar(options_.white), cv::LINE_AA, 4);
+    if (visible) {
+      cv::fillConvexPoly(canvas, polygon, cv::Scalar(options_.white), cv::LINE_AA, 4);
+      const cv::Rect fixed = cv::boundingRect(polygon);  // in 1/16 pixels
+      drawn |= cv::Rect(fixed.x / 16 - 2, fixed.y / 16 - 2, fixed.width / 16 + 5, fixed.height / 16 + 5);
+    }
   }
-  const cv::Rect frame(0, 0, canvas.cols, canvas.rows);
   for (const PrintedPlane& plane : planes_) {
     const Isometry3d T_camera_plane = T_camera_pattern * plane.T_pattern_plane;
     const double W = plane.texture.cols, H_texels = plane.texture.rows;
@@ -219,10 +247,38 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
     shift(1, 2) = -roi.y;
     cv::Mat target = canvas(roi);
     cv::warpPerspective(plane.texture, target, to_cv(shift * H), target.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+    drawn |= roi;
   }
-  if (options_.blur_sigma_px > 0.0) cv::GaussianBlur(canvas, canvas, cv::Size(), options_.blur_sigma_px * s);
-  cv::Mat distorted, sensor;
-  cv::remap(canvas, distorted, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  cv::Rect changed = drawn;  // the canvas differs from the background only here
+  if (options_.blur_sigma_px > 0.0) {
+    // Blurred where the target is, out to the kernel's reach (OpenCV's Gaussian for float
+    // images spans 4 sigma); the background beyond is uniform, which the blur leaves as it
+    // is. A filter on a sub-matrix reads the pixels around it, so the result there is the
+    // whole canvas's blur, at a fraction of its cost.
+    const double sigma = options_.blur_sigma_px * s;
+    const int reach = static_cast<int>(std::ceil(4.0 * sigma)) + 2;
+    const cv::Rect blurred = cv::Rect(drawn.x - reach, drawn.y - reach, drawn.width + 2 * reach, drawn.height + 2 * reach) & frame;
+    if (!drawn.empty() && !blurred.empty()) {
+      cv::Mat region = canvas(blurred);
+      cv::GaussianBlur(region, region, cv::Size(), sigma);
+      changed = blurred;
+    }
+  }
+  // Distorted: the background, and the tiles that read the changed part of the canvas
+  // remapped (a map's values are canvas coordinates, so a tile's maps remap on their own).
+  distorted.create(map_x_.size(), CV_32F);
+  distorted.setTo(cv::Scalar(options_.background));
+  cv::Rect remapped;
+  if (!changed.empty()) {
+    for (const MapTile& tile : map_tiles_) {
+      if (!(tile.reads & changed).empty()) remapped |= tile.distorted;
+    }
+  }
+  if (!remapped.empty()) {
+    cv::Mat into = distorted(remapped);
+    cv::remap(canvas, into, map_x_(remapped), map_y_(remapped), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  }
+  cv::Mat sensor;
   cv::resize(distorted, sensor, cv::Size(camera_.width, camera_.height), 0, 0, cv::INTER_AREA);
   if (options_.noise_sigma > 0.0) {
     cv::Mat noise(sensor.size(), CV_32F);

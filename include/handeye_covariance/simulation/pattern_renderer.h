@@ -85,6 +85,11 @@ class PatternRenderer {
   std::vector<PrintedPlane> planes_;  // texture CV_32F, gray levels
   std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
   cv::Mat map_x_, map_y_;  // supersampled distorted pixel -> supersampled ideal canvas pixel (margin included)
+  struct MapTile {
+    cv::Rect distorted;  // a tile of the distorted image ...
+    cv::Rect reads;      // ... and the canvas pixels its bilinear remap reads
+  };
+  std::vector<MapTile> map_tiles_;
   int ideal_margin_ = 0;                        // px of ideal image beyond the camera's frame, every side
 };
 
