@@ -147,7 +147,7 @@ Run run_star(const ArmRig& rig, const motion::CollisionModel& collision, const E
   return sim.run;
 }
 
-double median(std::vector<double> v) {
+double median_of_counts(std::vector<double> v) {  // of an even count, the mean of the middle two
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
@@ -206,11 +206,11 @@ int main(int argc, char** argv) {
   double mean_nees = 0.0;
   for (double n : nees) mean_nees += n / nees.size();
   std::printf("\nauto reached %.2g mm in %d of %zu runs, median %.0f samples; the star in %d, median %.0f samples.\n",
-              target_mm, auto_reached, nees.size(), median(auto_samples), star_reached, median(star_samples));
+              target_mm, auto_reached, nees.size(), median_of_counts(auto_samples), star_reached, median_of_counts(star_samples));
   std::printf("auto's samples to reach the star's final sigma over the star's samples: median %.2f (goal <= 0.6).\n",
-              median(auto_to_star));
+              median_of_counts(auto_to_star));
   std::printf("planning one move (session ranking + planner): median %.1f ms; mean NEES of auto's final X %.2f "
               "(6 expected).\n",
-              median(plan_ms), mean_nees);
+              median_of_counts(plan_ms), mean_nees);
   return 0;
 }

@@ -238,17 +238,6 @@ std::optional<Calibration::Prediction> prediction_check(
   return p;
 }
 
-Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
-  Matrix12d sigma = Matrix12d::Zero();
-  sigma.topLeftCorner<6, 6>() = calibration.pose_covariance;
-  if (calibration.pattern) {
-    sigma.bottomRightCorner<6, 6>() = calibration.pattern->covariance;
-    sigma.topRightCorner<6, 6>() = calibration.cross_covariance;
-    sigma.bottomLeftCorner<6, 6>() = calibration.cross_covariance.transpose();
-  }
-  return 0.5 * (sigma + sigma.transpose());
-}
-
 namespace {
 
 CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {

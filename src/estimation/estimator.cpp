@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/estimation/outliers.h"
 
 namespace handeye {
 
@@ -52,7 +53,6 @@ using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-double degrees(double radians) { return radians * 180.0 / M_PI; }
 
 // ---------------------------------------------------------------------------
 // The problem: motions plus the independent noise inputs that perturb them.
@@ -522,11 +522,6 @@ double angle_sigma(const Vector3d& v, const Matrix3d& sigma) {
   return std::sqrt(std::max(0.0, axis.dot(sigma * axis)));
 }
 
-double median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 }  // namespace
 
 void check_motion_rotations(const MotionRotations& m, const SolverOptions& options) {
@@ -909,6 +904,17 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
 }
 
 }  // namespace
+
+Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
+  Eigen::Matrix<double, 12, 12> sigma = Eigen::Matrix<double, 12, 12>::Zero();
+  sigma.topLeftCorner<6, 6>() = calibration.pose_covariance;
+  if (calibration.pattern) {
+    sigma.bottomRightCorner<6, 6>() = calibration.pattern->covariance;
+    sigma.topRightCorner<6, 6>() = calibration.cross_covariance;
+    sigma.bottomLeftCorner<6, 6>() = calibration.cross_covariance.transpose();
+  }
+  return 0.5 * (sigma + sigma.transpose());
+}
 
 Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions) {
   MotionSet set;

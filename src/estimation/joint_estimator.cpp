@@ -10,6 +10,7 @@
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/view_noise.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/variance_components.h"
 
 namespace handeye {
@@ -1056,11 +1057,6 @@ double kurtosis_z(const std::vector<double>& d2) {
   if (!(m2 > 0.0)) return 0.0;
   const double b2 = m4 / (m2 * m2) * 36.0;
   return (b2 - 48.0) / std::sqrt(384.0 / n);
-}
-
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 /// The sandwich A^-1 B A^-1 of the Huber M-estimate (joint_estimator.h).

@@ -112,13 +112,6 @@ bool has_joint_covariance(const Calibration& c) {
   return (c.method == Method::Joint || c.method == Method::Corners) && c.pattern.has_value();
 }
 
-/// The 12x12 covariance of (X, Y) of a joint calibration.
-Matrix12d joint_covariance(const Calibration& c) {
-  Matrix12d C;
-  C << c.pose_covariance, c.cross_covariance, c.cross_covariance.transpose(), c.pattern->covariance;
-  return C;
-}
-
 }  // namespace
 
 Suggestion rank_candidates(const SampleSet& samples, const Calibration& calibration,

@@ -13,7 +13,6 @@ using Eigen::Vector3d;
 
 namespace {
 
-double degrees(double radians) { return radians * 180.0 / M_PI; }
 
 struct PairCheck {
   int i = 0, j = 0;
@@ -137,6 +136,12 @@ double robust_sigma(std::vector<double> values) {
   if (values.empty()) return 0.0;
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 4), values.end());
   return values[values.size() / 4] / 0.3186;
+}
+
+double median(std::vector<double> values) {
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
 }
 
 double residual_scale(std::vector<double> squared_distances) {

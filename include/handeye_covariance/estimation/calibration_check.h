@@ -132,7 +132,4 @@ void require_checkable(const Calibration& calibration);
 /// predicts (scale > 1): then a check scales its prediction by it, else the model stands.
 bool prediction_disagrees(const Calibration::Prediction& prediction);
 
-/// The 12x12 covariance of (X, Y) of a joint calibration: X's, Y's and the cross block.
-Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration);
-
 }  // namespace handeye

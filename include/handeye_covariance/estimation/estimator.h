@@ -251,6 +251,10 @@ struct Calibration {
   std::optional<CornerFit> corner_fit;
 };
 
+/// The 12x12 covariance of (X, Y): X's, Y's and their cross block (Y's blocks zero when the
+/// calibration has no Y), symmetrised.
+Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration);
+
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of
 /// sum beta_i alpha_i^T, then t by linear least squares. Throws on < 2 motions.
 Eigen::Isometry3d park_martin(const std::vector<MotionPair>& motions);

@@ -75,6 +75,9 @@ double residual_scale(std::vector<double> squared_distances);
 /// 51%). 0 for none. The pair screen here and the symmetric views' turn decision.
 double robust_sigma(std::vector<double> values);
 
+/// The median (the upper one of an even count); values must not be empty.
+double median(std::vector<double> values);
+
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);
 

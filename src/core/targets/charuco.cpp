@@ -6,7 +6,7 @@
 namespace handeye {
 namespace {
 
-const CharucoTarget& board(const Target& target) { return target.as<CharucoTarget>(); }
+const CharucoTarget& charuco_of(const Target& target) { return target.as<CharucoTarget>(); }
 
 class CharucoKind : public TargetKind {
  public:
@@ -23,12 +23,12 @@ class CharucoKind : public TargetKind {
   std::vector<std::string> length_keys() const override { return {"square", "marker"}; }
 
   std::string describe(const Target& target) const override {
-    const CharucoTarget& t = board(target);
+    const CharucoTarget& t = charuco_of(target);
     return "ChArUco " + std::to_string(t.columns) + " x " + std::to_string(t.rows) + " squares of " +
            millimetres(t.square) + ", " + millimetres(t.marker) + " markers, " + t.dictionary;
   }
   std::string sizes_text(const Target& target) const override {
-    const CharucoTarget& t = board(target);
+    const CharucoTarget& t = charuco_of(target);
     return "square " + millimetres(t.square, 3) + ", marker " + millimetres(t.marker, 3) + " (black border included), " +
            t.dictionary;
   }
@@ -36,14 +36,14 @@ class CharucoKind : public TargetKind {
     return "frame (OpenCV's): origin at the board's top-left corner, x along a row (right), y down, z into the board";
   }
   std::string ruler_name() const override { return "square"; }
-  double ruler_length(const Target& target) const override { return board(target).square; }
+  double ruler_length(const Target& target) const override { return charuco_of(target).square; }
 
   Eigen::Isometry3d face(const Target& target) const override {
-    const CharucoTarget& t = board(target);
+    const CharucoTarget& t = charuco_of(target);
     return se3::make_pose(opencv_board_to_face(), Eigen::Vector3d(0.5 * t.columns * t.square, 0.5 * t.rows * t.square, 0.0));
   }
   Eigen::Vector2d face_size(const Target& target) const override {
-    const CharucoTarget& t = board(target);
+    const CharucoTarget& t = charuco_of(target);
     return Eigen::Vector2d(t.columns - 2, t.rows - 2) * t.square;
   }
 };

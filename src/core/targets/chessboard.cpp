@@ -6,7 +6,7 @@
 namespace handeye {
 namespace {
 
-const ChessboardTarget& board(const Target& target) { return target.as<ChessboardTarget>(); }
+const ChessboardTarget& chessboard_of(const Target& target) { return target.as<ChessboardTarget>(); }
 
 class ChessboardKind : public TargetKind {
  public:
@@ -22,28 +22,28 @@ class ChessboardKind : public TargetKind {
   std::vector<std::string> length_keys() const override { return {"square"}; }
 
   std::string describe(const Target& target) const override {
-    const ChessboardTarget& t = board(target);
+    const ChessboardTarget& t = chessboard_of(target);
     return "chessboard " + std::to_string(t.columns) + " x " + std::to_string(t.rows) + " inner corners, " +
            millimetres(t.square) + " squares";
   }
-  std::string sizes_text(const Target& target) const override { return "square " + millimetres(board(target).square, 3); }
+  std::string sizes_text(const Target& target) const override { return "square " + millimetres(chessboard_of(target).square, 3); }
   std::string frame_text(const Target&) const override {
     return "frame (OpenCV's): origin at the top-left inner corner, x along a row (right), y down, z into the board";
   }
   std::string ruler_name() const override { return "square"; }
-  double ruler_length(const Target& target) const override { return board(target).square; }
+  double ruler_length(const Target& target) const override { return chessboard_of(target).square; }
 
   Eigen::Isometry3d face(const Target& target) const override {
-    const ChessboardTarget& t = board(target);
+    const ChessboardTarget& t = chessboard_of(target);
     return se3::make_pose(opencv_board_to_face(),
                           Eigen::Vector3d(0.5 * (t.columns - 1) * t.square, 0.5 * (t.rows - 1) * t.square, 0.0));
   }
   Eigen::Vector2d face_size(const Target& target) const override {
-    const ChessboardTarget& t = board(target);
+    const ChessboardTarget& t = chessboard_of(target);
     return Eigen::Vector2d(t.columns - 1, t.rows - 1) * t.square;
   }
   bool half_turn_symmetric(const Target& target) const override {
-    return (board(target).columns + board(target).rows) % 2 == 0;
+    return (chessboard_of(target).columns + chessboard_of(target).rows) % 2 == 0;
   }
 };
 
