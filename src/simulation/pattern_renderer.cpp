@@ -171,9 +171,12 @@ void PatternRenderer::build_distortion_map() {
       double x_min, x_max, y_min, y_max;
       cv::minMaxLoc(map_x_(tile.distorted), &x_min, &x_max);
       cv::minMaxLoc(map_y_(tile.distorted), &y_min, &y_max);
-      const int left = static_cast<int>(std::floor(x_min)), top = static_cast<int>(std::floor(y_min));
-      tile.reads = cv::Rect(left, top, static_cast<int>(std::floor(x_max)) + 2 - left,
-                            static_cast<int>(std::floor(y_max)) + 2 - top);
+      // Clamped to the canvas, as BORDER_REPLICATE reads beyond it (the margin keeps the maps inside).
+      const int columns = (camera_.width + 2 * ideal_margin_) * s, rows = (camera_.height + 2 * ideal_margin_) * s;
+      const auto clamp = [](double v, int n) { return std::clamp(static_cast<int>(std::floor(v)), 0, n - 1); };
+      const int left = clamp(x_min, columns), top = clamp(y_min, rows);
+      tile.reads = cv::Rect(left, top, std::min(clamp(x_max, columns) + 1, columns - 1) + 1 - left,
+                            std::min(clamp(y_max, rows) + 1, rows - 1) + 1 - top);
       map_tiles_.push_back(tile);
     }
   }
