@@ -272,13 +272,7 @@ void judge_views(const SampleSet& as_given, const SampleSet& turned_all, const C
                  std::vector<double>& given_squared, std::vector<double>& turned_squared) {
   const Isometry3d& X = c.T_parent_camera;
   const Isometry3d Y = c.pattern ? c.pattern->pose : pattern_pose(as_given, X);
-  Eigen::Matrix<double, 12, 12> XY = Eigen::Matrix<double, 12, 12>::Zero();
-  XY.topLeftCorner<6, 6>() = c.pose_covariance;
-  if (c.pattern) {
-    XY.bottomRightCorner<6, 6>() = c.pattern->covariance;
-    XY.topRightCorner<6, 6>() = c.cross_covariance;
-    XY.bottomLeftCorner<6, 6>() = c.cross_covariance.transpose();
-  }
+  const Eigen::Matrix<double, 12, 12> XY = joint_covariance(c);
   const std::vector<Matrix6d> S_given = residual_covariances(as_given, c), S_turned = residual_covariances(turned_all, c);
   const std::size_t n = as_given.samples.size();
   given_squared.assign(n, 0.0);

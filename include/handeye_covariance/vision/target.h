@@ -61,6 +61,27 @@ void check_markers(const TagLayout& layout, const std::string& where);
 TargetObservation marker_observation(const TagLayout& layout, const std::vector<TagCorners>& tags,
                                      const PatternPoseOptions& options, const std::string& code);
 
+/// For the marker kinds: a layout's detector around a marker finder (TagDetector,
+/// ArucoDetector: detect(gray) gives the markers' corners), built in place from `finder`'s
+/// arguments; `code` as marker_observation's.
+template <class Finder>
+class MarkerLayoutDetector : public KindDetector {
+ public:
+  template <class... FinderArguments>
+  MarkerLayoutDetector(const TagLayout& layout, const PatternPoseOptions& options, std::string code,
+                       FinderArguments&&... finder)
+      : layout_(layout), options_(options), code_(std::move(code)), finder_(std::forward<FinderArguments>(finder)...) {}
+  TargetObservation detect(const cv::Mat& gray) const override {
+    return marker_observation(layout_, finder_.detect(gray), options_, code_);
+  }
+
+ private:
+  TagLayout layout_;
+  PatternPoseOptions options_;
+  std::string code_;
+  Finder finder_;
+};
+
 class TargetDetector {
  public:
   /// Checks the target (throws as check_target).

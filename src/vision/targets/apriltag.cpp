@@ -10,26 +10,14 @@ TagDetectorOptions with_family(TagDetectorOptions options, const std::string& fa
   return options;
 }
 
-class MarkersDetector : public KindDetector {
- public:
-  MarkersDetector(const TagLayout& layout, const TargetDetectorOptions& options)
-      : layout_(layout), options_(options.pose), detector_(with_family(options.apriltag, layout.family)) {}
-  TargetObservation detect(const cv::Mat& gray) const override {
-    return marker_observation(layout_, detector_.detect(gray), options_, "family");
-  }
-
- private:
-  TagLayout layout_;
-  PatternPoseOptions options_;
-  TagDetector detector_;
-};
-
 }  // namespace
 
 VisionKind apriltag_vision() {
   return {"apriltag", [](const Target& target, const std::string& where) { check_markers(target.as<TagLayout>(), where); },
           [](const Target& target, const TargetDetectorOptions& options) -> std::unique_ptr<KindDetector> {
-            return std::make_unique<MarkersDetector>(target.as<TagLayout>(), options);
+            const TagLayout& layout = target.as<TagLayout>();
+            return std::make_unique<MarkerLayoutDetector<TagDetector>>(layout, options.pose, "family",
+                                                                       with_family(options.apriltag, layout.family));
           }};
 }
 
