@@ -258,11 +258,7 @@ const std::vector<PrintKind>& print_kinds() {
 }
 
 const PrintKind& print_kind(const std::string& name) {
-  for (const PrintKind& kind : print_kinds()) {
-    if (kind.name == name) return kind;
-  }
-  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no printed drawing", "printer",
-                     "list its PrintKind in src/print/target_printer.cpp (docs/targets.md, \"Adding a target kind\")");
+  return layer_entry(print_kinds(), name, "printed drawing", "printer", "PrintKind", "src/print/target_printer.cpp");
 }
 
 void add_markers(const TagLayout& layout, const Eigen::Isometry3d& T_board_pattern, PrintedBoard& board) {

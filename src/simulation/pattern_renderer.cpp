@@ -56,11 +56,7 @@ const std::vector<RenderKind>& render_kinds() {
 }
 
 const RenderKind& render_kind(const std::string& name) {
-  for (const RenderKind& kind : render_kinds()) {
-    if (kind.name == name) return kind;
-  }
-  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no drawing", "renderer",
-                     "list its RenderKind in src/simulation/pattern_renderer.cpp (docs/targets.md, \"Adding a target kind\")");
+  return layer_entry(render_kinds(), name, "drawing", "renderer", "RenderKind", "src/simulation/pattern_renderer.cpp");
 }
 
 TargetPlanes marker_planes(const TagLayout& layout, const RenderOptions& options) {

@@ -16,11 +16,7 @@ const std::vector<VisionKind>& vision_kinds() {
 }
 
 const VisionKind& vision_kind(const std::string& name) {
-  for (const VisionKind& kind : vision_kinds()) {
-    if (kind.name == name) return kind;
-  }
-  throw HandEyeError(ErrorCode::InvalidLayout, "the target kind `" + name + "` has no detector", "vision",
-                     "list its VisionKind in src/vision/target.cpp (docs/targets.md, \"Adding a target kind\")");
+  return layer_entry(vision_kinds(), name, "detector", "vision", "VisionKind", "src/vision/target.cpp");
 }
 
 void check_target(const Target& target, const std::string& where) { vision_kind(target.kind_name()).check(target, where); }

@@ -105,6 +105,20 @@ class TargetKind {
 const std::vector<const TargetKind*>& target_kinds();
 /// The kind of that name, or nullptr.
 const TargetKind* find_target_kind(const std::string& name);
+
+/// A layer's part of a kind, from the layer's one table (`entries`, each with a `name`:
+/// the kind's). Throws HandEyeError(InvalidLayout): "the target kind `name` has no
+/// `missing`", and where to list it (`entry_type` in `table_file`).
+[[noreturn]] void throw_no_layer_entry(const std::string& name, const std::string& missing, const std::string& layer,
+                                       const std::string& entry_type, const std::string& table_file);
+template <class Entry>
+const Entry& layer_entry(const std::vector<Entry>& entries, const std::string& name, const std::string& missing,
+                         const std::string& layer, const std::string& entry_type, const std::string& table_file) {
+  for (const Entry& entry : entries) {
+    if (entry.name == name) return entry;
+  }
+  throw_no_layer_entry(name, missing, layer, entry_type, table_file);
+}
 /// The kind whose files have `type: type`, or nullptr.
 const TargetKind* find_target_kind_of_type(const std::string& type);
 /// "chessboard, charuco, aruco or apriltag", from the list.
