@@ -135,6 +135,8 @@ void PatternRenderer::build_distortion_map() {
                        "renderer camera", "check the distortion coefficients (OpenCV's order: k1, k2, p1, p2, k3)");
   }
   ideal_margin_ = static_cast<int>(std::ceil(overshoot)) + 2;
+  const int s = std::max(1, options_.supersample);
+  canvas_size_ = cv::Size((camera_.width + 2 * ideal_margin_) * s, (camera_.height + 2 * ideal_margin_) * s);
   cv::Mat map_x(camera_.height, camera_.width, CV_32F), map_y(camera_.height, camera_.width, CV_32F);
   for (int v = 0; v < camera_.height; ++v) {
     for (int u = 0; u < camera_.width; ++u) {
@@ -150,7 +152,6 @@ void PatternRenderer::build_distortion_map() {
   // 1.24x the corner model's bound in translation (0.97x without distortion).
   // The map is smooth: interpolating it to the supersampled grid (resize's pixel
   // centres are the renderer's) is exact to ~1e-5 px.
-  const int s = std::max(1, options_.supersample);
   cv::resize(map_x, map_x_, cv::Size(camera_.width * s, camera_.height * s), 0, 0, cv::INTER_LINEAR);
   cv::resize(map_y, map_y_, cv::Size(camera_.width * s, camera_.height * s), 0, 0, cv::INTER_LINEAR);
   map_x_ = map_x_ * s + 0.5 * (s - 1);  // ideal pixel -> supersampled canvas pixel
@@ -168,7 +169,7 @@ void PatternRenderer::build_distortion_map() {
       cv::minMaxLoc(map_x_(tile.distorted), &x_min, &x_max);
       cv::minMaxLoc(map_y_(tile.distorted), &y_min, &y_max);
       // Clamped to the canvas, as BORDER_REPLICATE reads beyond it (the margin keeps the maps inside).
-      const int columns = (camera_.width + 2 * ideal_margin_) * s, rows = (camera_.height + 2 * ideal_margin_) * s;
+      const int columns = canvas_size_.width, rows = canvas_size_.height;
       const auto clamp = [](double v, int n) { return std::clamp(static_cast<int>(std::floor(v)), 0, n - 1); };
       const int left = clamp(x_min, columns), top = clamp(y_min, rows);
       tile.reads = cv::Rect(left, top, std::min(clamp(x_max, columns) + 1, columns - 1) + 1 - left,
@@ -187,11 +188,10 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
   K(0, 2) += ideal_margin_;
   K(1, 2) += ideal_margin_;
   const Matrix3d KS = S * K;
-  const int width = camera_.width + 2 * ideal_margin_, height = camera_.height + 2 * ideal_margin_;
   // The supersampled images are about 12 MB each for a 640 x 480 camera: kept per thread,
   // not allocated (and page-faulted in) for every render.
   thread_local cv::Mat canvas, distorted;
-  canvas.create(height * s, width * s, CV_32F);
+  canvas.create(canvas_size_, CV_32F);
   canvas.setTo(cv::Scalar(options_.background));
   const cv::Rect frame(0, 0, canvas.cols, canvas.rows);
   cv::Rect drawn;  // what differs from the background

@@ -91,6 +91,7 @@ class PatternRenderer {
   };
   std::vector<MapTile> map_tiles_;
   int ideal_margin_ = 0;                        // px of ideal image beyond the camera's frame, every side
+  cv::Size canvas_size_;                        // the supersampled ideal image: (camera + 2 margins) x supersample
 };
 
 /// A camera like a typical industrial 640 x 480 camera with mild barrel
