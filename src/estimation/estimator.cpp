@@ -53,7 +53,6 @@ using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-
 // ---------------------------------------------------------------------------
 // The problem: motions plus the independent noise inputs that perturb them.
 // ---------------------------------------------------------------------------

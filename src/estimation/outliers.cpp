@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <utility>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
@@ -12,7 +13,6 @@ using Eigen::Isometry3d;
 using Eigen::Vector3d;
 
 namespace {
-
 
 struct PairCheck {
   int i = 0, j = 0;
@@ -146,9 +146,7 @@ double median(std::vector<double> values) {
 
 double residual_scale(std::vector<double> squared_distances) {
   if (squared_distances.empty()) return 1.0;
-  const auto middle = squared_distances.begin() + static_cast<std::ptrdiff_t>(squared_distances.size() / 2);
-  std::nth_element(squared_distances.begin(), middle, squared_distances.end());
-  return std::max(1.0, *middle / 5.348);
+  return std::max(1.0, median(std::move(squared_distances)) / 5.348);
 }
 
 std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration) {
