@@ -12,24 +12,54 @@
 
 namespace handeye {
 
-SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed) {
+SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed, int run_length) {
   const int n = static_cast<int>(samples.samples.size());
   if (n < 8) {
     throw HandEyeError(ErrorCode::TooFewMotions,
                        "the split-half check needs at least 8 samples (two halves of 4), got " + std::to_string(n),
                        "samples", "record more samples; the check is meaningful from about 20");
   }
+  if (run_length < 1 || 4 * run_length > n) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "halves of runs of " + std::to_string(run_length) + " consecutive samples need at least " +
+                           std::to_string(4 * std::max(run_length, 1)) + " samples (and a run length >= 1), got " +
+                           std::to_string(n),
+                       "split_runs", "use runs of at most n / 4 samples, or 1 for random halves");
+  }
   SplitCheck check;
+  check.run_length = run_length;
   check.half_size = n / 2;
   std::mt19937_64 rng(seed);
   std::vector<int> order(static_cast<std::size_t>(n));
   std::iota(order.begin(), order.end(), 0);
+  std::vector<std::vector<int>> runs;
   for (int split = 0; split < splits; ++split) {
-    std::shuffle(order.begin(), order.end(), rng);
     SampleSet halves[2] = {samples, samples};
     halves[0].samples.clear(), halves[1].samples.clear();
-    for (int k = 0; k < n; ++k) {
-      halves[k < n / 2 ? 0 : 1].samples.push_back(samples.samples[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])]);
+    if (run_length == 1) {
+      std::shuffle(order.begin(), order.end(), rng);
+      for (int k = 0; k < n; ++k) {
+        halves[k < n / 2 ? 0 : 1].samples.push_back(samples.samples[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])]);
+      }
+    } else {
+      // Runs of run_length consecutive samples (acquisition order), cut at a random
+      // phase; whole runs go to the first half until it holds n / 2 or more.
+      const int phase = static_cast<int>(rng() % static_cast<unsigned>(run_length));
+      runs.assign(1, {});
+      for (int i = 0; i < n; ++i) {
+        if (i > 0 && (i - phase) % run_length == 0) runs.emplace_back();
+        runs.back().push_back(i);
+      }
+      std::shuffle(runs.begin(), runs.end(), rng);
+      std::vector<bool> first(static_cast<std::size_t>(n), false);
+      int filled = 0;
+      for (const std::vector<int>& run : runs) {
+        if (filled >= n / 2) break;
+        for (int i : run) first[static_cast<std::size_t>(i)] = true;
+        filled += static_cast<int>(run.size());
+      }
+      for (int i = 0; i < n; ++i) halves[first[static_cast<std::size_t>(i)] ? 0 : 1].samples.push_back(samples.samples[static_cast<std::size_t>(i)]);
+      check.half_size = std::min(check.half_size, static_cast<int>(std::min(halves[0].samples.size(), halves[1].samples.size())));
     }
     Calibration a, b;
     try {
@@ -77,6 +107,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   Calibration::Honesty h;
   h.splits = check.observed.splits;
   h.half_size = check.observed.half_size;
+  h.run_length = check.observed.run_length;
   h.split_half_nees = check.observed.trimmed_mean_nees;
   h.replicates = check.reference.replicates;
   h.reference_mean = check.reference.mean, h.reference_low = check.reference.low, h.reference_high = check.reference.high;
@@ -132,15 +163,18 @@ double quantile(std::vector<double> values, double p) {
 
 std::string verdict_text(const HonestyCheck& c) {
   const double sigma = std::sqrt(c.ratio);
+  const int k = c.observed.run_length;
+  const std::string halves = k > 1 ? " (halves of runs of " + std::to_string(k) + " consecutive samples)" : "";
   switch (c.verdict) {
     case Honesty::Overconfident:
-      return "overconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(sigma, 2) + "x too small";
+      return "overconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(sigma, 2) + "x too small" +
+             halves;
     case Honesty::Underconfident:
       return "underconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(1.0 / sigma, 2) +
-             "x too large";
+             "x too large" + halves;
     case Honesty::Honest: break;
   }
-  return "honest";
+  return "honest" + halves;
 }
 
 }  // namespace
@@ -148,7 +182,7 @@ std::string verdict_text(const HonestyCheck& c) {
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options) {
   HonestyCheck check;
-  check.observed = split_check(samples, solve, options.splits, options.seed);
+  check.observed = split_check(samples, solve, options.splits, options.seed, options.run_length);
   const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
   SplitCheckReference& ref = check.reference;
   ref.splits = std::min(options.splits, std::max(1, options.replicate_splits));
@@ -160,7 +194,8 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
                              : std::max(std::min(20, options.replicates), options.replicates * options.full_replicates_up_to / n);
   for (int r = 0; r < replicates; ++r) {
     const SampleSet simulated = simulate_like(samples, fitted, S, rng);
-    const SplitCheck replicate = split_check(simulated, solve, ref.splits, options.seed);  // the session's own halves
+    const SplitCheck replicate =
+        split_check(simulated, solve, ref.splits, options.seed, options.run_length);  // the session's own halves
     if (replicate.splits == 0) {
       ++ref.failed;
       continue;

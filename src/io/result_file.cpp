@@ -120,6 +120,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   emit_list(out, human(report.split_half_sigma));
   out << YAML::Key << "split_half_splits" << YAML::Value << report.honesty.observed.splits;
   out << YAML::Key << "split_half_size" << YAML::Value << report.honesty.observed.half_size;
+  if (report.honesty.observed.run_length > 1) out << YAML::Key << "split_half_runs" << YAML::Value << report.honesty.observed.run_length;
   out << YAML::Key << "split_half_nees" << YAML::Value << report.honesty.observed.mean_nees;
   out << YAML::Key << "split_half_nees_translation" << YAML::Value << report.honesty.observed.mean_nees_translation;
   out << YAML::Key << "split_half_nees_rotation" << YAML::Value << report.honesty.observed.mean_nees_rotation;
@@ -262,6 +263,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "text" << YAML::Value << h->text;
     if (h->verdict != "not run") {
       out << YAML::Key << "splits" << YAML::Value << h->splits << YAML::Key << "half_size" << YAML::Value << h->half_size;
+      if (h->run_length > 1) out << YAML::Key << "run_length" << YAML::Value << h->run_length;
       out << YAML::Key << "split_half_nees" << YAML::Value << h->split_half_nees;
       out << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sessions"
           << YAML::Value << h->replicates << YAML::Key << "mean" << YAML::Value << h->reference_mean << YAML::Key << "low"

@@ -47,6 +47,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   // The config's honesty keys, unless the command line sets them.
   if (vm.count("split-check")) settings.honesty.splits = honesty.options.splits;
   if (vm.count("reference-sessions")) settings.honesty.replicates = honesty.options.replicates;
+  if (vm.count("split-runs")) settings.honesty.run_length = honesty.options.run_length;
   if (honesty.no_inflation) settings.inflate_when_overconfident = false;
   HonestyArgs{settings.honesty, !settings.inflate_when_overconfident}.apply(settings);  // checks the values
   settings.session_file.clear();  // the node's session file is the node's

@@ -30,14 +30,16 @@ SessionSettings session_settings(const SessionConfig& config) {
   s.reject_outliers = config.reject_outliers;
   s.method = method_from_string(config.method);
   s.robust = robust_from_string(config.robust);
-  if (config.honesty_splits < 0 || config.honesty_sessions < 2) {
+  if (config.honesty_splits < 0 || config.honesty_sessions < 2 || config.honesty_run_length < 1) {
     throw HandEyeError(ErrorCode::MalformedFile,
-                       "honesty_splits must be >= 0 and honesty_sessions >= 2, got " + std::to_string(config.honesty_splits) +
-                           " and " + std::to_string(config.honesty_sessions),
+                       "honesty_splits must be >= 0, honesty_sessions >= 2 and honesty_run_length >= 1, got " +
+                           std::to_string(config.honesty_splits) + ", " + std::to_string(config.honesty_sessions) + " and " +
+                           std::to_string(config.honesty_run_length),
                        "honesty_splits", "use e.g. honesty_splits: 200, honesty_sessions: 100 (honesty_splits: 0 turns the check off)");
   }
   s.honesty.splits = config.honesty_splits;
   s.honesty.replicates = config.honesty_sessions;
+  s.honesty.run_length = config.honesty_run_length;
   s.inflate_when_overconfident = config.inflate_when_overconfident;
   s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
   s.suggest.working_distance = config.working_distance;

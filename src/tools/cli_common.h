@@ -65,7 +65,7 @@ class ProgressBar {
 };
 
 /// The honesty check's options of every command that calibrates (solve, images,
-/// bag): --split-check N (0: none), --reference-sessions N, --no-inflation.
+/// bag): --split-check N (0: none), --reference-sessions N, --split-runs K, --no-inflation.
 struct HonestyArgs {
   HonestyOptions options;
   bool no_inflation = false;

@@ -9,6 +9,14 @@
 // honest; well above (> 7.5) it is overconfident, well below (< 5) too cautious.
 // Each half holds n/2 samples, so it says how honest the covariance of an n/2-pose
 // session of this kind is.
+//
+// What random halves cannot see: an error shared by neighbouring samples. A robot
+// whose pose error changes smoothly along its path (a kinematic error, drift) gives
+// consecutive samples alike errors; random halves each hold about half of every
+// stretch of the path, so the shared part cancels in d, while it does not cancel in
+// X's error. Halves made of runs of consecutive samples (run_length > 1) keep
+// neighbours together: such an error then enlarges d, and the check, against a
+// reference split the same way, reads overconfident (docs/checking.md).
 #pragma once
 
 #include <functional>
@@ -22,9 +30,10 @@
 namespace handeye {
 
 struct SplitCheck {
+  int run_length = 1;       // 1: random halves; k: halves of runs of k consecutive samples
   int splits = 0;           // random splits solved
   int failed = 0;           // splits where a half could not be solved (too few or degenerate samples)
-  int half_size = 0;        // samples in the smaller half
+  int half_size = 0;        // samples in the smaller half (of any split)
   double mean_nees = 0.0;   // 6-dof, over the solved splits
   /// The mean of the middle 90% of the splits' NEES (5% dropped at each end): what
   /// the calibrated check compares, since a rare degenerate half (a noise number at
@@ -41,9 +50,13 @@ struct SplitCheck {
 
 using SolveSamples = std::function<Calibration(const SampleSet&)>;
 
-/// `splits` random halves (seeded) of `samples`, each solved by `solve`.
-/// Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
-SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed);
+/// `splits` random halves (seeded) of `samples`, each solved by `solve`; with
+/// run_length k > 1, each half is made of whole runs of k consecutive samples (in
+/// the order they were taken), cut at a random phase and drawn at random until the
+/// first half holds n / 2 or more. Throws HandEyeError(TooFewMotions) for fewer than
+/// 8 samples, or fewer than 4 k.
+SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed,
+                       int run_length = 1);
 
 // ---------------------------------------------------------------- calibrated to the session
 //
@@ -68,6 +81,9 @@ struct HonestyOptions {
   /// halves: its mean NEES has the same expectation as with all of them, and the
   /// band is corrected for the extra spread of a mean over fewer splits.
   int replicate_splits = 40;
+  /// 1: random halves. k > 1: halves of runs of k consecutive samples (split_check),
+  /// for an error that follows the robot's path; the reference is split the same way.
+  int run_length = 1;
   unsigned seed = 1;
 };
 

@@ -37,6 +37,7 @@ struct SessionConfig {
   // verdict inflates the covariance (the default) or is only reported.
   int honesty_splits = 200;    // 0: no check
   int honesty_sessions = 100;
+  int honesty_run_length = 1;  // 1: random halves; k: halves of runs of k consecutive samples
   bool inflate_when_overconfident = true;
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
@@ -85,6 +86,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("robust", c.robust, 1.0);
   visit("honesty_splits", c.honesty_splits, 1.0);
   visit("honesty_sessions", c.honesty_sessions, 1.0);
+  visit("honesty_run_length", c.honesty_run_length, 1.0);
   visit("inflate_when_overconfident", c.inflate_when_overconfident, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
