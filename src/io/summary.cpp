@@ -171,7 +171,10 @@ std::string honesty_lines(const Calibration::Honesty& h) {
   std::string out = "  honesty check         " + h.text + " (split-half NEES " + number_text(h.split_half_nees, 3) +
                     " against " + number_text(h.reference_mean, 3) + " for an honest covariance on these poses; ratio " +
                     number_text(h.ratio, 3) + ")\n";
-  out += "                        " + std::to_string(h.splits) + " random splits into halves of " + std::to_string(h.half_size) +
+  const std::string halves = h.run_length > 1 ? "halves of runs of " + std::to_string(h.run_length) +
+                                                     " consecutive samples, at least " + std::to_string(h.half_size)
+                                               : "halves of " + std::to_string(h.half_size);
+  out += "                        " + std::to_string(h.splits) + " random splits into " + halves +
          " (middle 90%); reference: " + std::to_string(h.replicates) + " simulated sessions at the same robot poses, 5-95% " +
          number_text(h.reference_low, 3) + " to " + number_text(h.reference_high, 3) + "\n";
   return out;

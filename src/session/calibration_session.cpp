@@ -301,6 +301,11 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
     return c;
   }
+  if (const int k = settings_.honesty.run_length; static_cast<int>(kept.samples.samples.size()) < 4 * k) {
+    not_run("halves of runs of " + std::to_string(k) + " consecutive samples need at least " + std::to_string(4 * k) +
+            " samples, there are " + std::to_string(kept.samples.samples.size()));
+    return c;
+  }
   // The fit the reference simulates from is the kept samples' own (without the rejected).
   const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
   record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
