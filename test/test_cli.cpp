@@ -89,21 +89,25 @@ TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
   EXPECT_DOUBLE_EQ(written["honesty"]["inflation"].as<double>(), 1.0);
   EXPECT_FALSE(written["honesty"]["model_covariance"]);
 
-  // Halves of runs of consecutive samples: said, recorded, and refused beyond n / 4 or below 1.
+  // The second look, halves of runs of consecutive samples: said, recorded, and left
+  // out with the reason beyond n / 4; a negative length is refused.
+  EXPECT_NE(r.out.find("the other look: halves of runs of 4 consecutive samples, ratio "), std::string::npos) << r.out;
+  EXPECT_EQ(written["honesty"]["runs"]["length"].as<int>(), 4);  // auto: 60 / 8 within [2, 4]
+  EXPECT_FALSE(written["honesty"]["run_length"]);                 // random halves decided: not written
   const std::string runs_result = temp("split_runs.yaml");
   const CliRun runs = run("solve --input " + samples + " --output " + runs_result +
                           " --split-check 40 --reference-sessions 30 --split-runs 3");
   ASSERT_EQ(runs.exit_code, 0) << runs.err;
-  EXPECT_NE(runs.out.find("40 random splits into halves of runs of 3 consecutive samples, at least "), std::string::npos)
-      << runs.out;
-  EXPECT_EQ(YAML::LoadFile(runs_result)["honesty"]["run_length"].as<int>(), 3);
-  EXPECT_FALSE(written["honesty"]["run_length"]);  // random halves: not written
-  const CliRun zero = run("solve --input " + samples + " --output " + temp("split_zero.yaml") + " --split-runs 0");
-  EXPECT_EQ(zero.exit_code, 2);
-  EXPECT_NE(zero.err.find("--split-runs >= 1"), std::string::npos) << zero.err;
-  const CliRun long_runs = run("solve --input " + samples + " --output " + temp("split_long.yaml") + " --split-runs 16");
-  EXPECT_EQ(long_runs.exit_code, 0) << long_runs.err;  // calibrated; the check says why it did not run
-  EXPECT_NE(long_runs.out.find("need at least 64 samples"), std::string::npos) << long_runs.out;
+  EXPECT_NE(runs.out.find("halves of runs of 3 consecutive samples"), std::string::npos) << runs.out;
+  EXPECT_EQ(YAML::LoadFile(runs_result)["honesty"]["runs"]["length"].as<int>(), 3);
+  const CliRun negative = run("solve --input " + samples + " --output " + temp("split_negative.yaml") + " --split-runs -1");
+  EXPECT_EQ(negative.exit_code, 2);
+  EXPECT_NE(negative.err.find("--split-runs >= 0"), std::string::npos) << negative.err;
+  const CliRun long_runs = run("solve --input " + samples + " --output " + temp("split_long.yaml") +
+                               " --split-check 40 --reference-sessions 30 --split-runs 16");
+  EXPECT_EQ(long_runs.exit_code, 0) << long_runs.err;
+  EXPECT_NE(long_runs.out.find("no runs look: halves of runs of 16 consecutive samples need at least 64 samples, there are 60"),
+            std::string::npos) << long_runs.out;
 
   const std::string few = temp("split_few.yaml");
   ASSERT_EQ(run("sim --output " + few + " --samples 6").exit_code, 0);

@@ -108,6 +108,10 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   h.splits = check.observed.splits;
   h.half_size = check.observed.half_size;
   h.run_length = check.observed.run_length;
+  h.random_ratio = check.random_ratio;
+  h.runs_length = check.runs_length;
+  h.runs_ratio = check.runs_ratio;
+  h.runs_note = check.runs_note;
   h.split_half_nees = check.observed.trimmed_mean_nees;
   h.replicates = check.reference.replicates;
   h.reference_mean = check.reference.mean, h.reference_low = check.reference.low, h.reference_high = check.reference.high;
@@ -177,15 +181,13 @@ std::string verdict_text(const HonestyCheck& c) {
   return "honest" + halves;
 }
 
-}  // namespace
-
-HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
-                           const HonestyOptions& options) {
+/// One look: the session's halves (random, or runs of run_length) against its reference.
+HonestyCheck one_look(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
+                      const HonestyOptions& options, const std::vector<Matrix6d>& S, int run_length, int replicate_splits) {
   HonestyCheck check;
-  check.observed = split_check(samples, solve, options.splits, options.seed, options.run_length);
-  const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
+  check.observed = split_check(samples, solve, options.splits, options.seed, run_length);
   SplitCheckReference& ref = check.reference;
-  ref.splits = std::min(options.splits, std::max(1, options.replicate_splits));
+  ref.splits = std::min(options.splits, std::max(1, replicate_splits));
   std::mt19937_64 rng(options.seed ^ 0x5eed5eedULL);
   double within = 0.0;  // the mean over replicates of the NEES's variance across their splits
   const int n = static_cast<int>(samples.samples.size());
@@ -195,7 +197,7 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
   for (int r = 0; r < replicates; ++r) {
     const SampleSet simulated = simulate_like(samples, fitted, S, rng);
     const SplitCheck replicate =
-        split_check(simulated, solve, ref.splits, options.seed, options.run_length);  // the session's own halves
+        split_check(simulated, solve, ref.splits, options.seed, run_length);  // the session's own halves
     if (replicate.splits == 0) {
       ++ref.failed;
       continue;
@@ -238,6 +240,43 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
                                                        : Honesty::Honest;
   check.inflation = check.verdict == Honesty::Overconfident ? check.ratio : 1.0;
   check.text = verdict_text(check);
+  return check;
+}
+
+}  // namespace
+
+int runs_length_for(const HonestyOptions& options, int n, std::string* why_not) {
+  if (options.run_length == 1) return 0;
+  if (options.run_length == 0) return n >= 16 ? std::clamp(n / 8, 2, 4) : 0;
+  if (4 * options.run_length > n) {
+    if (why_not) {
+      *why_not = "halves of runs of " + std::to_string(options.run_length) + " consecutive samples need at least " +
+                 std::to_string(4 * options.run_length) + " samples, there are " + std::to_string(n);
+    }
+    return 0;
+  }
+  return options.run_length;
+}
+
+HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
+                           const HonestyOptions& options) {
+  const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
+  HonestyCheck random = one_look(samples, fitted, solve, options, S, 1, options.replicate_splits);
+  random.random_ratio = random.ratio;
+  const int k = runs_length_for(options, static_cast<int>(samples.samples.size()), &random.runs_note);
+  if (k == 0 || !random.ran()) return random;
+  HonestyCheck runs = one_look(samples, fitted, solve, options, S, k, std::max(20, options.replicate_splits / 2));
+  if (!runs.ran()) {
+    random.runs_note = "halves of runs of " + std::to_string(k) + ": " + runs.text;
+    return random;
+  }
+  // The worse look decides: the runs when they read overconfident beyond the random halves.
+  const bool runs_decide = runs.verdict == Honesty::Overconfident && runs.ratio > random.ratio;
+  HonestyCheck check = runs_decide ? runs : random;
+  check.random_ratio = random.ratio;
+  check.runs_length = k;
+  check.runs_ratio = runs.ratio;
+  check.runs_verdict = runs.verdict;
   return check;
 }
 

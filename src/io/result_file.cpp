@@ -132,6 +132,12 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
       << YAML::EndSeq;
   out << YAML::Key << "honest_sessions" << YAML::Value << h.reference.replicates;
   out << YAML::Key << "honesty_ratio" << YAML::Value << h.ratio;
+  out << YAML::Key << "honesty_random_halves_ratio" << YAML::Value << h.random_ratio;
+  if (h.runs_length > 0) {
+    out << YAML::Key << "honesty_runs" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "length" << YAML::Value
+        << h.runs_length << YAML::Key << "ratio" << YAML::Value << h.runs_ratio << YAML::Key << "verdict" << YAML::Value
+        << to_string(h.runs_verdict) << YAML::EndMap;
+  }
   out << YAML::Key << "honesty" << YAML::Value << (h.ran() ? to_string(h.verdict) : "not run");
   out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
   if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
@@ -263,12 +269,19 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "text" << YAML::Value << h->text;
     if (h->verdict != "not run") {
       out << YAML::Key << "splits" << YAML::Value << h->splits << YAML::Key << "half_size" << YAML::Value << h->half_size;
-      if (h->run_length > 1) out << YAML::Key << "run_length" << YAML::Value << h->run_length;
+      if (h->run_length > 1) out << YAML::Key << "run_length" << YAML::Value << h->run_length;  // the runs decided
       out << YAML::Key << "split_half_nees" << YAML::Value << h->split_half_nees;
       out << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sessions"
           << YAML::Value << h->replicates << YAML::Key << "mean" << YAML::Value << h->reference_mean << YAML::Key << "low"
           << YAML::Value << h->reference_low << YAML::Key << "high" << YAML::Value << h->reference_high << YAML::EndMap;
       out << YAML::Key << "ratio" << YAML::Value << h->ratio;
+      out << YAML::Key << "random_halves_ratio" << YAML::Value << h->random_ratio;
+      if (h->runs_length > 0) {
+        out << YAML::Key << "runs" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "length" << YAML::Value
+            << h->runs_length << YAML::Key << "ratio" << YAML::Value << h->runs_ratio << YAML::EndMap;
+      } else if (!h->runs_note.empty()) {
+        out << YAML::Key << "runs" << YAML::Value << h->runs_note;
+      }
       out << YAML::Key << "inflation" << YAML::Value << h->inflation;
       if (h->inflation > 1.0) {  // X's covariance as the noise model gave it; the one above is inflated
         const auto model = to_row_major_6x6(h->model_pose_covariance);

@@ -177,6 +177,15 @@ std::string honesty_lines(const Calibration::Honesty& h) {
   out += "                        " + std::to_string(h.splits) + " random splits into " + halves +
          " (middle 90%); reference: " + std::to_string(h.replicates) + " simulated sessions at the same robot poses, 5-95% " +
          number_text(h.reference_low, 3) + " to " + number_text(h.reference_high, 3) + "\n";
+  if (h.runs_length > 0) {
+    out += "                        the other look: " +
+           (h.run_length > 1 ? "random halves, ratio " + number_text(h.random_ratio, 3)
+                             : "halves of runs of " + std::to_string(h.runs_length) + " consecutive samples, ratio " +
+                                   number_text(h.runs_ratio, 3)) +
+           " (the worse look decides)\n";
+  } else if (!h.runs_note.empty()) {
+    out += "                        no runs look: " + h.runs_note + "\n";
+  }
   return out;
 }
 

@@ -30,9 +30,9 @@ SessionSettings session_settings(const SessionConfig& config) {
   s.reject_outliers = config.reject_outliers;
   s.method = method_from_string(config.method);
   s.robust = robust_from_string(config.robust);
-  if (config.honesty_splits < 0 || config.honesty_sessions < 2 || config.honesty_run_length < 1) {
+  if (config.honesty_splits < 0 || config.honesty_sessions < 2 || config.honesty_run_length < 0) {
     throw HandEyeError(ErrorCode::MalformedFile,
-                       "honesty_splits must be >= 0, honesty_sessions >= 2 and honesty_run_length >= 1, got " +
+                       "honesty_splits must be >= 0, honesty_sessions >= 2 and honesty_run_length >= 0, got " +
                            std::to_string(config.honesty_splits) + ", " + std::to_string(config.honesty_sessions) + " and " +
                            std::to_string(config.honesty_run_length),
                        "honesty_splits", "use e.g. honesty_splits: 200, honesty_sessions: 100 (honesty_splits: 0 turns the check off)");
@@ -299,11 +299,6 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   }
   if (kept.samples.samples.size() < 8) {
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
-    return c;
-  }
-  if (const int k = settings_.honesty.run_length; static_cast<int>(kept.samples.samples.size()) < 4 * k) {
-    not_run("halves of runs of " + std::to_string(k) + " consecutive samples need at least " + std::to_string(4 * k) +
-            " samples, there are " + std::to_string(kept.samples.samples.size()));
     return c;
   }
   // The fit the reference simulates from is the kept samples' own (without the rejected).

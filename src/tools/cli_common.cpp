@@ -88,16 +88,17 @@ void add_honesty_options(po::options_description& options, HonestyArgs& a) {
       "with what an honest covariance gives on these poses (a parametric bootstrap); from 8 samples")(
       "reference-sessions", po::value(&a.options.replicates), "the honesty check's simulated honest sessions (default 100)")(
       "split-runs", po::value(&a.options.run_length),
-      "the honesty check's halves made of runs of K consecutive samples (default 1: random halves): an error that "
-      "follows the robot's path cancels between random halves and shows with K of 3-4; from 4 K samples")(
+      "the honesty check's second look: halves made of runs of K consecutive samples, as well as random ones (an "
+      "error shared by poses taken close together cancels between random halves); default 0: K = n / 8 within "
+      "[2, 4] from 16 samples; 1: random halves alone; from 4 K samples")(
       "no-inflation", po::bool_switch(&a.no_inflation),
       "keep the noise model's covariance even when the honesty check finds it overconfident (by default it is "
       "inflated by the measured factor)");
 }
 
 void HonestyArgs::apply(SessionSettings& settings) const {
-  if (options.splits < 0 || options.replicates < 2 || options.run_length < 1) {
-    throw HandEyeError(ErrorCode::MalformedFile, "--split-check must be >= 0, --reference-sessions >= 2 and --split-runs >= 1",
+  if (options.splits < 0 || options.replicates < 2 || options.run_length < 0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "--split-check must be >= 0, --reference-sessions >= 2 and --split-runs >= 0",
                        "--split-check", "e.g. --split-check 200 --reference-sessions 100 --split-runs 4, or --split-check 0 for no check");
   }
   settings.honesty = options;

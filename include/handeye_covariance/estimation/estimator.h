@@ -197,7 +197,11 @@ struct Calibration {
   /// covariance is kept beside them; otherwise inflation is 1.
   struct Honesty {
     int splits = 0, half_size = 0;   // the session's random halves, of this many samples
-    int run_length = 1;              // 1: random halves; k: halves of runs of k consecutive samples
+    int run_length = 1;              // which look decided: 1 random halves, k halves of runs of k consecutive samples
+    double random_ratio = 1.0;       // the random halves' ratio
+    int runs_length = 0;             // the runs' look (0: not run), its ratio and why it did not run
+    double runs_ratio = 1.0;
+    std::string runs_note;
     double split_half_nees = 0.0;    // the middle 90% of the splits' mean NEES of X_a - X_b
     int replicates = 0;              // simulated honest sessions of the reference
     double reference_mean = 0.0, reference_low = 0.0, reference_high = 0.0;  // their mean, 5% and 95%

@@ -81,9 +81,13 @@ struct HonestyOptions {
   /// halves: its mean NEES has the same expectation as with all of them, and the
   /// band is corrected for the extra spread of a mean over fewer splits.
   int replicate_splits = 40;
-  /// 1: random halves. k > 1: halves of runs of k consecutive samples (split_check),
-  /// for an error that follows the robot's path; the reference is split the same way.
-  int run_length = 1;
+  /// The second look, for an error shared by neighbouring poses (a robot's kinematic
+  /// error, drift): halves of runs of k consecutive samples (split_check), its
+  /// reference split the same way, each simulated session by max(20,
+  /// replicate_splits / 2) of them (20 keeps the trimmed mean's 5% cut). 0 (auto):
+  /// from 16 samples, k = n / 8 within [2, 4]; 1: random halves alone; k >= 2: this
+  /// k, from 4 k samples. The verdict is the worse of the two looks (honesty_check).
+  int run_length = 0;
   unsigned seed = 1;
 };
 
@@ -121,12 +125,26 @@ struct HonestyCheck {
   /// least two simulated sessions (the halves of 4 samples a small session leaves
   /// may all fail to solve).
   bool ran() const { return reference.replicates >= 2 && observed.splits > 0; }
+  /// Both looks, whichever decided (observed.run_length says which did): the random
+  /// halves' ratio, and the runs' length (0: not run), ratio and verdict; why the runs
+  /// did not run when they were asked for.
+  double random_ratio = 1.0;
+  int runs_length = 0;
+  double runs_ratio = 1.0;
+  Honesty runs_verdict = Honesty::Honest;
+  std::string runs_note;
 };
+
+/// The runs' length HonestyOptions::run_length asks of n samples (0: no runs), and
+/// why not when it asks for runs that n cannot hold.
+int runs_length_for(const HonestyOptions& options, int n, std::string* why_not = nullptr);
 
 /// The split-half check of `samples` (as split_check) and its parametric-bootstrap
 /// reference from `fitted` (the calibration of all of `samples` by `solve`):
-/// options.replicates simulated sessions, each split by the session's own halves.
-/// Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
+/// options.replicates simulated sessions, each split by the session's own halves;
+/// then the same with halves of runs (options.run_length). The runs decide when they
+/// read overconfident and above the random halves' ratio; otherwise the random
+/// halves do. Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options = {});
 

@@ -37,7 +37,7 @@ struct SessionConfig {
   // verdict inflates the covariance (the default) or is only reported.
   int honesty_splits = 200;    // 0: no check
   int honesty_sessions = 100;
-  int honesty_run_length = 1;  // 1: random halves; k: halves of runs of k consecutive samples
+  int honesty_run_length = 0;  // the second look's runs (split_check.h): 0 auto, 1 none, k runs of k
   bool inflate_when_overconfident = true;
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
