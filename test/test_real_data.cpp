@@ -359,7 +359,7 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
       const Vector6d error = pose_error(cal.T_parent_camera, c.published);
       const Vector6d sigma = cal.pose_covariance.diagonal().cwiseSqrt();
       std::printf("[honesty, real %s, %s, %zu samples] split-half NEES %.2f against %.2f (5-95%% %.2f to %.2f): ratio "
-                  "%.3f (random halves %.3f, runs of %d %.3f), %s; covariance x%.3f; X - published [%.2f %.2f %.2f] mm [%.3f %.3f %.3f] deg, in its sigma "
+                  "%.3f (random halves %.3f; runs of %d: %.3f), %s; covariance x%.3f; X - published [%.2f %.2f %.2f] mm [%.3f %.3f %.3f] deg, in its sigma "
                   "[%.2f %.2f %.2f %.2f %.2f %.2f]; noise: %s\n",
                   c.name, path.c_str(), samples->samples.size(), h.split_half_nees, h.reference_mean, h.reference_low,
                   h.reference_high, h.ratio, h.random_ratio, h.runs_length, h.runs_ratio, h.text.c_str(), h.inflation, error(0) * 1e3, error(1) * 1e3, error(2) * 1e3,

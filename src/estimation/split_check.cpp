@@ -263,6 +263,7 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
   const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
   HonestyCheck random = one_look(samples, fitted, solve, options, S, 1, options.replicate_splits);
   random.random_ratio = random.ratio;
+  random.random_verdict = random.verdict;
   const int k = runs_length_for(options, static_cast<int>(samples.samples.size()), &random.runs_note);
   if (k == 0 || !random.ran()) return random;
   HonestyCheck runs = one_look(samples, fitted, solve, options, S, k, std::max(20, options.replicate_splits / 2));
@@ -274,6 +275,7 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
   const bool runs_decide = runs.verdict == Honesty::Overconfident && runs.ratio > random.ratio;
   HonestyCheck check = runs_decide ? runs : random;
   check.random_ratio = random.ratio;
+  check.random_verdict = random.verdict;
   check.runs_length = k;
   check.runs_ratio = runs.ratio;
   check.runs_verdict = runs.verdict;

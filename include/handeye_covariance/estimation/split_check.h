@@ -129,6 +129,7 @@ struct HonestyCheck {
   /// halves' ratio, and the runs' length (0: not run), ratio and verdict; why the runs
   /// did not run when they were asked for.
   double random_ratio = 1.0;
+  Honesty random_verdict = Honesty::Honest;
   int runs_length = 0;
   double runs_ratio = 1.0;
   Honesty runs_verdict = Honesty::Honest;
