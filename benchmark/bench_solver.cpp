@@ -129,7 +129,8 @@ BENCHMARK(BM_SolveJointSessions)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 // tools run it: 200 random halves against 100 simulated honest sessions of 40 halves
 // each (about 4 400 half-session solves), outlier rejection on; range 2: 0, with the
 // second look of the default (halves of runs, from 16 samples: 200 more against the
-// same sessions split by 20 of them), 1: random halves alone. Range 1: 0, no noise
+// same sessions split by 20 of them), 1: random halves alone; range 3: 1, the halves
+// under the session's noise (the default), 0: each half fitting its own (until stop 49). Range 1: 0, no noise
 // given (the camera's and robot's estimated); 1, each detection with its own
 // covariance stated 50x too small in sigma, as the real sessions' detectors state it
 // (the missing part estimated: the costlier path; halves of 5 fail its start there,
@@ -147,6 +148,7 @@ void BM_HonestyCheck(benchmark::State& state) {
   s.samples.noise.reset();
   SessionSettings settings = session_settings(s.samples);
   settings.honesty.run_length = static_cast<int>(state.range(2));  // 0: both looks (the default); 1: random halves alone
+  settings.honesty.hold_noise = state.range(3) == 1;  // 1: the halves under the session's noise (the default); 0: refitted
   CalibrationSession session(settings);
   session.replace(s.samples.samples, "benchmark");
   std::string verdict;
@@ -158,15 +160,17 @@ void BM_HonestyCheck(benchmark::State& state) {
   state.SetLabel(verdict);  // "not run ..." would say the check was not timed
 }
 BENCHMARK(BM_HonestyCheck)
-    ->Args({10, 0, 0})
-    ->Args({16, 0, 1})
-    ->Args({16, 0, 0})
-    ->Args({30, 0, 1})
-    ->Args({30, 0, 0})
-    ->Args({16, 1, 1})
-    ->Args({16, 1, 0})
-    ->Args({30, 1, 1})
-    ->Args({30, 1, 0})
+    ->Args({10, 0, 0, 1})
+    ->Args({16, 0, 1, 1})
+    ->Args({16, 0, 0, 1})
+    ->Args({30, 0, 1, 0})
+    ->Args({30, 0, 1, 1})
+    ->Args({30, 0, 0, 1})
+    ->Args({16, 1, 1, 1})
+    ->Args({16, 1, 0, 1})
+    ->Args({30, 1, 1, 0})
+    ->Args({30, 1, 1, 1})
+    ->Args({30, 1, 0, 1})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
 

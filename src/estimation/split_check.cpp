@@ -181,23 +181,19 @@ std::string verdict_text(const HonestyCheck& c) {
   return "honest" + halves;
 }
 
-/// One look: the session's halves (random, or runs of run_length) against its reference.
-HonestyCheck one_look(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
-                      const HonestyOptions& options, const std::vector<Matrix6d>& S, int run_length, int replicate_splits) {
+/// One look: the session's halves (random, or runs of run_length) against its
+/// reference, the simulated sessions split the same way.
+HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& simulated, int failed_fits,
+                      const SolveSamples& solve_half, const HonestyOptions& options, int run_length, int replicate_splits) {
   HonestyCheck check;
-  check.observed = split_check(samples, solve, options.splits, options.seed, run_length);
+  check.observed = split_check(session, solve_half, options.splits, options.seed, run_length);
   SplitCheckReference& ref = check.reference;
   ref.splits = std::min(options.splits, std::max(1, replicate_splits));
-  std::mt19937_64 rng(options.seed ^ 0x5eed5eedULL);
+  ref.failed = failed_fits;
   double within = 0.0;  // the mean over replicates of the NEES's variance across their splits
-  const int n = static_cast<int>(samples.samples.size());
-  const int replicates = n <= options.full_replicates_up_to
-                             ? options.replicates
-                             : std::max(std::min(20, options.replicates), options.replicates * options.full_replicates_up_to / n);
-  for (int r = 0; r < replicates; ++r) {
-    const SampleSet simulated = simulate_like(samples, fitted, S, rng);
+  for (const SampleSet& replica : simulated) {
     const SplitCheck replicate =
-        split_check(simulated, solve, ref.splits, options.seed, run_length);  // the session's own halves
+        split_check(replica, solve_half, ref.splits, options.seed, run_length);  // the session's own halves
     if (replicate.splits == 0) {
       ++ref.failed;
       continue;
@@ -258,15 +254,57 @@ int runs_length_for(const HonestyOptions& options, int n, std::string* why_not) 
   return options.run_length;
 }
 
+SampleSet with_held_noise(const SampleSet& samples, const std::vector<Matrix6d>& S) {
+  SampleSet held = samples;
+  held.noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(S.at(0))};  // each sample has its own
+  for (std::size_t i = 0; i < held.samples.size(); ++i) {
+    held.samples[i].noise = MeasurementNoise{PoseNoise{}, PoseNoise::from_pose_covariance(S.at(i))};
+    held.samples[i].corners.reset();
+  }
+  return held;
+}
+
+Calibration solve_with_held_noise(const SampleSet& half) {
+  JointOptions options;
+  options.estimate_missing_noise = false;
+  options.robust = JointOptions::Robust::Off;
+  return solve_joint(half, options);
+}
+
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options) {
   const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
-  HonestyCheck random = one_look(samples, fitted, solve, options, S, 1, options.replicate_splits);
+  const SolveSamples solve_half = options.hold_noise ? SolveSamples(solve_with_held_noise) : solve;
+  // The simulated sessions, once for both looks: drawn at the session's poses from its
+  // fit, and with the noise held, each fitted in full as the session was.
+  const int n = static_cast<int>(samples.samples.size());
+  const int replicates = n <= options.full_replicates_up_to
+                             ? options.replicates
+                             : std::max(std::min(20, options.replicates), options.replicates * options.full_replicates_up_to / n);
+  std::mt19937_64 rng(options.seed ^ 0x5eed5eedULL);
+  std::vector<SampleSet> simulated;
+  int failed_fits = 0;
+  for (int r = 0; r < replicates; ++r) {
+    SampleSet replica = simulate_like(samples, fitted, S, rng);
+    if (options.hold_noise) {
+      try {
+        const Calibration fit = solve(replica);
+        replica = with_held_noise(replica, residual_covariances(replica, fit));
+      } catch (const HandEyeError&) {
+        ++failed_fits;
+        continue;
+      }
+    }
+    simulated.push_back(std::move(replica));
+  }
+  const SampleSet session = options.hold_noise ? with_held_noise(samples, S) : samples;
+  HonestyCheck random = one_look(session, simulated, failed_fits, solve_half, options, 1, options.replicate_splits);
   random.random_ratio = random.ratio;
   random.random_verdict = random.verdict;
   const int k = runs_length_for(options, static_cast<int>(samples.samples.size()), &random.runs_note);
   if (k == 0 || !random.ran()) return random;
-  HonestyCheck runs = one_look(samples, fitted, solve, options, S, k, std::max(20, options.replicate_splits / 2));
+  HonestyCheck runs =
+      one_look(session, simulated, failed_fits, solve_half, options, k, std::max(20, options.replicate_splits / 2));
   if (!runs.ran()) {
     random.runs_note = "halves of runs of " + std::to_string(k) + ": " + runs.text;
     return random;

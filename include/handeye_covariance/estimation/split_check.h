@@ -88,6 +88,16 @@ struct HonestyOptions {
   /// from 16 samples, k = n / 8 within [2, 4]; 1: random halves alone; k >= 2: this
   /// k, from 4 k samples. The verdict is the worse of the two looks (honesty_check).
   int run_length = 0;
+  /// The halves are solved under the session's own noise: each sample's fitted
+  /// residual covariance S_i held (with_held_noise, solve_with_held_noise), and each
+  /// simulated session's halves under the S_i of its own fit of all its samples by
+  /// `solve`. The check then judges the noise model the session's covariance was
+  /// computed with. A half that fits its noise again from its n/2 samples judges a
+  /// noisier estimate than the user gets, and on real errors shared by neighbouring
+  /// poses its fits go astray beyond what the reference's draws do (docs/evidence.md).
+  /// false: each half is solved by `solve`, its noise fitted again (the pairs
+  /// estimator's sessions: their halves must be that estimator's).
+  bool hold_noise = true;
   unsigned seed = 1;
 };
 
@@ -148,6 +158,14 @@ int runs_length_for(const HonestyOptions& options, int n, std::string* why_not =
 /// halves do. Throws HandEyeError(TooFewMotions) for fewer than 8 samples.
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options = {});
+
+/// `samples` with each sample's noise held at its residual covariance S[i] (its
+/// camera noise S_i, its robot noise zero; corners dropped): what
+/// solve_with_held_noise solves a half of.
+SampleSet with_held_noise(const SampleSet& samples, const std::vector<Matrix6d>& S);
+/// The joint estimate under the samples' stated noise taken as true: no noise
+/// estimated, no robust mode (the halves of the check with the noise held).
+Calibration solve_with_held_noise(const SampleSet& half);
 
 /// What `check` says, recorded in `calibration` (Calibration::honesty); with
 /// `inflate`, an overconfident verdict multiplies X's, Y's and their cross
