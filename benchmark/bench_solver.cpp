@@ -127,11 +127,11 @@ BENCHMARK(BM_SolveJointSessions)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // The calibrated honesty check (split_check.h) of a session of n samples as the
 // tools run it: 200 random halves against 100 simulated honest sessions of 40 halves
-// each (about 4 400 half-session solves), outlier rejection on; range 2: 0, with the
+// each (about 4 400 half-session solves), outlier rejection on. Range 2: 0, with the
 // second look of the default (halves of runs, from 16 samples: 200 more against the
-// same sessions split by 20 of them), 1: random halves alone; range 3: 1, the halves
-// under the session's noise (the default), 0: each half fitting its own (until stop 49). Range 1: 0, no noise
-// given (the camera's and robot's estimated); 1, each detection with its own
+// same sessions split by 20 of them), 1: random halves alone. Range 3: 1, the halves
+// under the session's noise (the default), 0: each half fitting its own (until stop
+// 49). Range 1: 0, no noise given (the camera's and robot's estimated); 1, each detection with its own
 // covariance stated 50x too small in sigma, as the real sessions' detectors state it
 // (the missing part estimated: the costlier path; halves of 5 fail its start there,
 // robot and camera angles beyond the understated noise, and the check is not run).

@@ -203,6 +203,12 @@ TEST(Honesty, HalvesOfRunsAreWholeRunsOfConsecutiveSamples) {
   }
   EXPECT_EQ(phases.size(), static_cast<std::size_t>(k));  // every phase is drawn
   EXPECT_GE(check.half_size, 22 / 2 - k + 1);
+  // Eight samples in runs of 2 could leave a half of 3 (5 + 3 at phase 1): refused.
+  EXPECT_EQ(min_samples_for_runs(2), 9);
+  EXPECT_EQ(min_samples_for_runs(3), 12);
+  SampleSet eight = samples;
+  eight.samples.resize(8);
+  EXPECT_THROW(split_check(eight, [](const SampleSet& half) { return solve_joint(half); }, 5, 1, 2), HandEyeError);
   try {
     split_check(samples, [](const SampleSet& half) { return solve_joint(half); }, 5, 1, 6);
     ADD_FAILURE() << "runs of 6 in 22 samples were not refused";

@@ -96,7 +96,6 @@ TEST(Report, OnHonestSessionsTheChecksAgreeWithThePredictedSigma) {
               random_overconfident, runs_overconfident, overconfident);
   EXPECT_LE(random_overconfident, 2);
   EXPECT_LE(runs_overconfident, 2);
-  EXPECT_LE(overconfident, random_overconfident + runs_overconfident);
   EXPECT_LE(flagged - overconfident, 2);
   EXPECT_GT(std::sqrt(loo_square), 0.85);
   EXPECT_LT(std::sqrt(loo_square), 1.25);

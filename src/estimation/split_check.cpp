@@ -12,6 +12,13 @@
 
 namespace handeye {
 
+int min_samples_for_runs(int run_length) {
+  if (run_length <= 1) return 8;
+  // Four runs at least, and the smaller half (the first may overshoot n / 2 by a run
+  // less one sample: n - n / 2 - k + 1) of 4 or more: n >= 2 k + 5.
+  return std::max(4 * run_length, 2 * run_length + 5);
+}
+
 SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed, int run_length) {
   const int n = static_cast<int>(samples.samples.size());
   if (n < 8) {
@@ -19,12 +26,12 @@ SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int 
                        "the split-half check needs at least 8 samples (two halves of 4), got " + std::to_string(n),
                        "samples", "record more samples; the check is meaningful from about 20");
   }
-  if (run_length < 1 || 4 * run_length > n) {
+  if (run_length < 1 || n < min_samples_for_runs(run_length)) {
     throw HandEyeError(ErrorCode::TooFewMotions,
                        "halves of runs of " + std::to_string(run_length) + " consecutive samples need at least " +
-                           std::to_string(4 * std::max(run_length, 1)) + " samples (and a run length >= 1), got " +
-                           std::to_string(n),
-                       "split_runs", "use runs of at most n / 4 samples, or 1 for random halves");
+                           std::to_string(min_samples_for_runs(std::max(run_length, 1))) +
+                           " samples (and a run length >= 1), got " + std::to_string(n),
+                       "split_runs", "use shorter runs, or 1 for random halves");
   }
   SplitCheck check;
   check.run_length = run_length;
@@ -242,16 +249,18 @@ HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& si
 }  // namespace
 
 int runs_length_for(const HonestyOptions& options, int n, std::string* why_not) {
-  if (options.run_length == 1) return 0;
-  if (options.run_length == 0) return n >= 16 ? std::clamp(n / 8, 2, 4) : 0;
-  if (4 * options.run_length > n) {
+  const int k = options.run_length;
+  if (k == 1) return 0;
+  if (k == 0) return n >= 16 ? std::clamp(n / 8, 2, 4) : 0;
+  if (k < 0 || k > n / 4 || n < min_samples_for_runs(k)) {
     if (why_not) {
-      *why_not = "halves of runs of " + std::to_string(options.run_length) + " consecutive samples need at least " +
-                 std::to_string(4 * options.run_length) + " samples, there are " + std::to_string(n);
+      *why_not = k < 0 ? "a run length must be >= 0 (0: chosen from the samples), got " + std::to_string(k)
+                       : "halves of runs of " + std::to_string(k) + " consecutive samples need at least " +
+                             std::to_string(min_samples_for_runs(k)) + " samples, there are " + std::to_string(n);
     }
     return 0;
   }
-  return options.run_length;
+  return k;
 }
 
 SampleSet with_held_noise(const SampleSet& samples, const std::vector<Matrix6d>& S) {

@@ -280,7 +280,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
         out << YAML::Key << "runs" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "length" << YAML::Value
             << h->runs_length << YAML::Key << "ratio" << YAML::Value << h->runs_ratio << YAML::EndMap;
       } else if (!h->runs_note.empty()) {
-        out << YAML::Key << "runs" << YAML::Value << h->runs_note;
+        out << YAML::Key << "runs_not_run" << YAML::Value << h->runs_note;
       }
       out << YAML::Key << "inflation" << YAML::Value << h->inflation;
       if (h->inflation > 1.0) {  // X's covariance as the noise model gave it; the one above is inflated

@@ -315,7 +315,7 @@ SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int 
 
 HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
                                                const HonestyOptions& options) const {
-  HonestyOptions held = options;  // the pairs estimator's halves are its own, their noise fitted again
+  HonestyOptions held = options;  // another estimator's halves are its own, their noise fitted again
   held.hold_noise = options.hold_noise && settings_.method == Method::Joint;
   return handeye::honesty_check(
       snapshot.samples, calibration,

@@ -64,7 +64,7 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& kept, 
   HonestyOptions honesty = session.settings().honesty;
   honesty.splits = options.splits;
   honesty.replicates = options.reference_sessions;
-  honesty.run_length = options.run_length;
+  if (options.run_length >= 0) honesty.run_length = options.run_length;
   honesty.seed = options.seed;
   try {
     // The reference simulates from the calibration's X, Y and noise model (an

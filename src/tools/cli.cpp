@@ -158,8 +158,8 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
       "reference-sessions", po::value(&report_options.reference_sessions),
       "simulated honest sessions the split-half check is judged against (default 100)")(
       "split-runs", po::value(&report_options.run_length),
-      "the second look: halves made of runs of K consecutive samples (default 0: n / 8 within [2, 4] from 16 "
-      "samples; 1: random halves alone; docs/how_it_works.md)")(
+      "the second look: halves made of runs of K consecutive samples (default: the session's, 0: n / 8 within "
+      "[2, 4] from 16 samples; 1: random halves alone; docs/how_it_works.md)")(
       "working-distance", po::value(&working_distance),
       ("m along the optical axis for the object's 1 sigma (default " + number_text(working_distance) + ")").c_str())(
       "target-mm", po::value(&target_mm),
@@ -168,7 +168,7 @@ int report_command(const std::vector<std::string>& args, std::ostream& out, std:
   po::variables_map vm;
   if (!parse("report", "--input FILE [--output DIR] [--noise FILE] [--splits N]", options, args, vm, out)) return kOk;
   if (!(working_distance > 0.0) || !(target_mm > 0.0) || report_options.splits < 0 || report_options.reference_sessions < 2 ||
-      report_options.run_length < 0) {
+      (vm.count("split-runs") && report_options.run_length < 0)) {
     throw HandEyeError(ErrorCode::MalformedFile,
                        "--working-distance and --target-mm must be > 0, --splits >= 0, --reference-sessions >= 2, "
                        "--split-runs >= 0",

@@ -196,7 +196,7 @@ struct Calibration {
   /// their cross block) are the model's times `inflation`, and the model's own X
   /// covariance is kept beside them; otherwise inflation is 1.
   struct Honesty {
-    int splits = 0, half_size = 0;   // the session's random halves, of this many samples
+    int splits = 0, half_size = 0;   // the deciding look's halves, the smaller of this many samples
     int run_length = 1;              // which look decided: 1 random halves, k halves of runs of k consecutive samples
     double random_ratio = 1.0;       // the random halves' ratio
     int runs_length = 0;             // the runs' look (0: not run), its ratio and why it did not run

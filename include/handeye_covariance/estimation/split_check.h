@@ -7,8 +7,8 @@
 //     d = (t_a - t_b, log(R_a R_b^T)),   NEES = d^T (Sigma_a + Sigma_b)^-1 d.
 // Over many random splits the mean NEES is about 6 when the covariance is
 // honest; well above (> 7.5) it is overconfident, well below (< 5) too cautious.
-// Each half holds n/2 samples, so it says how honest the covariance of an n/2-pose
-// session of this kind is.
+// Each half holds about n/2 samples, so it says how honest the covariance of an
+// n/2-pose session of this kind is.
 //
 // What random halves cannot see: an error shared by neighbouring samples. A robot
 // whose pose error changes smoothly along its path (a kinematic error, drift) gives
@@ -16,7 +16,7 @@
 // stretch of the path, so the shared part cancels in d, while it does not cancel in
 // X's error. Halves made of runs of consecutive samples (run_length > 1) keep
 // neighbours together: such an error then enlarges d, and the check, against a
-// reference split the same way, reads overconfident (docs/checking.md).
+// reference split the same way, reads overconfident (docs/how_it_works.md).
 #pragma once
 
 #include <functional>
@@ -54,9 +54,11 @@ using SolveSamples = std::function<Calibration(const SampleSet&)>;
 /// run_length k > 1, each half is made of whole runs of k consecutive samples (in
 /// the order they were taken), cut at a random phase and drawn at random until the
 /// first half holds n / 2 or more. Throws HandEyeError(TooFewMotions) for fewer than
-/// 8 samples, or fewer than 4 k.
+/// min_samples_for_runs(run_length) samples.
 SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed,
                        int run_length = 1);
+/// 8 for random halves; for runs of k, four runs and halves of 4 or more: max(4 k, 2 k + 5).
+int min_samples_for_runs(int run_length);
 
 // ---------------------------------------------------------------- calibrated to the session
 //
@@ -86,7 +88,7 @@ struct HonestyOptions {
   /// reference split the same way, each simulated session by max(20,
   /// replicate_splits / 2) of them (20 keeps the trimmed mean's 5% cut). 0 (auto):
   /// from 16 samples, k = n / 8 within [2, 4]; 1: random halves alone; k >= 2: this
-  /// k, from 4 k samples. The verdict is the worse of the two looks (honesty_check).
+  /// k, from min_samples_for_runs(k). The verdict is the worse of the two looks (honesty_check).
   int run_length = 0;
   /// The halves are solved under the session's own noise: each sample's fitted
   /// residual covariance S_i held (with_held_noise, solve_with_held_noise), and each
@@ -95,8 +97,8 @@ struct HonestyOptions {
   /// computed with. A half that fits its noise again from its n/2 samples judges a
   /// noisier estimate than the user gets, and on real errors shared by neighbouring
   /// poses its fits go astray beyond what the reference's draws do (docs/evidence.md).
-  /// false: each half is solved by `solve`, its noise fitted again (the pairs
-  /// estimator's sessions: their halves must be that estimator's).
+  /// false: each half is solved by `solve`, its noise fitted again (sessions whose
+  /// estimator is not the joint one: their halves must be that estimator's).
   bool hold_noise = true;
   unsigned seed = 1;
 };
@@ -104,7 +106,7 @@ struct HonestyOptions {
 /// The reference distribution of the mean split-half NEES.
 struct SplitCheckReference {
   int replicates = 0;           // simulated sessions whose check gave a mean
-  int failed = 0;               // simulated sessions whose splits all failed
+  int failed = 0;               // simulated sessions that could not be fitted in full, or whose splits all failed
   int splits = 0;               // halves per simulated session
   double mean = 0.0;            // of their trimmed means (SplitCheck): what an honest covariance averages here
   /// The 5% and 95% quantiles of an honest session's mean over the session's own

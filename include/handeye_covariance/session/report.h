@@ -35,7 +35,7 @@ namespace handeye {
 struct ReportOptions {
   int splits = 200;                // random halves for the split-half check (0: leave it out)
   int reference_sessions = 100;    // simulated honest sessions for its reference (split_check.h)
-  int run_length = 0;              // the second look's runs (split_check.h): 0 auto, 1 none, k runs of k
+  int run_length = -1;             // the second look's runs (split_check.h): -1 the session's, 0 auto, 1 none, k runs of k
   unsigned seed = 1;
   /// A sample beyond this many sigmas (6-dof Mahalanobis length of its residual)
   /// is called out: sqrt of the chi2(6) 0.999 quantile.
