@@ -283,7 +283,9 @@ Calibration solve_with_held_noise(const SampleSet& half) {
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options) {
   const std::vector<Matrix6d> S = residual_covariances(samples, fitted);
-  const SolveSamples solve_half = options.hold_noise ? SolveSamples(solve_with_held_noise) : solve;
+  // Held noise is solved by the joint estimator: another estimator's halves are its own.
+  const bool hold = options.hold_noise && fitted.method == Method::Joint;
+  const SolveSamples solve_half = hold ? SolveSamples(solve_with_held_noise) : solve;
   // The simulated sessions, once for both looks: drawn at the session's poses from its
   // fit, and with the noise held, each fitted in full as the session was.
   const int n = static_cast<int>(samples.samples.size());
@@ -295,7 +297,7 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
   int failed_fits = 0;
   for (int r = 0; r < replicates; ++r) {
     SampleSet replica = simulate_like(samples, fitted, S, rng);
-    if (options.hold_noise) {
+    if (hold) {
       try {
         const Calibration fit = solve(replica);
         replica = with_held_noise(replica, residual_covariances(replica, fit));
@@ -306,11 +308,11 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
     }
     simulated.push_back(std::move(replica));
   }
-  const SampleSet session = options.hold_noise ? with_held_noise(samples, S) : samples;
+  const SampleSet session = hold ? with_held_noise(samples, S) : samples;
   HonestyCheck random = one_look(session, simulated, failed_fits, solve_half, options, 1, options.replicate_splits);
   random.random_ratio = random.ratio;
   random.random_verdict = random.verdict;
-  const int k = runs_length_for(options, static_cast<int>(samples.samples.size()), &random.runs_note);
+  const int k = runs_length_for(options, n, &random.runs_note);
   if (k == 0 || !random.ran()) return random;
   HonestyCheck runs =
       one_look(session, simulated, failed_fits, solve_half, options, k, std::max(20, options.replicate_splits / 2));

@@ -315,11 +315,9 @@ SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int 
 
 HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
                                                const HonestyOptions& options) const {
-  HonestyOptions held = options;  // another estimator's halves are its own, their noise fitted again
-  held.hold_noise = options.hold_noise && settings_.method == Method::Joint;
   return handeye::honesty_check(
       snapshot.samples, calibration,
-      [this, &snapshot](const SampleSet& half) { return calibrate_decided({snapshot.generation, half}); }, held);
+      [this, &snapshot](const SampleSet& half) { return calibrate_decided({snapshot.generation, half}); }, options);
 }
 
 SuggestOptions CalibrationSession::suggest_options(const std::string& criterion, std::size_t samples) const {

@@ -97,8 +97,8 @@ struct HonestyOptions {
   /// computed with. A half that fits its noise again from its n/2 samples judges a
   /// noisier estimate than the user gets, and on real errors shared by neighbouring
   /// poses its fits go astray beyond what the reference's draws do (docs/evidence.md).
-  /// false: each half is solved by `solve`, its noise fitted again (sessions whose
-  /// estimator is not the joint one: their halves must be that estimator's).
+  /// false, or `fitted` not the joint estimator's (its halves must be its own
+  /// estimator's): each half is solved by `solve`, its noise fitted again.
   bool hold_noise = true;
   unsigned seed = 1;
 };
