@@ -19,6 +19,37 @@ int min_samples_for_runs(int run_length) {
   return std::max(4 * run_length, 2 * run_length + 5);
 }
 
+HalfSplitter::HalfSplitter(int n, int run_length) : n_(n), run_length_(run_length), order_(static_cast<std::size_t>(n)) {
+  std::iota(order_.begin(), order_.end(), 0);
+}
+
+std::array<std::vector<int>, 2> HalfSplitter::next(std::mt19937_64& rng) {
+  std::array<std::vector<int>, 2> halves;
+  if (run_length_ == 1) {
+    std::shuffle(order_.begin(), order_.end(), rng);
+    for (int k = 0; k < n_; ++k) halves[k < n_ / 2 ? 0 : 1].push_back(order_[static_cast<std::size_t>(k)]);
+    return halves;
+  }
+  // Runs of run_length consecutive samples (acquisition order), cut at a random
+  // phase; whole runs go to the first half until it holds n / 2 or more.
+  const int phase = static_cast<int>(rng() % static_cast<unsigned>(run_length_));
+  std::vector<std::vector<int>> runs(1);
+  for (int i = 0; i < n_; ++i) {
+    if (i > 0 && (i - phase) % run_length_ == 0) runs.emplace_back();
+    runs.back().push_back(i);
+  }
+  std::shuffle(runs.begin(), runs.end(), rng);
+  std::vector<bool> first(static_cast<std::size_t>(n_), false);
+  int filled = 0;
+  for (const std::vector<int>& run : runs) {
+    if (filled >= n_ / 2) break;
+    for (int i : run) first[static_cast<std::size_t>(i)] = true;
+    filled += static_cast<int>(run.size());
+  }
+  for (int i = 0; i < n_; ++i) halves[first[static_cast<std::size_t>(i)] ? 0 : 1].push_back(i);
+  return halves;
+}
+
 SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int splits, unsigned seed, int run_length) {
   const int n = static_cast<int>(samples.samples.size());
   if (n < 8) {
@@ -37,37 +68,15 @@ SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int 
   check.run_length = run_length;
   check.half_size = n / 2;
   std::mt19937_64 rng(seed);
-  std::vector<int> order(static_cast<std::size_t>(n));
-  std::iota(order.begin(), order.end(), 0);
-  std::vector<std::vector<int>> runs;
+  HalfSplitter splitter(n, run_length);
   for (int split = 0; split < splits; ++split) {
-    SampleSet halves[2] = {samples, samples};
-    halves[0].samples.clear(), halves[1].samples.clear();
-    if (run_length == 1) {
-      std::shuffle(order.begin(), order.end(), rng);
-      for (int k = 0; k < n; ++k) {
-        halves[k < n / 2 ? 0 : 1].samples.push_back(samples.samples[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])]);
-      }
-    } else {
-      // Runs of run_length consecutive samples (acquisition order), cut at a random
-      // phase; whole runs go to the first half until it holds n / 2 or more.
-      const int phase = static_cast<int>(rng() % static_cast<unsigned>(run_length));
-      runs.assign(1, {});
-      for (int i = 0; i < n; ++i) {
-        if (i > 0 && (i - phase) % run_length == 0) runs.emplace_back();
-        runs.back().push_back(i);
-      }
-      std::shuffle(runs.begin(), runs.end(), rng);
-      std::vector<bool> first(static_cast<std::size_t>(n), false);
-      int filled = 0;
-      for (const std::vector<int>& run : runs) {
-        if (filled >= n / 2) break;
-        for (int i : run) first[static_cast<std::size_t>(i)] = true;
-        filled += static_cast<int>(run.size());
-      }
-      for (int i = 0; i < n; ++i) halves[first[static_cast<std::size_t>(i)] ? 0 : 1].samples.push_back(samples.samples[static_cast<std::size_t>(i)]);
-      check.half_size = std::min(check.half_size, static_cast<int>(std::min(halves[0].samples.size(), halves[1].samples.size())));
+    const std::array<std::vector<int>, 2> index = splitter.next(rng);
+    SampleSet halves[2];
+    for (int h = 0; h < 2; ++h) {
+      halves[h].rig = samples.rig, halves[h].noise = samples.noise;
+      for (int i : index[static_cast<std::size_t>(h)]) halves[h].samples.push_back(samples.samples[static_cast<std::size_t>(i)]);
     }
+    check.half_size = std::min(check.half_size, static_cast<int>(std::min(index[0].size(), index[1].size())));
     Calibration a, b;
     try {
       a = solve(halves[0]);

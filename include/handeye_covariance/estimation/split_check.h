@@ -19,6 +19,7 @@
 // reference split the same way, reads overconfident (docs/how_it_works.md).
 #pragma once
 
+#include <array>
 #include <functional>
 #include <random>
 #include <string>
@@ -46,6 +47,20 @@ struct SplitCheck {
   /// covariance Sigma_a + Sigma_b predicts: the per-axis check (report.h).
   std::vector<Vector6d> differences, difference_sigmas;
   std::string first_failure;  // the first half's error, when some failed
+};
+
+/// The halves of split_check as sample indices, one split per call: random halves
+/// (the first n / 2 of a fresh shuffle of the last order, in that order, and the
+/// rest), or whole runs of run_length consecutive samples cut at a random phase and
+/// drawn until the first half holds n / 2 or more (each half ascending).
+class HalfSplitter {
+ public:
+  HalfSplitter(int n, int run_length);
+  std::array<std::vector<int>, 2> next(std::mt19937_64& rng);
+
+ private:
+  int n_, run_length_;
+  std::vector<int> order_;
 };
 
 using SolveSamples = std::function<Calibration(const SampleSet&)>;
