@@ -1,0 +1,109 @@
+// A robot error shared by nearby poses: the per-view noise model with a correlated part.
+//
+// The joint estimator (joint_estimator.h) takes the samples' errors as independent.
+// A real arm's recorded pose is off by a kinematic error (link lengths, joint
+// offsets, compliance) that is a smooth function of where the arm is: poses taken
+// close together share most of it. On the real KUKA sessions of ../shared/realdata
+// the split-half check reads such an error from both sides (docs/evidence.md):
+// random halves cancel it and read under-confident, halves of runs keep it and read
+// overconfident. Here the residuals' covariance is
+//     Cov(e_i, e_j) = s S_i [i = j] + k(p_i, p_j) D_i diag(a I3, b I3) D_j^T,
+//     k(p, q) = exp(-|p - q|^2 / (2 l^2)),
+// S_i the sample's residual covariance under the calibration's per-view model,
+// p_i the effector's position in the base frame, D_i = d P_hat_i / d xi_E (the
+// robot pose's left perturbation in the base frame carried into the camera,
+// joint_estimator.h): a Gaussian process over the arm's workspace, a per-axis
+// translation variance a and rotation variance b in the base frame, length l.
+// Linearised at the calibration: e = r + J dxi, J the residuals' Jacobian to
+// (xi_X, xi_Y) and r the residuals at (X_hat, Y_hat).
+//   - (s, a, b) by REML at each length of a grid (Fisher scoring on the dense
+//     6n x 6n covariance C), l by the best restricted likelihood;
+//   - the model is chosen over the per-view one (s = 1, a = b = 0) when its BIC is
+//     better: 2 (L - L0) > 4 log(6n - 12), four numbers more (s, a, b, l);
+//   - then (X, Y) take one generalised least-squares step,
+//     dxi = -(J^T C^-1 J)^-1 J^T C^-1 r, and (J^T C^-1 J)^-1 is their covariance.
+// A constant error (l far beyond the workspace) is a change of the base frame and
+// Y absorbs it; an error shared by a few neighbours counts them as fewer samples.
+//
+// The check of this model is the split-half check of split_check.h, linearised:
+// a half's estimate is G_h r_h (G_h its GLS gain under C's block), and the
+// difference of two halves has covariance
+//     A_1^-1 + A_2^-1 - G_1 C_12 G_2^T - G_2 C_21 G_1^T,
+// the cross terms being the error the halves share. The reference is a parametric
+// bootstrap: r* ~ N(0, C_hat) at the session's J, its (s, a, b) fitted again at l,
+// split the same way.
+#pragma once
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/estimation/estimator.h"
+
+namespace handeye {
+
+struct SharedRobotError {
+  double length_scale = 0.0;       // m, l of the kernel; 0: none (the per-view model alone)
+  double view_noise_scale = 1.0;   // s, on the per-view model's S_i
+  double translation_sigma = 0.0;  // m, 1 sigma per axis of the shared error (base frame)
+  double rotation_sigma = 0.0;     // rad
+  double log_likelihood = 0.0;     // restricted, up to the constant the candidates share
+};
+
+struct SharedRobotErrorOptions {
+  std::vector<double> length_scales = {0.05, 0.1, 0.2, 0.4, 0.8, 1.6};  // m
+  int max_iterations = 50;
+  /// Fitted from this many samples used (fewer: the per-view model alone). A
+  /// workspace's error needs neighbours to be told from the views' own noise: on the
+  /// 8-pose Franka sessions of ../shared/realdata a kernel wins the BIC and then
+  /// reads overconfident (docs/evidence.md). The runs look of split_check starts here too.
+  int min_samples = 16;
+};
+
+struct SharedRobotErrorFit {
+  std::vector<int> used;                // sample indices fitted (the calibration's rejected left out)
+  SharedRobotError per_view;            // s = 1, no shared part: the calibration's own model
+  std::vector<SharedRobotError> candidates;  // one per length scale, (s, a, b) at their REML
+  SharedRobotError best;                // the candidate of the highest likelihood
+  double bic_gain = 0.0;                // 2 (L_best - L_per_view) - 4 log(6n - 12)
+  bool chosen = false;                  // bic_gain > 0
+  /// X and Y under the chosen model (one GLS step) with their covariance; the
+  /// calibration's, its covariances recomputed under the per-view model (the same
+  /// linearisation), when not chosen.
+  Eigen::Isometry3d T_parent_camera = Eigen::Isometry3d::Identity();
+  Matrix6d pose_covariance = Matrix6d::Zero();
+  PoseWithCovariance pattern;
+  Matrix6d cross_covariance = Matrix6d::Zero();
+};
+
+/// The shared error fitted to `samples` about `calibration` (a joint fit of them:
+/// Method::Joint, with its pattern pose). Throws InvalidNoise when a residual
+/// covariance is singular, TooFewMotions for fewer than 8 samples used.
+SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
+                                           const SharedRobotErrorOptions& options = {});
+
+/// One look of the linearised split-half check (random halves, or runs of k).
+struct LinearSplitLook {
+  int run_length = 1;
+  double observed = 0.0;                 // the session's mean NEES of X's difference over its splits
+  double reference = 0.0;                // the bootstrap sessions' mean of the same
+  double low = 0.0, high = 0.0;          // 5% and 95% of the bootstrap sessions' means
+  double ratio = 0.0;                    // observed / reference
+};
+struct SharedRobotErrorCheck {
+  LinearSplitLook random, runs;  // runs.run_length 0: not run (too few samples)
+};
+struct LinearCheckOptions {
+  int splits = 200;       // the session's
+  int replicates = 40;    // bootstrap sessions
+  int replicate_splits = 40;
+  int run_length = 3;     // the second look's k (needs min_samples_for_runs(k))
+  unsigned seed = 1;
+};
+
+/// The split-half check of `model` (a SharedRobotErrorFit's best, per_view or any
+/// candidate) on the samples fit_shared_robot_error uses, about `calibration`.
+SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
+                                               const SharedRobotError& model, const LinearCheckOptions& options = {});
+
+}  // namespace handeye
