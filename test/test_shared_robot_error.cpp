@@ -83,9 +83,6 @@ TEST(SharedRobotError, ChosenWhereTheRobotErrorIsSharedAndHonestThere) {
       ASSERT_EQ(fit.candidates.size(), SharedRobotErrorOptions{}.length_scales.size());
       ASSERT_EQ(fit.used.size(), static_cast<std::size_t>(n));
       chosen += fit.chosen ? 1 : 0;
-      if (!fit.chosen) {
-        EXPECT_TRUE(fit.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
-      }
       nees_per_view += nees(c.T_parent_camera, c.pose_covariance, s.X) / sessions;
       nees_shared += nees(fit.T_parent_camera, fit.pose_covariance, s.X) / sessions;
     }
@@ -122,21 +119,24 @@ TEST(SharedRobotError, TheLinearisedCheckOfTheChosenModelReadsAboutOne) {
   EXPECT_EQ(shared.runs.run_length, 3);
   for (const LinearSplitLook& look : {shared.random, shared.runs}) {
     EXPECT_GT(look.reference, 4.0);
-    EXPECT_LE(look.low, look.reference);
-    EXPECT_GE(look.high, look.reference);
+    EXPECT_GT(look.high - look.low, 0.5);  // a band from 30 sessions, not a point
     EXPECT_GT(look.ratio, 0.7);
     EXPECT_LT(look.ratio, 1.4);
   }
 }
 
-// Below min_samples the per-view model alone: no candidate, nothing chosen.
+// Below min_samples (16) the per-view model alone: no candidate, nothing chosen;
+// from 16, every length is a candidate.
 TEST(SharedRobotError, AShortSessionKeepsThePerViewModel) {
-  const Session s = simulate(12, 5, true);
-  const Calibration c = solve_joint(s.samples);
-  const SharedRobotErrorFit fit = fit_shared_robot_error(s.samples, c);
-  EXPECT_TRUE(fit.candidates.empty());
-  EXPECT_FALSE(fit.chosen);
-  EXPECT_TRUE(fit.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
+  for (int n : {15, 16}) {
+    const Session s = simulate(n, 5, true);
+    const Calibration c = solve_joint(s.samples);
+    const SharedRobotErrorFit fit = fit_shared_robot_error(s.samples, c);
+    EXPECT_EQ(fit.candidates.size(), n < 16 ? 0u : SharedRobotErrorOptions{}.length_scales.size()) << n;
+    if (n < 16) {
+      EXPECT_FALSE(fit.chosen);
+    }
+  }
 }
 
 // The halves of split_check, as indices: each split a partition of 0..n-1, random
@@ -155,7 +155,19 @@ TEST(SharedRobotError, HalfSplitterPartitionsTheSamples) {
       EXPECT_GE(h[0].size(), 14u);
       if (k == 1) {
         EXPECT_EQ(h[0].size(), 14u);
+        continue;
       }
+      // Whole runs: some phase p has every i with (i - p) % k != 0 in i - 1's half.
+      std::vector<int> side(29, 1);
+      for (int i : h[0]) side[static_cast<std::size_t>(i)] = 0;
+      bool whole = false;
+      for (int p = 0; p < k && !whole; ++p) {
+        whole = true;
+        for (int i = 1; i < 29; ++i) {
+          if ((i - p) % k != 0 && side[static_cast<std::size_t>(i)] != side[static_cast<std::size_t>(i - 1)]) whole = false;
+        }
+      }
+      EXPECT_TRUE(whole) << "split " << s;
     }
   }
 }

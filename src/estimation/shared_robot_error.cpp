@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "handeye_covariance/core/errors.h"
@@ -117,8 +118,8 @@ Reml evaluate(const Parts& P, const Eigen::Vector3d& theta, const MatrixXd& J, c
   if (lla.info() != Eigen::Success) return out;
   const MatrixXd Pm = Ci - W * lla.solve(W.transpose());
   const VectorXd Pr = Pm * r;
-  const double log_det_C = 2.0 * MatrixXd(llt.matrixL()).diagonal().array().log().sum();
-  const double log_det_A = 2.0 * MatrixXd(lla.matrixL()).diagonal().array().log().sum();
+  const double log_det_C = 2.0 * llt.matrixLLT().diagonal().array().log().sum();
+  const double log_det_A = 2.0 * lla.matrixLLT().diagonal().array().log().sum();
   out.log_likelihood = -0.5 * (log_det_C + log_det_A + r.dot(Pr));
   const int k = P.shared ? 3 : 1;
   const MatrixXd* part[3] = {&P.view, &P.translation, &P.rotation};
@@ -192,12 +193,24 @@ Eigen::Vector3d theta_of(const SharedRobotError& e) {
   return {e.view_noise_scale, e.translation_sigma * e.translation_sigma, e.rotation_sigma * e.rotation_sigma};
 }
 
-std::vector<int> rows_of(const std::vector<int>& samples) {
-  std::vector<int> rows;
-  for (int i : samples) {
-    for (int k = 0; k < 6; ++k) rows.push_back(6 * i + k);
+/// The 6x6 blocks of C at samples a (rows) and b (columns); the 6-row blocks of M at a.
+MatrixXd blocks(const MatrixXd& C, const std::vector<int>& a, const std::vector<int>& b) {
+  MatrixXd out(6 * a.size(), 6 * b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t j = 0; j < b.size(); ++j) out.block<6, 6>(6 * static_cast<long>(i), 6 * static_cast<long>(j)) = C.block<6, 6>(6 * a[i], 6 * b[j]);
   }
-  return rows;
+  return out;
+}
+MatrixXd rows_of(const MatrixXd& M, const std::vector<int>& a) {
+  MatrixXd out(6 * a.size(), M.cols());
+  for (std::size_t i = 0; i < a.size(); ++i) out.middleRows<6>(6 * static_cast<long>(i)) = M.middleRows<6>(6 * a[i]);
+  return out;
+}
+
+HandEyeError singular_covariance() {
+  return HandEyeError(ErrorCode::InvalidNoise,
+                      "the residuals' covariance of the shared robot error model is not positive definite", "calibration",
+                      "check the samples' stated noise; a model from fit_shared_robot_error of these samples is one");
 }
 
 /// The NEES of X's difference between the halves' GLS estimates under C, the
@@ -205,18 +218,18 @@ std::vector<int> rows_of(const std::vector<int>& samples) {
 double split_nees(const MatrixXd& C, const MatrixXd& J, const VectorXd& r, const std::array<std::vector<int>, 2>& halves) {
   MatrixXd G[2];
   Vector12d estimate[2];
-  std::vector<int> rows[2] = {rows_of(halves[0]), rows_of(halves[1])};
   for (int h = 0; h < 2; ++h) {
-    const MatrixXd Chh = C(rows[h], rows[h]);
-    const MatrixXd Jh = J(rows[h], Eigen::all);
-    const Eigen::LLT<MatrixXd> llt(Chh);
+    const std::vector<int>& half = halves[static_cast<std::size_t>(h)];
+    const Eigen::LLT<MatrixXd> llt(blocks(C, half, half));
+    if (llt.info() != Eigen::Success) throw singular_covariance();
+    const MatrixXd Jh = rows_of(J, half);
     const MatrixXd CiJ = llt.solve(Jh);
     G[h] = (Jh.transpose() * CiJ).ldlt().solve(CiJ.transpose());
-    estimate[h] = G[h] * r(rows[h]);
+    estimate[h] = -G[h] * rows_of(r, half);  // the half's GLS step
   }
-  const MatrixXd cross = G[0] * C(rows[0], rows[1]) * G[1].transpose();
-  const MatrixXd V = G[0] * C(rows[0], rows[0]) * G[0].transpose() + G[1] * C(rows[1], rows[1]) * G[1].transpose() - cross -
-                     cross.transpose();
+  const MatrixXd cross = G[0] * blocks(C, halves[0], halves[1]) * G[1].transpose();
+  const MatrixXd V = G[0] * blocks(C, halves[0], halves[0]) * G[0].transpose() +
+                     G[1] * blocks(C, halves[1], halves[1]) * G[1].transpose() - cross - cross.transpose();
   const Vector6d d = (estimate[0] - estimate[1]).head<6>();
   const Matrix6d Vx = V.topLeftCorner<6, 6>();
   return d.dot(Vx.ldlt().solve(d));
@@ -228,14 +241,6 @@ double mean_nees(const MatrixXd& C, const MatrixXd& J, const VectorXd& r, const 
   double sum = 0.0;
   for (std::size_t s = 0; s < count; ++s) sum += split_nees(C, J, r, splits[s]);
   return sum / static_cast<double>(count);
-}
-
-double quantile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(at));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
 }  // namespace
@@ -252,8 +257,10 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   }
   fit.per_view = describe(0.0, Eigen::Vector3d(1.0, 0.0, 0.0), at_model.log_likelihood);
   fit.best = fit.per_view;
-  // The first length starts from a shared error of 1 mm and 0.006 degree per axis
-  // (Fisher scoring leaves a bound slowly); each next one where the last ended.
+  // The first length starts inside the region, from a shared error of 1 mm and
+  // 0.006 degree per axis and the view scale a little below 1 (an eighth of the
+  // per-view variance left for the shared part to take): Fisher scoring leaves a
+  // bound slowly. Each next length starts where the last ended.
   Eigen::Vector3d start(0.875, 1e-6, 1e-8);
   const std::vector<double> none;
   for (double l : L.n >= options.min_samples ? options.length_scales : none) {
@@ -286,12 +293,19 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
 
 SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
                                                const SharedRobotError& model, const LinearCheckOptions& options) {
+  if (options.splits < 1 || options.replicates < 1 || options.replicate_splits < 1 || options.run_length < 2) {
+    throw HandEyeError(ErrorCode::TooFewMotions,
+                       "the linearised split-half check needs splits, replicates and replicate_splits >= 1 and a run length >= 2",
+                       "LinearCheckOptions", "use the defaults (200 splits, 40 replicates of 40 splits, runs of 3)");
+  }
   std::vector<int> used;
   const Linearised L = linearise(samples, calibration, used);
   const Parts parts = make_parts(L, model.length_scale);
   const Eigen::Vector3d theta = theta_of(model);
   const MatrixXd C = combine(parts, theta);
-  const MatrixXd lower = Eigen::LLT<MatrixXd>(C).matrixL();
+  const Eigen::LLT<MatrixXd> factor(C);
+  if (factor.info() != Eigen::Success) throw singular_covariance();
+  const MatrixXd lower = factor.matrixL();
   SharedRobotErrorCheck check;
   const int looks[2] = {1, L.n >= min_samples_for_runs(options.run_length) ? options.run_length : 0};
   for (int look = 0; look < 2; ++look) {
@@ -317,8 +331,8 @@ SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const C
     }
     if (means.empty()) continue;
     out.reference = std::accumulate(means.begin(), means.end(), 0.0) / static_cast<double>(means.size());
-    out.low = quantile(means, 0.05);
-    out.high = quantile(means, 0.95);
+    out.low = linear_quantile(means, 0.05);
+    out.high = linear_quantile(means, 0.95);
     out.ratio = out.observed / out.reference;
   }
   return check;

@@ -171,15 +171,16 @@ SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, con
   return out;
 }
 
-namespace {
-
-double quantile(std::vector<double> values, double p) {
+double linear_quantile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());
   const double at = p * static_cast<double>(values.size() - 1);
   const std::size_t below = static_cast<std::size_t>(std::floor(at));
   const std::size_t above = std::min(below + 1, values.size() - 1);
   return values[below] + (at - static_cast<double>(below)) * (values[above] - values[below]);
 }
+
+namespace {
 
 std::string verdict_text(const HonestyCheck& c) {
   const double sigma = std::sqrt(c.ratio);
@@ -243,8 +244,8 @@ HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& si
   const double scale = spread > 0.0 ? std::sqrt((between + within / check.observed.splits) / spread) : 1.0;
   std::vector<double> adjusted;
   for (double m : ref.means) adjusted.push_back(ref.mean + scale * (m - ref.mean));
-  ref.low = quantile(adjusted, 0.05);
-  ref.high = quantile(adjusted, 0.95);
+  ref.low = linear_quantile(adjusted, 0.05);
+  ref.high = linear_quantile(adjusted, 0.95);
   const double observed = check.observed.trimmed_mean_nees;
   check.ratio = observed / ref.mean;
   check.verdict = observed > ref.high   ? Honesty::Overconfident

@@ -26,7 +26,7 @@
 // Y absorbs it; an error shared by a few neighbours counts them as fewer samples.
 //
 // The check of this model is the split-half check of split_check.h, linearised:
-// a half's estimate is G_h r_h (G_h its GLS gain under C's block), and the
+// a half's estimate is -G_h r_h (G_h its GLS gain under C's block), and the
 // difference of two halves has covariance
 //     A_1^-1 + A_2^-1 - G_1 C_12 G_2^T - G_2 C_21 G_1^T,
 // the cross terms being the error the halves share. The reference is a parametric
@@ -64,7 +64,7 @@ struct SharedRobotErrorFit {
   std::vector<int> used;                // sample indices fitted (the calibration's rejected left out)
   SharedRobotError per_view;            // s = 1, no shared part: the calibration's own model
   std::vector<SharedRobotError> candidates;  // one per length scale, (s, a, b) at their REML
-  SharedRobotError best;                // the candidate of the highest likelihood
+  SharedRobotError best;                // the candidate of the highest likelihood, or per_view when none beats it
   double bic_gain = 0.0;                // 2 (L_best - L_per_view) - 4 log(6n - 12)
   bool chosen = false;                  // bic_gain > 0
   /// X and Y under the chosen model (one GLS step) with their covariance; the
@@ -102,7 +102,11 @@ struct LinearCheckOptions {
 };
 
 /// The split-half check of `model` (a SharedRobotErrorFit's best, per_view or any
-/// candidate) on the samples fit_shared_robot_error uses, about `calibration`.
+/// candidate) on the samples fit_shared_robot_error uses, about `calibration`. Each
+/// bootstrap session fits its (s, a, b) again at the model's length (the per-view
+/// model: its scale s), as the session's own fit did. Throws InvalidNoise when the
+/// model's covariance is not positive definite, TooFewMotions for options below 1
+/// (or runs shorter than 2).
 SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
                                                const SharedRobotError& model, const LinearCheckOptions& options = {});
 
