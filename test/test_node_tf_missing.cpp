@@ -1,3 +1,4 @@
+#include <filesystem>
 #include <fstream>
 
 #include "handeye_covariance/simulation/simulation.h"
@@ -36,8 +37,12 @@ TEST(CalibrationNode, MissingRobotTfRefusesSamplesWithTheReason) {
 // calibration file as they were.
 
 std::string write_file(const std::string& name, const std::string& text) {
+  // Its own directory made here: on a fresh machine no other rostest need have run first.
+  std::filesystem::create_directories("/tmp/handeye_covariance_rostest");
   const std::string path = "/tmp/handeye_covariance_rostest/bad_" + name;
-  std::ofstream(path) << text;
+  std::ofstream file(path);
+  file << text;
+  EXPECT_TRUE(file.good()) << "cannot write " << path;
   return path;
 }
 
