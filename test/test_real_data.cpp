@@ -411,18 +411,22 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
         return std::max(std::abs(std::log(k.random.ratio)), std::abs(std::log(k.runs.ratio)));
       };
       EXPECT_LT(worst(shared), worst(per_view)) << c.name << ", " << path;
+      EXPECT_LT(fit.step_nees, 22.46) << c.name << ", " << path;  // chi2(6) 99.9%: the model explains why X moved
+      const Vector6d s_true = fit.per_view_estimate_covariance.diagonal().cwiseSqrt();
       const Vector6d s0 = cal.pose_covariance.diagonal().cwiseSqrt(), s1 = fit.pose_covariance.diagonal().cwiseSqrt();
       const Vector6d e0 = pose_error(cal.T_parent_camera, c.published), e1 = pose_error(fit.T_parent_camera, c.published);
       std::printf("[shared robot error, real %s, %s, %zu samples] chosen %d (BIC gain %.1f): l %.2f m, %.2f mm, %.3f deg, "
                   "view noise x%.3f; split-half ratio random / runs of 3: %.2f / %.2f (per-view model %.2f / %.2f); "
                   "sigma_X / per-view [%.2f %.2f %.2f %.2f %.2f %.2f]; X - published in sigma: per-view [%.1f %.1f %.1f "
-                  "%.1f %.1f %.1f], shared [%.1f %.1f %.1f %.1f %.1f %.1f]\n",
+                  "%.1f %.1f %.1f], shared [%.1f %.1f %.1f %.1f %.1f %.1f]; X's step NEES %.2f; the per-view sigma_X "
+                  "under the model / its own [%.2f %.2f %.2f %.2f %.2f %.2f]\n",
                   c.name, path.c_str(), fit.used.size(), fit.chosen ? 1 : 0, fit.bic_gain, fit.best.length_scale,
                   fit.best.translation_sigma * 1e3, fit.best.rotation_sigma * 180.0 / M_PI, fit.best.view_noise_scale,
                   shared.random.ratio, shared.runs.ratio, per_view.random.ratio, per_view.runs.ratio, s1(0) / s0(0),
                   s1(1) / s0(1), s1(2) / s0(2), s1(3) / s0(3), s1(4) / s0(4), s1(5) / s0(5), e0(0) / s0(0), e0(1) / s0(1),
                   e0(2) / s0(2), e0(3) / s0(3), e0(4) / s0(4), e0(5) / s0(5), e1(0) / s1(0), e1(1) / s1(1), e1(2) / s1(2),
-                  e1(3) / s1(3), e1(4) / s1(4), e1(5) / s1(5));
+                  e1(3) / s1(3), e1(4) / s1(4), e1(5) / s1(5), fit.step_nees, s_true(0) / s0(0), s_true(1) / s0(1),
+                  s_true(2) / s0(2), s_true(3) / s0(3), s_true(4) / s0(4), s_true(5) / s0(5));
     }
   }
 }

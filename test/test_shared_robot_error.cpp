@@ -69,13 +69,15 @@ double nees(const Eigen::Isometry3d& estimate, const Matrix6d& covariance, const
 
 // With a shared error the per-view model is overconfident (its NEES of X against the
 // truth far above 6); the shared model is chosen and brings it back to about 6 (its
-// four noise numbers fitted from the same residuals leave a little above). Without
-// one, the BIC keeps the per-view model in nearly every session and X is unchanged.
+// four noise numbers fitted from the same residuals leave a little above), as does
+// the model's covariance of the per-view estimate, and the step from one estimate
+// to the other has a NEES of about 6 under its own covariance. Without one, the BIC
+// keeps the per-view model in nearly every session and X is unchanged.
 TEST(SharedRobotError, ChosenWhereTheRobotErrorIsSharedAndHonestThere) {
   const int sessions = 24, n = 30;
   for (bool shared : {true, false}) {
     int chosen = 0;
-    double nees_per_view = 0.0, nees_shared = 0.0;
+    double nees_per_view = 0.0, nees_shared = 0.0, nees_per_view_under_model = 0.0, step_nees = 0.0;
     for (int m = 0; m < sessions; ++m) {
       const Session s = simulate(n, 900 + static_cast<unsigned>(m), shared);
       const Calibration c = solve_joint(s.samples);
@@ -85,16 +87,29 @@ TEST(SharedRobotError, ChosenWhereTheRobotErrorIsSharedAndHonestThere) {
       chosen += fit.chosen ? 1 : 0;
       nees_per_view += nees(c.T_parent_camera, c.pose_covariance, s.X) / sessions;
       nees_shared += nees(fit.T_parent_camera, fit.pose_covariance, s.X) / sessions;
+      if (fit.chosen) {
+        nees_per_view_under_model += nees(c.T_parent_camera, fit.per_view_estimate_covariance, s.X);
+        step_nees += fit.step_nees;
+      } else {
+        EXPECT_EQ(fit.step_nees, 0.0);
+      }
     }
+    if (chosen > 0) nees_per_view_under_model /= chosen, step_nees /= chosen;
     std::printf("[ figures  ] %s, %d sessions of %d: the shared model chosen in %d; NEES of X against the truth %.2f "
-                "(per-view model), %.2f (as the choice leaves it)\n",
+                "(per-view model), %.2f (as the choice leaves it); where chosen, the per-view X's NEES under the "
+                "model's covariance of it %.2f and the step's NEES %.2f\n",
                 shared ? "a robot error shared over the workspace" : "independent errors", sessions, n, chosen,
-                nees_per_view, nees_shared);
+                nees_per_view, nees_shared, nees_per_view_under_model, step_nees);
     if (shared) {
       EXPECT_GE(chosen, sessions * 9 / 10);
       EXPECT_GT(nees_per_view, 12.0);
       EXPECT_GT(nees_shared, 4.5);
       EXPECT_LT(nees_shared, 8.0);
+      // The model also says how wrong the per-view covariance is, and why X moved.
+      EXPECT_GT(nees_per_view_under_model, 4.5);
+      EXPECT_LT(nees_per_view_under_model, 8.0);
+      EXPECT_GT(step_nees, 3.5);  // 4.6: the step from the same residuals the model was fitted to
+      EXPECT_LT(step_nees, 9.0);
     } else {
       EXPECT_LE(chosen, sessions / 10);
       EXPECT_LT(std::abs(nees_shared - nees_per_view), 0.1 * nees_per_view);

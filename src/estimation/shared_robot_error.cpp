@@ -280,6 +280,19 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   const MatrixXd A = L.J.transpose() * CiJ;
   const MatrixXd covariance = A.inverse();
   const Vector12d step = fit.chosen ? Vector12d(-covariance * (CiJ.transpose() * L.r)) : Vector12d::Zero();
+  {
+    // The per-view estimate's error is H0 eps and the GLS one's -G eps (eps the
+    // errors under C), so the step is (H0 + G) eps: its covariance under the model
+    // is (H0 + G) C (H0 + G)^T, and H0 C H0^T is the per-view estimate's own.
+    const Eigen::LLT<MatrixXd> per_view_llt(per_view.view);
+    const MatrixXd SiJ = per_view_llt.solve(L.J);
+    const MatrixXd H0 = (L.J.transpose() * SiJ).ldlt().solve(SiJ.transpose());
+    const MatrixXd gain = H0 - covariance * CiJ.transpose();
+    const Matrix6d move = (gain * C * gain.transpose()).topLeftCorner<6, 6>();
+    fit.per_view_estimate_covariance = (H0 * C * H0.transpose()).topLeftCorner<6, 6>();
+    const Vector6d x = step.head<6>();
+    fit.step_nees = fit.chosen ? x.dot(move.ldlt().solve(x)) : 0.0;
+  }
   auto moved = [](const Eigen::Isometry3d& T, const Vector6d& xi) {
     return se3::make_pose(so3::exp(xi.tail<3>()) * T.linear(), T.translation() + xi.head<3>());
   };

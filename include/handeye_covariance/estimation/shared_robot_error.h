@@ -74,6 +74,13 @@ struct SharedRobotErrorFit {
   Matrix6d pose_covariance = Matrix6d::Zero();
   PoseWithCovariance pattern;
   Matrix6d cross_covariance = Matrix6d::Zero();
+  /// The GLS step of X judged under the chosen model: its NEES under the step's own
+  /// covariance (H0 + G) C (H0 + G)^T, H0 the per-view gain and -G the GLS one (a
+  /// Hausman test: about 6 when the model explains why X moved; 0 when not chosen).
+  double step_nees = 0.0;
+  /// The per-view estimate's X covariance under the chosen model, H0 C H0^T: what
+  /// the calibration's own covariance would have to be, were the model true.
+  Matrix6d per_view_estimate_covariance = Matrix6d::Zero();
 };
 
 /// The shared error fitted to `samples` about `calibration` (a joint fit of them:
