@@ -24,6 +24,7 @@
 #include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
+#include "handeye_covariance/io/result_file.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/report.h"
 #include "handeye_covariance/corners/corner_calibration.h"
@@ -396,11 +397,20 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       const SampleSet decided = session.decided(snapshot.samples, cal);
       const SharedRobotErrorFit fit = fit_shared_robot_error(decided, cal);
       const bool kuka = std::string(c.name).find("kuka") != std::string::npos;
+      // The session's own path (calibrate_checked) records the same fit as advice, and says so.
+      const Calibration checked = session.calibrate_checked(snapshot);
+      const std::string summary = io::human_summary(checked, io::context_of(decided));
       if (!kuka) {
         EXPECT_TRUE(fit.candidates.empty()) << c.name;
         EXPECT_FALSE(fit.chosen) << c.name;
+        EXPECT_FALSE(checked.shared_robot_error) << c.name;
         continue;
       }
+      ASSERT_TRUE(checked.shared_robot_error) << c.name << ", " << path;
+      EXPECT_EQ(checked.shared_robot_error->chosen, fit.chosen);
+      EXPECT_NEAR(checked.shared_robot_error->bic_gain, fit.bic_gain, 1e-6 * std::abs(fit.bic_gain));
+      EXPECT_TRUE(checked.T_parent_camera.isApprox(cal.T_parent_camera, 1e-12)) << "advice only: X is the per-view model's";
+      EXPECT_NE(summary.find("shared robot error    the likelihood prefers"), std::string::npos) << summary;
       EXPECT_GE(fit.used.size(), 28u) << c.name;  // none rejected
       EXPECT_TRUE(fit.chosen) << c.name << ", " << path << ": BIC gain " << fit.bic_gain;
       LinearCheckOptions options;

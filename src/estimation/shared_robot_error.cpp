@@ -263,7 +263,7 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   // bound slowly. Each next length starts where the last ended.
   Eigen::Vector3d start(0.875, 1e-6, 1e-8);
   const std::vector<double> none;
-  for (double l : L.n >= options.min_samples ? options.length_scales : none) {
+  for (double l : L.n >= options.min_samples && L.n <= options.max_samples ? options.length_scales : none) {
     const Parts parts = make_parts(L, l);
     double log_likelihood = 0.0;
     const Eigen::Vector3d theta = fit_theta(parts, start, L.J, L.r, options.max_iterations, &log_likelihood);
@@ -302,6 +302,21 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   fit.pattern.covariance = covariance.bottomRightCorner<6, 6>();
   fit.cross_covariance = covariance.topRightCorner<6, 6>();
   return fit;
+}
+
+Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
+  Calibration::SharedError r;
+  r.chosen = fit.chosen;
+  r.bic_gain = fit.bic_gain;
+  r.length_scale = fit.best.length_scale;
+  r.translation_sigma = fit.best.translation_sigma;
+  r.rotation_sigma = fit.best.rotation_sigma;
+  r.view_noise_scale = fit.best.view_noise_scale;
+  r.T_parent_camera = fit.T_parent_camera;
+  r.pose_covariance = fit.pose_covariance;
+  r.step_nees = fit.step_nees;
+  r.per_view_estimate_covariance = fit.per_view_estimate_covariance;
+  return r;
 }
 
 SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration,

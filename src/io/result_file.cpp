@@ -291,6 +291,27 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     }
     out << YAML::EndMap;
   }
+  if (const auto& e = calibration.shared_robot_error) {  // advice: a robot error shared by nearby poses
+    out << YAML::Key << "shared_robot_error" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
+    if (e->chosen) {
+      out << YAML::Key << "length_scale" << YAML::Value << e->length_scale;
+      out << YAML::Key << "translation_sigma" << YAML::Value << e->translation_sigma;
+      out << YAML::Key << "rotation_sigma" << YAML::Value << e->rotation_sigma;
+      out << YAML::Key << "view_noise_scale" << YAML::Value << e->view_noise_scale;
+      out << YAML::Key << "step_nees" << YAML::Value << e->step_nees;
+      out << YAML::Key << "X" << YAML::Value << YAML::BeginMap;
+      emit_pose(out, e->T_parent_camera);
+      out << YAML::Key << "covariance" << YAML::Value;
+      const auto shared = to_row_major_6x6(e->pose_covariance);
+      emit_numbers(out, shared.data(), shared.size());
+      out << YAML::EndMap;
+      out << YAML::Key << "per_view_covariance_under_it" << YAML::Value;
+      const auto per_view = to_row_major_6x6(e->per_view_estimate_covariance);
+      emit_numbers(out, per_view.data(), per_view.size());
+    }
+    out << YAML::EndMap;
+  }
   if (const auto& p = calibration.prediction) {  // leave-one-out: how well it predicts a view it has not seen
     out << YAML::Key << "prediction" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "scale" << YAML::Value
         << p->scale << YAML::Key << "dof" << YAML::Value << p->dof << YAML::Key << "views" << YAML::Value << p->views

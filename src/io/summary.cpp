@@ -150,6 +150,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                       c.pattern_covariance_inflation);
   }
   if (c.honesty) out += honesty_lines(*c.honesty);
+  if (c.shared_robot_error) out += shared_error_lines(*c.shared_robot_error, c);
   if (c.method == Method::Joint || c.method == Method::Corners) {
     out += line("  solver                %d it (%s, chi2/dof %.2f over %d dof)", c.rotation_stage.iterations,
                 to_string(c.rotation_stage.stop_reason), c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof),
@@ -187,6 +188,25 @@ std::string honesty_lines(const Calibration::Honesty& h) {
     out += "                        no runs look: " + h.runs_note + "\n";
   }
   return out;
+}
+
+std::string shared_error_lines(const Calibration::SharedError& e, const Calibration& c) {
+  if (!e.chosen) {
+    return line("  shared robot error    not preferred: the per-view noise explains the residuals (BIC gain %.1f)",
+                e.bic_gain);
+  }
+  double understated = 1.0;
+  for (int k = 0; k < 6; ++k) {
+    understated = std::max(understated, std::sqrt(e.per_view_estimate_covariance(k, k) / c.pose_covariance(k, k)));
+  }
+  const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);
+  return line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: %.2f mm and "
+              "%.3f deg per axis over %.2f m): under it sigma_X above is up to %.1fx too small",
+              e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale, understated) +
+         line("                        and X would move by [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg (step NEES %.1f); "
+              "advice only: X and its covariance above are the per-view model's",
+              step(0) * 1e3, step(1) * 1e3, step(2) * 1e3, degrees(step(3)), degrees(step(4)), degrees(step(5)),
+              e.step_nees);
 }
 
 std::string report_summary(const CalibrationReport& report) {

@@ -1,5 +1,7 @@
 #include "handeye_covariance/session/calibration_session.h"
 
+#include "handeye_covariance/estimation/shared_robot_error.h"
+
 #include "handeye_covariance/estimation/calibration_check.h"
 
 #include <cstdlib>
@@ -304,6 +306,12 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   // The fit the reference simulates from is the kept samples' own (without the rejected).
   const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
   record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
+  // Advice: a robot error shared by nearby poses, about the same fit (shared_robot_error.h).
+  const SharedRobotErrorOptions shared;
+  const int kept_count = static_cast<int>(kept.samples.samples.size());
+  if (fitted.method == Method::Joint && fitted.pattern && kept_count >= shared.min_samples && kept_count <= shared.max_samples) {
+    c.shared_robot_error = shared_error_record(fit_shared_robot_error(kept.samples, fitted, shared));
+  }
   return c;
 }
 

@@ -213,6 +213,26 @@ struct Calibration {
   };
   std::optional<Honesty> honesty;
 
+  /// A robot error shared by nearby poses (shared_robot_error.h), fitted about this
+  /// calibration by CalibrationSession::calibrate_checked (a joint fit, 16 to 40 kept
+  /// samples): whether the likelihood prefers it (BIC), its numbers, and what X and its
+  /// covariance would be under it. Advice, not yet used: X and the covariances above
+  /// stay the per-view model's (and the honesty check's). When `chosen`, the per-view
+  /// covariance understates X's by what per_view_estimate_covariance says.
+  struct SharedError {
+    bool chosen = false;
+    double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
+    double length_scale = 0.0;        // m, over the effector positions
+    double translation_sigma = 0.0;   // m, per axis, base frame
+    double rotation_sigma = 0.0;      // rad
+    double view_noise_scale = 1.0;    // on the per-view model's residual covariances
+    Eigen::Isometry3d T_parent_camera = Eigen::Isometry3d::Identity();  // after the GLS step
+    Matrix6d pose_covariance = Matrix6d::Zero();                        // its covariance
+    double step_nees = 0.0;           // X's step under its own covariance (about 6 when the model explains it)
+    Matrix6d per_view_estimate_covariance = Matrix6d::Zero();  // the X above's covariance under the model
+  };
+  std::optional<SharedError> shared_robot_error;
+
   /// How well the noise model and the covariance predict a view the calibration has not
   /// seen, measured on its own kept views by leave-one-out (calibration_check.h
   /// prediction_check): each view predicted from the others' X, Y, covariance and noise

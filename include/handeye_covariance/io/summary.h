@@ -21,6 +21,8 @@ std::string human_summary(const Calibration& calibration, const ResultContext& c
 /// The calibrated honesty check's lines (Calibration::honesty): the verdict, the
 /// session's split-half NEES against its reference, the band.
 std::string honesty_lines(const Calibration::Honesty& honesty);
+/// The shared robot error's lines of the summary (Calibration::shared_robot_error), about `calibration`.
+std::string shared_error_lines(const Calibration::SharedError& shared, const Calibration& calibration);
 
 /// The report's lines: 1 sigma per axis as predicted, by leave-one-out and by
 /// split-half (mm, degrees), then the advice.
