@@ -6,6 +6,7 @@
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/simulation.h"
 
@@ -149,6 +150,7 @@ void BM_HonestyCheck(benchmark::State& state) {
   SessionSettings settings = session_settings(s.samples);
   settings.honesty.run_length = static_cast<int>(state.range(2));  // 0: both looks (the default); 1: random halves alone
   settings.honesty.hold_noise = state.range(3) == 1;  // 1: the halves under the session's noise (the default); 0: refitted
+  settings.shared_robot_error_advice = false;          // the check alone (BM_SharedRobotError times the advice)
   CalibrationSession session(settings);
   session.replace(s.samples.samples, "benchmark");
   std::string verdict;
@@ -159,6 +161,24 @@ void BM_HonestyCheck(benchmark::State& state) {
   }
   state.SetLabel(verdict);  // "not run ..." would say the check was not timed
 }
+// The advice calibrate_checked adds beside the check: the shared robot error's fit
+// (shared_robot_error.h) about an n-sample joint fit, its noise estimated.
+void BM_SharedRobotError(benchmark::State& state) {
+  Rng rng(5);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)), paper_noise(1e-5));
+  s.samples.noise.reset();
+  const Calibration fitted = solve_joint(s.samples);
+  bool chosen = false;
+  for (auto _ : state) {
+    const SharedRobotErrorFit fit = fit_shared_robot_error(s.samples, fitted);
+    chosen = fit.chosen;
+    benchmark::DoNotOptimize(fit.pose_covariance);
+  }
+  state.SetLabel(chosen ? "chosen" : "not chosen");
+}
+BENCHMARK(BM_SharedRobotError)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
+
 BENCHMARK(BM_HonestyCheck)
     ->Args({10, 0, 0, 1})
     ->Args({16, 0, 1, 1})

@@ -309,7 +309,8 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   // Advice: a robot error shared by nearby poses, about the same fit (shared_robot_error.h).
   const SharedRobotErrorOptions shared;
   const int kept_count = static_cast<int>(kept.samples.samples.size());
-  if (fitted.method == Method::Joint && fitted.pattern && kept_count >= shared.min_samples && kept_count <= shared.max_samples) {
+  if (settings_.shared_robot_error_advice && fitted.method == Method::Joint && fitted.pattern &&
+      kept_count >= shared.min_samples && kept_count <= shared.max_samples) {
     c.shared_robot_error = shared_error_record(fit_shared_robot_error(kept.samples, fitted, shared));
   }
   return c;

@@ -47,6 +47,9 @@ struct SessionSettings {
   /// whether an overconfident verdict inflates the covariance.
   HonestyOptions honesty;
   bool inflate_when_overconfident = true;
+  /// calibrate_checked also fits a robot error shared by nearby poses as advice
+  /// (shared_robot_error.h, Calibration::shared_robot_error; 16 to 40 kept samples).
+  bool shared_robot_error_advice = true;
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
   /// suggest.seed + the number of samples, so each new sample brings fresh ones.
