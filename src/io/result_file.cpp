@@ -293,8 +293,12 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   }
   if (const auto& e = calibration.shared_robot_error) {  // advice: a robot error shared by nearby poses
     out << YAML::Key << "shared_robot_error" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
-    if (e->chosen) {
+    if (!e->not_fitted.empty()) {
+      out << YAML::Key << "not_fitted" << YAML::Value << e->not_fitted;
+    } else {
+      out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
+    }
+    if (e->not_fitted.empty() && e->chosen) {
       out << YAML::Key << "length_scale" << YAML::Value << e->length_scale;
       out << YAML::Key << "translation_sigma" << YAML::Value << e->translation_sigma;
       out << YAML::Key << "rotation_sigma" << YAML::Value << e->rotation_sigma;

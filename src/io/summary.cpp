@@ -191,22 +191,28 @@ std::string honesty_lines(const Calibration::Honesty& h) {
 }
 
 std::string shared_error_lines(const Calibration::SharedError& e, const Calibration& c) {
+  if (!e.not_fitted.empty()) return "  shared robot error    not fitted: " + e.not_fitted + "\n";
   if (!e.chosen) {
     return line("  shared robot error    not preferred: the per-view noise explains the residuals (BIC gain %.1f)",
                 e.bic_gain);
   }
-  double understated = 1.0;
+  double ratio = 0.0;  // the largest of sigma_X under the model over sigma_X above, per axis
   for (int k = 0; k < 6; ++k) {
-    understated = std::max(understated, std::sqrt(e.per_view_estimate_covariance(k, k) / c.pose_covariance(k, k)));
+    if (c.pose_covariance(k, k) > 0.0) {
+      ratio = std::max(ratio, std::sqrt(std::max(e.per_view_estimate_covariance(k, k), 0.0) / c.pose_covariance(k, k)));
+    }
   }
   const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);
-  return line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: %.2f mm and "
-              "%.3f deg per axis over %.2f m): under it sigma_X above is up to %.1fx too small",
-              e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale, understated) +
-         line("                        and X would move by [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg (step NEES %.1f); "
+  std::string out = line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: "
+                         "%.2f mm and %.3f deg per axis over %.2f m)",
+                         e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale);
+  out += ratio > 1.0 ? line("                        under it sigma_X above is up to %.1fx too small", ratio)
+                     : line("                        under it sigma_X above covers it (at most %.2f of it on any axis)", ratio);
+  out += line("                        and X would move by [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg (step NEES %.1f); "
               "advice only: X and its covariance above are the per-view model's",
               step(0) * 1e3, step(1) * 1e3, step(2) * 1e3, degrees(step(3)), degrees(step(4)), degrees(step(5)),
               e.step_nees);
+  return out;
 }
 
 std::string report_summary(const CalibrationReport& report) {

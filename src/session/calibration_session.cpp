@@ -274,6 +274,31 @@ Calibration CalibrationSession::calibrate_decided(const SessionSnapshot& snapsho
   return settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
 }
 
+Calibration::SharedError CalibrationSession::shared_error_advice(const SessionSnapshot& snapshot, const Calibration& c) const {
+  Calibration::SharedError advice;
+  if (c.method != Method::Joint || !c.pattern) {
+    advice.not_fitted = "it is a model of the joint estimator's residuals (method " + std::string(to_string(c.method)) + ")";
+    return advice;
+  }
+  if (c.covariance_kind == "sandwich") {
+    advice.not_fitted = "robust mode: the Huber-weighted fit is not the least-squares one the model is linearised at";
+    return advice;
+  }
+  const SharedRobotErrorOptions options;
+  const int kept = static_cast<int>(snapshot.samples.samples.size() - c.rejected.size());
+  if (kept < options.min_samples || kept > options.max_samples) {
+    advice.not_fitted = std::to_string(kept) + " kept samples; it is fitted from " + std::to_string(options.min_samples) +
+                        " to " + std::to_string(options.max_samples);
+    return advice;
+  }
+  try {  // about c itself, on the samples as it decided them (its rejected left out by the fit)
+    advice = shared_error_record(fit_shared_robot_error(decided(snapshot.samples, c), c, options));
+  } catch (const HandEyeError& e) {  // advice: the calibration stands without it
+    advice.not_fitted = std::string("the fit was refused: ") + e.what();
+  }
+  return advice;
+}
+
 Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapshot) const {
   Calibration c = calibrate(snapshot);
   const auto not_run = [&c](const std::string& why) {
@@ -291,6 +316,7 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
       return calibrate_decided({kept.generation, others});
     });
   }
+  if (settings_.shared_robot_error_advice) c.shared_robot_error = shared_error_advice(snapshot, c);
   if (settings_.honesty.splits <= 0) {
     not_run("the check is off (honesty_splits: 0)");
     return c;
@@ -306,13 +332,6 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   // The fit the reference simulates from is the kept samples' own (without the rejected).
   const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
   record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
-  // Advice: a robot error shared by nearby poses, about the same fit (shared_robot_error.h).
-  const SharedRobotErrorOptions shared;
-  const int kept_count = static_cast<int>(kept.samples.samples.size());
-  if (settings_.shared_robot_error_advice && fitted.method == Method::Joint && fitted.pattern &&
-      kept_count >= shared.min_samples && kept_count <= shared.max_samples) {
-    c.shared_robot_error = shared_error_record(fit_shared_robot_error(kept.samples, fitted, shared));
-  }
   return c;
 }
 

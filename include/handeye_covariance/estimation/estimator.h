@@ -214,12 +214,16 @@ struct Calibration {
   std::optional<Honesty> honesty;
 
   /// A robot error shared by nearby poses (shared_robot_error.h), fitted about this
-  /// calibration by CalibrationSession::calibrate_checked (a joint fit, 16 to 40 kept
-  /// samples): whether the likelihood prefers it (BIC), its numbers, and what X and its
+  /// calibration by CalibrationSession::calibrate_checked (a joint fit without robust
+  /// mode, 16 to 40 kept samples; otherwise `not_fitted` says why): whether the
+  /// likelihood prefers it (BIC), its numbers, and what X and its
   /// covariance would be under it. Advice, not yet used: X and the covariances above
   /// stay the per-view model's (and the honesty check's). When `chosen`, the per-view
   /// covariance understates X's by what per_view_estimate_covariance says.
   struct SharedError {
+    /// Empty when fitted; otherwise why not (too few or too many samples, robust
+    /// mode, method corners, the fit refused): the fields below are then unset.
+    std::string not_fitted;
     bool chosen = false;
     double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
     double length_scale = 0.0;        // m, over the effector positions

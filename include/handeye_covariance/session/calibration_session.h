@@ -183,6 +183,9 @@ class CalibrationSession {
   /// pose-level method; otherwise the record says why it did not run. Seconds of
   /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
+  /// The shared robot error about `calibration` of `snapshot` (calibrate()), as the
+  /// advice calibrate_checked records (Calibration::shared_robot_error).
+  Calibration::SharedError shared_error_advice(const SessionSnapshot& snapshot, const Calibration& calibration) const;
   /// The split-half check (split_check.h) of this session's calibration: `splits`
   /// random halves of the (decided) samples, each calibrated as calibrate_decided() does.
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;
