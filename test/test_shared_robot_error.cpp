@@ -12,6 +12,7 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/simulation.h"
 
 namespace handeye {
@@ -152,6 +153,38 @@ TEST(SharedRobotError, AShortSessionKeepsThePerViewModel) {
       EXPECT_FALSE(fit.chosen);
     }
   }
+}
+
+// The session's advice (CalibrationSession::shared_error_advice, calibrate_checked):
+// fitted from 16 to 40 kept samples of a least-squares joint fit, otherwise a note of
+// why not; off when the settings say so. X stays the calibration's either way.
+TEST(SharedRobotError, TheSessionsAdviceSaysWhyItWasNotFitted) {
+  auto advice = [](int n, JointOptions::Robust robust, bool on) {
+    const Session s = simulate(n, 31, true);
+    SessionSettings settings = session_settings(s.samples);
+    settings.robust = robust;
+    settings.honesty.splits = 0;  // the advice does not depend on the check
+    settings.shared_robot_error_advice = on;
+    CalibrationSession session(settings);
+    session.replace(s.samples.samples, "simulated");
+    const SessionSnapshot snapshot = session.snapshot();
+    const Calibration c = session.calibrate_checked(snapshot);
+    EXPECT_TRUE(c.T_parent_camera.isApprox(session.calibrate(snapshot).T_parent_camera, 1e-12));
+    return c.shared_robot_error;
+  };
+  const auto off = JointOptions::Robust::Off;
+  const auto fitted = advice(30, off, true);
+  ASSERT_TRUE(fitted);
+  EXPECT_TRUE(fitted->not_fitted.empty()) << fitted->not_fitted;
+  EXPECT_TRUE(fitted->chosen);  // the simulated error is shared
+  EXPECT_GT(fitted->step_nees, 0.0);
+  const auto many = advice(41, off, true);
+  ASSERT_TRUE(many);
+  EXPECT_EQ(many->not_fitted, "41 kept samples; it is fitted from 16 to 40");
+  const auto robust = advice(30, JointOptions::Robust::On, true);
+  ASSERT_TRUE(robust);
+  EXPECT_EQ(robust->not_fitted.rfind("robust mode:", 0), 0u) << robust->not_fitted;
+  EXPECT_FALSE(advice(30, off, false));
 }
 
 // The halves of split_check, as indices: each split a partition of 0..n-1, random
