@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <random>
 
@@ -24,6 +25,11 @@ namespace {
 /// between two poses, 2 mm and 0.15 degree per axis (base frame, left perturbation),
 /// beside the independent noise of the paper (eq. 57-60, lambda 1e-6: about 0.8 mm and
 /// 0.05 degree), as on the real KUKA sessions where the shared part dominates.
+/// HANDEYE_SHARED_TRUE_NOISE=1: the samples keep their true independent noise and
+/// the calibration takes it as stated (none estimated), for the figure of
+/// shared_robot_error.h; by default the noise is estimated, as a user's would be.
+bool true_noise() { return std::getenv("HANDEYE_SHARED_TRUE_NOISE") != nullptr; }
+
 struct Session {
   SampleSet samples;
   Eigen::Isometry3d X;
@@ -32,7 +38,7 @@ Session simulate(int n, unsigned seed, bool shared) {
   Rng rng(seed);
   const SimulatedSession at = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), n, paper_noise(1e-6));
   Session s{at.samples, at.X};
-  s.samples.noise.reset();
+  if (!true_noise()) s.samples.noise.reset();
   if (!shared) return s;
   std::vector<double> distances;
   Eigen::MatrixXd K(n, n);
@@ -69,19 +75,24 @@ double nees(const Eigen::Isometry3d& estimate, const Matrix6d& covariance, const
 }
 
 // With a shared error the per-view model is overconfident (its NEES of X against the
-// truth far above 6); the shared model is chosen and brings it back to about 6 (its
-// four noise numbers fitted from the same residuals leave a little above), as does
-// the model's covariance of the per-view estimate, and the step from one estimate
-// to the other has a NEES of about 6 under its own covariance. Without one, the BIC
-// keeps the per-view model in nearly every session and X is unchanged.
+// truth far above 6); the shared model is chosen and brings it back to about 6, with
+// Kenward and Roger's adjustment for its fitted numbers (6.3 over these 24 sessions;
+// 6.8 over 200, 6.1 over 100 with the true per-view noise: the per-view noise fitted
+// with the shared error in the residuals keeps a wrong shape, shared_robot_error.h),
+// as does the model's covariance of the per-view estimate, and the step from one
+// estimate to the other has a NEES of about 6 under its own covariance. Without one,
+// the BIC keeps the per-view model in nearly every session and X is unchanged.
+// HANDEYE_SHARED_SESSIONS=200 (and HANDEYE_SHARED_TRUE_NOISE=1) give the longer runs.
 TEST(SharedRobotError, ChosenWhereTheRobotErrorIsSharedAndHonestThere) {
-  const int sessions = 24, n = 30;
+  const int sessions = std::getenv("HANDEYE_SHARED_SESSIONS") ? std::atoi(std::getenv("HANDEYE_SHARED_SESSIONS")) : 24, n = 30;
   for (bool shared : {true, false}) {
     int chosen = 0;
     double nees_per_view = 0.0, nees_shared = 0.0, nees_per_view_under_model = 0.0, step_nees = 0.0;
     for (int m = 0; m < sessions; ++m) {
       const Session s = simulate(n, 900 + static_cast<unsigned>(m), shared);
-      const Calibration c = solve_joint(s.samples);
+      JointOptions options;
+      options.estimate_missing_noise = !true_noise();
+      const Calibration c = solve_joint(s.samples, options);
       const SharedRobotErrorFit fit = fit_shared_robot_error(s.samples, c);
       ASSERT_EQ(fit.candidates.size(), SharedRobotErrorOptions{}.length_scales.size());
       ASSERT_EQ(fit.used.size(), static_cast<std::size_t>(n));
@@ -119,25 +130,34 @@ TEST(SharedRobotError, ChosenWhereTheRobotErrorIsSharedAndHonestThere) {
 }
 
 // The linearised split-half check (cross-half terms, a bootstrap reference at the
-// session's poses) of the chosen model on a session with a shared error: both looks
-// within the reference's reach of 1, the band around the reference's mean.
+// session's poses) of the chosen model on a session with a shared error, with the
+// calibration's own halves and with the GLS ones: both looks within the reference's
+// reach of 1, a band around the reference's mean; the per-view model's runs read
+// overconfident.
 TEST(SharedRobotError, TheLinearisedCheckOfTheChosenModelReadsAboutOne) {
   const Session s = simulate(30, 77, true);
   const Calibration c = solve_joint(s.samples);
   const SharedRobotErrorFit fit = fit_shared_robot_error(s.samples, c);
   ASSERT_TRUE(fit.chosen);
-  LinearCheckOptions options;
+  HonestyOptions options;
   options.splits = 100, options.replicates = 30, options.replicate_splits = 30;
-  const SharedRobotErrorCheck shared = check_shared_robot_error(s.samples, c, fit.best, options);
-  const SharedRobotErrorCheck per_view = check_shared_robot_error(s.samples, c, fit.per_view, options);
-  std::printf("[ figures  ] one session with a shared error: random halves %.2f, runs of 3 %.2f (shared model); %.2f, %.2f "
-              "(per-view model)\n", shared.random.ratio, shared.runs.ratio, per_view.random.ratio, per_view.runs.ratio);
-  EXPECT_EQ(shared.runs.run_length, 3);
-  for (const LinearSplitLook& look : {shared.random, shared.runs}) {
-    EXPECT_GT(look.reference, 4.0);
-    EXPECT_GT(look.high - look.low, 0.5);  // a band from 30 sessions, not a point
-    EXPECT_GT(look.ratio, 0.7);
-    EXPECT_LT(look.ratio, 1.4);
+  for (SharedErrorEstimator estimator : {SharedErrorEstimator::PerView, SharedErrorEstimator::Gls}) {
+    const HonestyCheck shared = check_shared_robot_error(s.samples, c, fit.best, options, estimator);
+    const HonestyCheck per_view = check_shared_robot_error(s.samples, c, fit.per_view, options, estimator);
+    std::printf("[ figures  ] one session with a shared error, %s halves: random halves %.2f, runs of 3 %.2f (shared "
+                "model); %.2f, %.2f (per-view model)\n",
+                estimator == SharedErrorEstimator::PerView ? "per-view" : "GLS", shared.random_ratio, shared.runs_ratio,
+                per_view.random_ratio, per_view.runs_ratio);
+    ASSERT_TRUE(shared.ran());
+    EXPECT_EQ(shared.runs_length, 3);
+    EXPECT_EQ(shared.observed.splits, 100);
+    EXPECT_EQ(shared.reference.replicates, 30);
+    EXPECT_GT(shared.reference.mean, 4.0);
+    EXPECT_GT(shared.reference.high - shared.reference.low, 0.5);  // a band from 30 sessions, not a point
+    for (double ratio : {shared.random_ratio, shared.runs_ratio}) {
+      EXPECT_GT(ratio, 0.7);
+      EXPECT_LT(ratio, 1.4);
+    }
   }
 }
 
@@ -164,7 +184,7 @@ TEST(SharedRobotError, TheSessionsAdviceSaysWhyItWasNotFitted) {
     SessionSettings settings = session_settings(s.samples);
     settings.robust = robust;
     settings.honesty.splits = 0;  // the advice does not depend on the check
-    settings.shared_robot_error_advice = on;
+    settings.shared_robot_error = on ? SharedErrorUse::Advice : SharedErrorUse::Off;
     CalibrationSession session(settings);
     session.replace(s.samples.samples, "simulated");
     const SessionSnapshot snapshot = session.snapshot();

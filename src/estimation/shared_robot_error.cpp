@@ -18,6 +18,11 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using Vector12d = Eigen::Matrix<double, 12, 1>;
+/// C's numbers: the scale s of the per-view S_i, the shared error's translation and
+/// rotation variances a and b.
+constexpr int kComponents = 3;
+using Theta = Eigen::Vector3d;
+constexpr double kFloor[kComponents] = {1e-6, 0.0, 0.0};
 
 /// The session linearised at the calibration: e = r + J dxi (6n rows, sample by sample).
 struct Linearised {
@@ -63,38 +68,40 @@ Linearised linearise(const SampleSet& samples, const Calibration& calibration, s
   return L;
 }
 
-/// C's three parts: the per-view S_i (block diagonal), and the kernel's
-/// translation and rotation parts, k(p_i, p_j) D_i E D_j^T.
+/// C's parts, theta's three numbers: the per-view S_i (block diagonal), and the
+/// kernel's translation and rotation parts, k(p_i, p_j) D_i E D_j^T.
 struct Parts {
-  MatrixXd view, translation, rotation;
-  bool shared = false;  // a kernel: three components; none: the view scale alone
+  std::array<MatrixXd, kComponents> part;
+  std::vector<int> present;  // the components C has: the view part, and the kernel's when there is one
+  const MatrixXd& view() const { return part[0]; }
 };
 
 Parts make_parts(const Linearised& L, double length_scale) {
   Parts P;
   const int m = 6 * L.n;
-  P.view = MatrixXd::Zero(m, m);
-  for (int i = 0; i < L.n; ++i) P.view.block<6, 6>(6 * i, 6 * i) = L.S[static_cast<std::size_t>(i)];
-  P.shared = length_scale > 0.0;
-  if (!P.shared) return P;
-  P.translation = MatrixXd::Zero(m, m);
-  P.rotation = MatrixXd::Zero(m, m);
+  P.part[0] = MatrixXd::Zero(m, m);
+  for (int i = 0; i < L.n; ++i) P.part[0].block<6, 6>(6 * i, 6 * i) = L.S[static_cast<std::size_t>(i)];
+  P.present.push_back(0);
+  if (length_scale <= 0.0) return P;
+  P.part[1] = MatrixXd::Zero(m, m);
+  P.part[2] = MatrixXd::Zero(m, m);
   for (int i = 0; i < L.n; ++i) {
     for (int j = 0; j < L.n; ++j) {
       const double d = (L.position[static_cast<std::size_t>(i)] - L.position[static_cast<std::size_t>(j)]).norm();
       const double k = std::exp(-d * d / (2.0 * length_scale * length_scale));
       const Matrix6d& Di = L.D[static_cast<std::size_t>(i)];
       const Matrix6d& Dj = L.D[static_cast<std::size_t>(j)];
-      P.translation.block<6, 6>(6 * i, 6 * j) = k * Di.leftCols<3>() * Dj.leftCols<3>().transpose();
-      P.rotation.block<6, 6>(6 * i, 6 * j) = k * Di.rightCols<3>() * Dj.rightCols<3>().transpose();
+      P.part[1].block<6, 6>(6 * i, 6 * j) = k * Di.leftCols<3>() * Dj.leftCols<3>().transpose();
+      P.part[2].block<6, 6>(6 * i, 6 * j) = k * Di.rightCols<3>() * Dj.rightCols<3>().transpose();
     }
   }
+  P.present.push_back(1), P.present.push_back(2);
   return P;
 }
 
-MatrixXd combine(const Parts& P, const Eigen::Vector3d& theta) {
-  MatrixXd C = theta(0) * P.view;
-  if (P.shared) C += theta(1) * P.translation + theta(2) * P.rotation;
+MatrixXd combine(const Parts& P, const Theta& theta) {
+  MatrixXd C = MatrixXd::Zero(P.part[0].rows(), P.part[0].cols());
+  for (int c : P.present) C += theta(c) * P.part[static_cast<std::size_t>(c)];
   return C;
 }
 
@@ -102,11 +109,11 @@ MatrixXd combine(const Parts& P, const Eigen::Vector3d& theta) {
 struct Reml {
   bool ok = false;
   double log_likelihood = 0.0;
-  Eigen::Vector3d score = Eigen::Vector3d::Zero();
+  Theta score = Theta::Zero();
   Eigen::Matrix3d information = Eigen::Matrix3d::Identity();
 };
 
-Reml evaluate(const Parts& P, const Eigen::Vector3d& theta, const MatrixXd& J, const VectorXd& r) {
+Reml evaluate(const Parts& P, const Theta& theta, const MatrixXd& J, const VectorXd& r) {
   Reml out;
   const MatrixXd C = combine(P, theta);
   const Eigen::LLT<MatrixXd> llt(C);
@@ -121,50 +128,55 @@ Reml evaluate(const Parts& P, const Eigen::Vector3d& theta, const MatrixXd& J, c
   const double log_det_C = 2.0 * llt.matrixLLT().diagonal().array().log().sum();
   const double log_det_A = 2.0 * lla.matrixLLT().diagonal().array().log().sum();
   out.log_likelihood = -0.5 * (log_det_C + log_det_A + r.dot(Pr));
-  const int k = P.shared ? 3 : 1;
-  const MatrixXd* part[3] = {&P.view, &P.translation, &P.rotation};
-  std::vector<MatrixXd> PC;
-  for (int a = 0; a < k; ++a) {
-    PC.push_back(Pm * *part[a]);
-    out.score(a) = 0.5 * (Pr.dot(*part[a] * Pr) - PC.back().trace());
+  std::array<MatrixXd, kComponents> PC;
+  for (int a : P.present) {
+    const MatrixXd& Ca = P.part[static_cast<std::size_t>(a)];
+    PC[static_cast<std::size_t>(a)] = Pm * Ca;
+    out.score(a) = 0.5 * (Pr.dot(Ca * Pr) - PC[static_cast<std::size_t>(a)].trace());
   }
-  for (int a = 0; a < k; ++a) {
-    for (int b = 0; b <= a; ++b) {
+  for (int a : P.present) {
+    for (int b : P.present) {
       // tr(P C_a P C_b) = sum_ij (P C_a)_ij (P C_b)_ji
-      out.information(a, b) = out.information(b, a) = 0.5 * PC[static_cast<std::size_t>(a)].cwiseProduct(PC[static_cast<std::size_t>(b)].transpose()).sum();
+      out.information(a, b) = 0.5 * PC[static_cast<std::size_t>(a)].cwiseProduct(PC[static_cast<std::size_t>(b)].transpose()).sum();
     }
   }
   out.ok = true;
   return out;
 }
 
-/// Fisher scoring from `theta` within theta >= 0 (s > 0): a component at its bound
-/// whose score points out of the region stays there; a step is halved until the
-/// likelihood does not fall.
-Eigen::Vector3d fit_theta(const Parts& P, Eigen::Vector3d theta, const MatrixXd& J, const VectorXd& r, int max_iterations,
-                          double* log_likelihood) {
-  const int k = P.shared ? 3 : 1;
+/// Fisher scoring from `theta` within theta >= 0 (the view scale >= 1e-6): a
+/// component at its bound whose score points out of the region stays there; a step
+/// is halved until the likelihood does not fall. Only P's present components move.
+Theta fit_theta(const Parts& P, Theta theta, const MatrixXd& J, const VectorXd& r, int max_iterations, double* log_likelihood) {
+  const int k = static_cast<int>(P.present.size());
   Reml at = evaluate(P, theta, J, r);
   if (!at.ok) {
     *log_likelihood = -std::numeric_limits<double>::infinity();
     return theta;
   }
-  const double floor[3] = {1e-6, 0.0, 0.0};
   for (int it = 0; it < max_iterations; ++it) {
-    Eigen::MatrixXd F = at.information.topLeftCorner(k, k);
-    Eigen::VectorXd g = at.score.head(k);
-    for (int a = 0; a < k; ++a) {
-      if (theta(a) <= floor[a] && g(a) < 0.0) {  // held at its bound
-        g(a) = 0.0;
-        F.row(a).setZero(), F.col(a).setZero(), F(a, a) = 1.0;
+    Eigen::MatrixXd F(k, k);
+    Eigen::VectorXd g(k);
+    for (int x = 0; x < k; ++x) {
+      g(x) = at.score(P.present[static_cast<std::size_t>(x)]);
+      for (int y = 0; y < k; ++y) F(x, y) = at.information(P.present[static_cast<std::size_t>(x)], P.present[static_cast<std::size_t>(y)]);
+    }
+    for (int x = 0; x < k; ++x) {
+      const int a = P.present[static_cast<std::size_t>(x)];
+      if (theta(a) <= kFloor[a] && g(x) < 0.0) {  // held at its bound
+        g(x) = 0.0;
+        F.row(x).setZero(), F.col(x).setZero(), F(x, x) = 1.0;
       }
     }
     const Eigen::VectorXd step = F.ldlt().solve(g);
     double t = 1.0;
     bool moved = false;
     for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
-      Eigen::Vector3d candidate = theta;
-      for (int a = 0; a < k; ++a) candidate(a) = std::max(floor[a], theta(a) + t * step(a));
+      Theta candidate = theta;
+      for (int x = 0; x < k; ++x) {
+        const int a = P.present[static_cast<std::size_t>(x)];
+        candidate(a) = std::max(kFloor[a], theta(a) + t * step(x));
+      }
       const Reml next = evaluate(P, candidate, J, r);
       if (next.ok && next.log_likelihood >= at.log_likelihood - 1e-9) {
         const double gain = next.log_likelihood - at.log_likelihood;
@@ -179,7 +191,7 @@ Eigen::Vector3d fit_theta(const Parts& P, Eigen::Vector3d theta, const MatrixXd&
   return theta;
 }
 
-SharedRobotError describe(double length_scale, const Eigen::Vector3d& theta, double log_likelihood) {
+SharedRobotError describe(double length_scale, const Theta& theta, double log_likelihood) {
   SharedRobotError e;
   e.length_scale = length_scale;
   e.view_noise_scale = theta(0);
@@ -189,8 +201,47 @@ SharedRobotError describe(double length_scale, const Eigen::Vector3d& theta, dou
   return e;
 }
 
-Eigen::Vector3d theta_of(const SharedRobotError& e) {
+Theta theta_of(const SharedRobotError& e) {
   return {e.view_noise_scale, e.translation_sigma * e.translation_sigma, e.rotation_sigma * e.rotation_sigma};
+}
+
+/// The GLS covariance with the fitted (s, a, b)'s own error, as Kenward and Roger
+/// (1997, Biometrics 53: 983) adjust it for a covariance linear in its numbers:
+///   Phi_A = Phi + 2 Phi [sum_kl W_kl (Q_kl - P_k Phi P_l)] Phi,
+///   Phi = (J^T C^-1 J)^-1,  P_k = -J^T C^-1 C_k C^-1 J,  Q_kl = J^T C^-1 C_k C^-1 C_l C^-1 J,
+/// W the inverse of the REML expected information over the numbers off their bound
+/// (a number held at 0 is not estimated from the data's spread). The length l is
+/// taken as known (chosen from a grid, not estimated continuously).
+MatrixXd kenward_roger(const Parts& P, const Theta& theta, const MatrixXd& J, const VectorXd& r,
+                       const Eigen::LLT<MatrixXd>& llt, const MatrixXd& CiJ, const MatrixXd& Phi) {
+  const Reml at = evaluate(P, theta, J, r);
+  if (!at.ok) return Phi;
+  std::vector<int> active;
+  for (int k : P.present) {
+    if (theta(k) > kFloor[k]) active.push_back(k);
+  }
+  if (active.empty()) return Phi;
+  const int m = static_cast<int>(active.size());
+  MatrixXd I(m, m);
+  for (int x = 0; x < m; ++x) {
+    for (int y = 0; y < m; ++y) I(x, y) = at.information(active[static_cast<std::size_t>(x)], active[static_cast<std::size_t>(y)]);
+  }
+  const MatrixXd W = I.inverse();
+  std::vector<MatrixXd> U, CiU, Pk;  // U_k = C_k C^-1 J
+  for (int k : active) {
+    U.push_back(P.part[static_cast<std::size_t>(k)] * CiJ);
+    CiU.push_back(llt.solve(U.back()));
+    Pk.push_back(-CiJ.transpose() * U.back());
+  }
+  MatrixXd Lambda = MatrixXd::Zero(Phi.rows(), Phi.cols());
+  for (int x = 0; x < m; ++x) {
+    for (int y = 0; y < m; ++y) {
+      const MatrixXd Q = U[static_cast<std::size_t>(x)].transpose() * CiU[static_cast<std::size_t>(y)];
+      Lambda += W(x, y) * (Q - Pk[static_cast<std::size_t>(x)] * Phi * Pk[static_cast<std::size_t>(y)]);
+    }
+  }
+  MatrixXd adjusted = Phi + 2.0 * Phi * Lambda * Phi;
+  return 0.5 * (adjusted + adjusted.transpose());
 }
 
 /// The 6x6 blocks of C at samples a (rows) and b (columns); the 6-row blocks of M at a.
@@ -213,34 +264,50 @@ HandEyeError singular_covariance() {
                       "check the samples' stated noise; a model from fit_shared_robot_error of these samples is one");
 }
 
-/// The NEES of X's difference between the halves' GLS estimates under C, the
-/// covariance of the difference with its cross-half terms.
-double split_nees(const MatrixXd& C, const MatrixXd& J, const VectorXd& r, const std::array<std::vector<int>, 2>& halves) {
+/// One split of the linearised check: X's difference between the halves' estimates,
+/// each the weighted least-squares step under W's blocks (W = C: the GLS estimate;
+/// W = the per-view S_i: the calibration's own), judged under C with the cross-half
+/// terms. Adds the split to `check` (its NEES, difference and 1 sigma per axis).
+void add_split(const MatrixXd& C, const MatrixXd& W, const MatrixXd& J, const VectorXd& r,
+               const std::array<std::vector<int>, 2>& halves, SplitCheck& check) {
   MatrixXd G[2];
   Vector12d estimate[2];
   for (int h = 0; h < 2; ++h) {
     const std::vector<int>& half = halves[static_cast<std::size_t>(h)];
-    const Eigen::LLT<MatrixXd> llt(blocks(C, half, half));
+    const Eigen::LLT<MatrixXd> llt(blocks(W, half, half));
     if (llt.info() != Eigen::Success) throw singular_covariance();
     const MatrixXd Jh = rows_of(J, half);
-    const MatrixXd CiJ = llt.solve(Jh);
-    G[h] = (Jh.transpose() * CiJ).ldlt().solve(CiJ.transpose());
-    estimate[h] = -G[h] * rows_of(r, half);  // the half's GLS step
+    const MatrixXd WiJ = llt.solve(Jh);
+    G[h] = (Jh.transpose() * WiJ).ldlt().solve(WiJ.transpose());
+    estimate[h] = -G[h] * rows_of(r, half);  // the half's step
   }
   const MatrixXd cross = G[0] * blocks(C, halves[0], halves[1]) * G[1].transpose();
   const MatrixXd V = G[0] * blocks(C, halves[0], halves[0]) * G[0].transpose() +
                      G[1] * blocks(C, halves[1], halves[1]) * G[1].transpose() - cross - cross.transpose();
   const Vector6d d = (estimate[0] - estimate[1]).head<6>();
   const Matrix6d Vx = V.topLeftCorner<6, 6>();
-  return d.dot(Vx.ldlt().solve(d));
+  check.nees.push_back(d.dot(Vx.ldlt().solve(d)));
+  check.differences.push_back(d);
+  check.difference_sigmas.push_back(Vx.diagonal().cwiseMax(0.0).cwiseSqrt());
+  check.mean_nees_translation += d.head<3>().dot(Vx.topLeftCorner<3, 3>().ldlt().solve(d.head<3>()));
+  check.mean_nees_rotation += d.tail<3>().dot(Vx.bottomRightCorner<3, 3>().ldlt().solve(d.tail<3>()));
+  check.half_size = std::min(check.half_size, static_cast<int>(std::min(halves[0].size(), halves[1].size())));
 }
 
-double mean_nees(const MatrixXd& C, const MatrixXd& J, const VectorXd& r, const std::vector<std::array<std::vector<int>, 2>>& splits,
-                 std::size_t count) {
-  count = std::min(count, splits.size());
-  double sum = 0.0;
-  for (std::size_t s = 0; s < count; ++s) sum += split_nees(C, J, r, splits[s]);
-  return sum / static_cast<double>(count);
+/// The split check of residuals r under C (estimator weights W) over the first
+/// `count` of `splits`.
+SplitCheck linear_split_check(const MatrixXd& C, const MatrixXd& W, const MatrixXd& J, const VectorXd& r, int run_length,
+                              const std::vector<std::array<std::vector<int>, 2>>& splits, std::size_t count) {
+  SplitCheck check;
+  check.run_length = run_length;
+  check.half_size = static_cast<int>(r.size() / 12);
+  for (std::size_t s = 0; s < std::min(count, splits.size()); ++s) add_split(C, W, J, r, splits[s], check);
+  summarise_splits(check);
+  if (check.splits > 0) {
+    check.mean_nees_translation /= check.splits;
+    check.mean_nees_rotation /= check.splits;
+  }
+  return check;
 }
 
 }  // namespace
@@ -250,23 +317,24 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   SharedRobotErrorFit fit;
   const Linearised L = linearise(samples, calibration, fit.used);
   const Parts per_view = make_parts(L, 0.0);
-  const Reml at_model = evaluate(per_view, Eigen::Vector3d(1.0, 0.0, 0.0), L.J, L.r);
+  const Theta unit(1.0, 0.0, 0.0);  // the calibration's own model
+  const Reml at_model = evaluate(per_view, unit, L.J, L.r);
   if (!at_model.ok) {
     throw HandEyeError(ErrorCode::InvalidNoise, "a residual covariance of the calibration's noise model is singular",
                        "calibration", "check the samples' stated noise");
   }
-  fit.per_view = describe(0.0, Eigen::Vector3d(1.0, 0.0, 0.0), at_model.log_likelihood);
+  fit.per_view = describe(0.0, unit, at_model.log_likelihood);
   fit.best = fit.per_view;
   // The first length starts inside the region, from a shared error of 1 mm and
   // 0.006 degree per axis and the view scale a little below 1 (an eighth of the
   // per-view variance left for the shared part to take): Fisher scoring leaves a
   // bound slowly. Each next length starts where the last ended.
-  Eigen::Vector3d start(0.875, 1e-6, 1e-8);
+  Theta start(0.875, 1e-6, 1e-8);
   const std::vector<double> none;
   for (double l : L.n >= options.min_samples && L.n <= options.max_samples ? options.length_scales : none) {
     const Parts parts = make_parts(L, l);
     double log_likelihood = 0.0;
-    const Eigen::Vector3d theta = fit_theta(parts, start, L.J, L.r, options.max_iterations, &log_likelihood);
+    const Theta theta = fit_theta(parts, start, L.J, L.r, options.max_iterations, &log_likelihood);
     fit.candidates.push_back(describe(l, theta, log_likelihood));
     if (std::isfinite(log_likelihood)) start = theta;  // the next length starts here
     if (log_likelihood > fit.best.log_likelihood) fit.best = fit.candidates.back();
@@ -278,16 +346,25 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   const Eigen::LLT<MatrixXd> llt(C);
   const MatrixXd CiJ = llt.solve(L.J);
   const MatrixXd A = L.J.transpose() * CiJ;
-  const MatrixXd covariance = A.inverse();
-  const Vector12d step = fit.chosen ? Vector12d(-covariance * (CiJ.transpose() * L.r)) : Vector12d::Zero();
+  const MatrixXd information_inverse = A.inverse();
+  const Vector12d step = fit.chosen ? Vector12d(-information_inverse * (CiJ.transpose() * L.r)) : Vector12d::Zero();
+  // (J^T C^-1 J)^-1 takes C as known; (s, a, b) were fitted from these residuals.
+  const MatrixXd covariance =
+      fit.chosen ? kenward_roger(make_parts(L, model.length_scale), theta_of(model), L.J, L.r, llt, CiJ, information_inverse)
+                 : information_inverse;
+  if (fit.chosen) {  // their mean effect, tr(Phi^-1 Phi_A) / 6 on X's block and on Y's
+    fit.covariance_inflation = information_inverse.topLeftCorner<6, 6>().ldlt().solve(covariance.topLeftCorner<6, 6>()).trace() / 6.0;
+    fit.pattern_covariance_inflation =
+        information_inverse.bottomRightCorner<6, 6>().ldlt().solve(covariance.bottomRightCorner<6, 6>()).trace() / 6.0;
+  }
   {
     // The per-view estimate's error is H0 eps and the GLS one's -G eps (eps the
     // errors under C), so the step is (H0 + G) eps: its covariance under the model
     // is (H0 + G) C (H0 + G)^T, and H0 C H0^T is the per-view estimate's own.
-    const Eigen::LLT<MatrixXd> per_view_llt(per_view.view);
+    const Eigen::LLT<MatrixXd> per_view_llt(per_view.view());
     const MatrixXd SiJ = per_view_llt.solve(L.J);
     const MatrixXd H0 = (L.J.transpose() * SiJ).ldlt().solve(SiJ.transpose());
-    const MatrixXd gain = H0 - covariance * CiJ.transpose();
+    const MatrixXd gain = H0 - information_inverse * CiJ.transpose();
     const Matrix6d move = (gain * C * gain.transpose()).topLeftCorner<6, 6>();
     fit.per_view_estimate_covariance = (H0 * C * H0.transpose()).topLeftCorner<6, 6>();
     const Vector6d x = step.head<6>();
@@ -312,6 +389,8 @@ Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   r.translation_sigma = fit.best.translation_sigma;
   r.rotation_sigma = fit.best.rotation_sigma;
   r.view_noise_scale = fit.best.view_noise_scale;
+  r.covariance_inflation = fit.covariance_inflation;
+  r.covariance_inflation = fit.covariance_inflation;
   r.T_parent_camera = fit.T_parent_camera;
   r.pose_covariance = fit.pose_covariance;
   r.step_nees = fit.step_nees;
@@ -319,50 +398,69 @@ Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   return r;
 }
 
-SharedRobotErrorCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
-                                               const SharedRobotError& model, const LinearCheckOptions& options) {
-  if (options.splits < 1 || options.replicates < 1 || options.replicate_splits < 1 || options.run_length < 2) {
+HonestyCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration, const SharedRobotError& model,
+                                      const HonestyOptions& options, SharedErrorEstimator estimator) {
+  if (options.splits < 1 || options.replicates < 2 || options.replicate_splits < 1) {
     throw HandEyeError(ErrorCode::TooFewMotions,
-                       "the linearised split-half check needs splits, replicates and replicate_splits >= 1 and a run length >= 2",
-                       "LinearCheckOptions", "use the defaults (200 splits, 40 replicates of 40 splits, runs of 3)");
+                       "the linearised split-half check needs splits >= 1, replicates >= 2 and replicate_splits >= 1",
+                       "HonestyOptions", "use the defaults (200 splits, 100 simulated sessions of 40 splits)");
   }
   std::vector<int> used;
   const Linearised L = linearise(samples, calibration, used);
   const Parts parts = make_parts(L, model.length_scale);
-  const Eigen::Vector3d theta = theta_of(model);
+  const Theta theta = theta_of(model);
   const MatrixXd C = combine(parts, theta);
   const Eigen::LLT<MatrixXd> factor(C);
   if (factor.info() != Eigen::Success) throw singular_covariance();
-  const MatrixXd lower = factor.matrixL();
-  SharedRobotErrorCheck check;
-  const int looks[2] = {1, L.n >= min_samples_for_runs(options.run_length) ? options.run_length : 0};
-  for (int look = 0; look < 2; ++look) {
-    LinearSplitLook& out = look == 0 ? check.random : check.runs;
-    out.run_length = looks[look];
-    if (out.run_length == 0) continue;
-    std::mt19937_64 rng(options.seed + static_cast<unsigned>(look));
-    HalfSplitter splitter(L.n, out.run_length);
-    std::vector<std::array<std::vector<int>, 2>> splits;
-    for (int s = 0; s < options.splits; ++s) splits.push_back(splitter.next(rng));
-    out.observed = mean_nees(C, L.J, L.r, splits, splits.size());
-    std::mt19937_64 draw(options.seed + 101u * static_cast<unsigned>(look + 1));
-    std::normal_distribution<double> normal(0.0, 1.0);
-    std::vector<double> means;
-    for (int b = 0; b < options.replicates; ++b) {
-      VectorXd z(L.r.size());
-      for (int k = 0; k < z.size(); ++k) z(k) = normal(draw);
-      const VectorXd r = lower * z;
-      double log_likelihood = 0.0;
-      const Eigen::Vector3d refit = fit_theta(parts, theta, L.J, r, 50, &log_likelihood);
-      if (!std::isfinite(log_likelihood)) continue;
-      means.push_back(mean_nees(combine(parts, refit), L.J, r, splits, static_cast<std::size_t>(options.replicate_splits)));
-    }
-    if (means.empty()) continue;
-    out.reference = std::accumulate(means.begin(), means.end(), 0.0) / static_cast<double>(means.size());
-    out.low = linear_quantile(means, 0.05);
-    out.high = linear_quantile(means, 0.95);
-    out.ratio = out.observed / out.reference;
+  // The halves' estimator: the calibration's own (weights S_i; their scale s does not
+  // change the estimate), or the GLS one under the model.
+  const MatrixXd& view = parts.view();
+  const auto weights = [&](const MatrixXd& covariance) -> const MatrixXd& {
+    return estimator == SharedErrorEstimator::PerView ? view : covariance;
+  };
+  // The session's halves, both looks, as honesty_check draws them.
+  std::string why_not;
+  const int k = runs_length_for(options, L.n, &why_not);
+  const int looks = k == 0 ? 1 : 2;
+  std::vector<std::array<std::vector<int>, 2>> splits[2];
+  for (int look = 0; look < looks; ++look) {
+    std::mt19937_64 rng(options.seed);
+    HalfSplitter splitter(L.n, look == 0 ? 1 : k);
+    for (int s = 0; s < options.splits; ++s) splits[look].push_back(splitter.next(rng));
   }
+  const std::size_t replicate_splits[2] = {
+      static_cast<std::size_t>(std::min(options.splits, options.replicate_splits)),
+      static_cast<std::size_t>(std::min(options.splits, std::max(20, options.replicate_splits / 2)))};
+  // The bootstrap sessions, once for both looks: r* ~ N(0, C) at the session's J,
+  // (s, a, b) fitted again at the model's length as the session's own fit was.
+  const MatrixXd lower = factor.matrixL();
+  std::mt19937_64 draw(options.seed ^ 0x5eed5eedULL);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<SplitCheck> replicates[2];
+  int failed = 0;
+  for (int b = 0; b < options.replicates; ++b) {
+    VectorXd z(L.r.size());
+    for (int i = 0; i < z.size(); ++i) z(i) = normal(draw);
+    const VectorXd r = lower * z;
+    double log_likelihood = 0.0;
+    const Theta refit = fit_theta(parts, theta, L.J, r, 50, &log_likelihood);
+    if (!std::isfinite(log_likelihood)) {
+      ++failed;
+      continue;
+    }
+    const MatrixXd Cb = combine(parts, refit);
+    for (int look = 0; look < looks; ++look) {
+      replicates[look].push_back(linear_split_check(Cb, weights(Cb), L.J, r, look == 0 ? 1 : k, splits[look],
+                                                    replicate_splits[look]));
+    }
+  }
+  HonestyCheck look[2];
+  for (int l = 0; l < looks; ++l) {
+    const SplitCheck observed = linear_split_check(C, weights(C), L.J, L.r, l == 0 ? 1 : k, splits[l], splits[l].size());
+    look[l] = judge_look(observed, replicates[l], failed, static_cast<int>(replicate_splits[l]));
+  }
+  HonestyCheck check = worse_look(look[0], looks == 2 ? &look[1] : nullptr, looks == 2 ? k : 0);
+  if (looks == 1) check.runs_note = why_not;
   return check;
 }
 

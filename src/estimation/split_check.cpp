@@ -95,15 +95,8 @@ SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int 
     check.mean_nees_translation += d.head<3>().dot(S.topLeftCorner<3, 3>().ldlt().solve(d.head<3>()));
     check.mean_nees_rotation += d.tail<3>().dot(S.bottomRightCorner<3, 3>().ldlt().solve(d.tail<3>()));
   }
-  check.splits = static_cast<int>(check.nees.size());
+  summarise_splits(check);
   if (check.splits > 0) {
-    check.mean_nees = std::accumulate(check.nees.begin(), check.nees.end(), 0.0) / check.splits;
-    std::vector<double> sorted = check.nees;
-    std::sort(sorted.begin(), sorted.end());
-    const std::size_t cut = sorted.size() / 20;
-    check.trimmed_mean_nees =
-        std::accumulate(sorted.begin() + static_cast<long>(cut), sorted.end() - static_cast<long>(cut), 0.0) /
-        static_cast<double>(sorted.size() - 2 * cut);
     check.mean_nees_translation /= check.splits;
     check.mean_nees_rotation /= check.splits;
   }
@@ -198,19 +191,27 @@ std::string verdict_text(const HonestyCheck& c) {
   return "honest" + halves;
 }
 
-/// One look: the session's halves (random, or runs of run_length) against its
-/// reference, the simulated sessions split the same way.
-HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& simulated, int failed_fits,
-                      const SolveSamples& solve_half, const HonestyOptions& options, int run_length, int replicate_splits) {
+}  // namespace
+
+void summarise_splits(SplitCheck& check) {
+  check.splits = static_cast<int>(check.nees.size());
+  if (check.splits == 0) return;
+  check.mean_nees = std::accumulate(check.nees.begin(), check.nees.end(), 0.0) / check.splits;
+  std::vector<double> sorted = check.nees;
+  std::sort(sorted.begin(), sorted.end());
+  const std::size_t cut = sorted.size() / 20;
+  check.trimmed_mean_nees = std::accumulate(sorted.begin() + static_cast<long>(cut), sorted.end() - static_cast<long>(cut), 0.0) /
+                            static_cast<double>(sorted.size() - 2 * cut);
+}
+
+HonestyCheck judge_look(const SplitCheck& observed, const std::vector<SplitCheck>& replicates, int failed, int replicate_splits) {
   HonestyCheck check;
-  check.observed = split_check(session, solve_half, options.splits, options.seed, run_length);
+  check.observed = observed;
   SplitCheckReference& ref = check.reference;
-  ref.splits = std::min(options.splits, std::max(1, replicate_splits));
-  ref.failed = failed_fits;
+  ref.splits = replicate_splits;
+  ref.failed = failed;
   double within = 0.0;  // the mean over replicates of the NEES's variance across their splits
-  for (const SampleSet& replica : simulated) {
-    const SplitCheck replicate =
-        split_check(replica, solve_half, ref.splits, options.seed, run_length);  // the session's own halves
+  for (const SplitCheck& replicate : replicates) {
     if (replicate.splits == 0) {
       ++ref.failed;
       continue;
@@ -246,14 +247,49 @@ HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& si
   for (double m : ref.means) adjusted.push_back(ref.mean + scale * (m - ref.mean));
   ref.low = linear_quantile(adjusted, 0.05);
   ref.high = linear_quantile(adjusted, 0.95);
-  const double observed = check.observed.trimmed_mean_nees;
-  check.ratio = observed / ref.mean;
-  check.verdict = observed > ref.high   ? Honesty::Overconfident
-                  : observed < ref.low ? Honesty::Underconfident
-                                                       : Honesty::Honest;
+  const double value = check.observed.trimmed_mean_nees;
+  check.ratio = value / ref.mean;
+  check.verdict = value > ref.high   ? Honesty::Overconfident
+                  : value < ref.low ? Honesty::Underconfident
+                                    : Honesty::Honest;
   check.inflation = check.verdict == Honesty::Overconfident ? check.ratio : 1.0;
   check.text = verdict_text(check);
   return check;
+}
+
+HonestyCheck worse_look(HonestyCheck random, const HonestyCheck* runs, int run_length) {
+  random.random_ratio = random.ratio;
+  random.random_verdict = random.verdict;
+  if (run_length == 0 || runs == nullptr || !random.ran()) return random;
+  if (!runs->ran()) {
+    random.runs_note = "halves of runs of " + std::to_string(run_length) + ": " + runs->text;
+    return random;
+  }
+  // The worse look decides: the runs when they read overconfident beyond the random halves.
+  const bool runs_decide = runs->verdict == Honesty::Overconfident && runs->ratio > random.ratio;
+  HonestyCheck check = runs_decide ? *runs : random;
+  check.random_ratio = random.ratio;
+  check.random_verdict = random.verdict;
+  check.runs_length = run_length;
+  check.runs_ratio = runs->ratio;
+  check.runs_verdict = runs->verdict;
+  check.runs_note = random.runs_note;
+  return check;
+}
+
+namespace {
+
+/// One look: the session's halves (random, or runs of run_length) against its
+/// reference, the simulated sessions split the same way.
+HonestyCheck one_look(const SampleSet& session, const std::vector<SampleSet>& simulated, int failed_fits,
+                      const SolveSamples& solve_half, const HonestyOptions& options, int run_length, int replicate_splits) {
+  const SplitCheck observed = split_check(session, solve_half, options.splits, options.seed, run_length);
+  const int splits = std::min(options.splits, std::max(1, replicate_splits));
+  std::vector<SplitCheck> replicates;
+  for (const SampleSet& replica : simulated) {
+    replicates.push_back(split_check(replica, solve_half, splits, options.seed, run_length));  // the session's own halves
+  }
+  return judge_look(observed, replicates, failed_fits, splits);
 }
 
 }  // namespace
@@ -319,26 +355,17 @@ HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, 
     simulated.push_back(std::move(replica));
   }
   const SampleSet session = hold ? with_held_noise(samples, S) : samples;
-  HonestyCheck random = one_look(session, simulated, failed_fits, solve_half, options, 1, options.replicate_splits);
-  random.random_ratio = random.ratio;
-  random.random_verdict = random.verdict;
-  const int k = runs_length_for(options, n, &random.runs_note);
-  if (k == 0 || !random.ran()) return random;
-  HonestyCheck runs =
-      one_look(session, simulated, failed_fits, solve_half, options, k, std::max(20, options.replicate_splits / 2));
-  if (!runs.ran()) {
-    random.runs_note = "halves of runs of " + std::to_string(k) + ": " + runs.text;
-    return random;
+  const HonestyCheck random = one_look(session, simulated, failed_fits, solve_half, options, 1, options.replicate_splits);
+  std::string why_not;
+  const int k = runs_length_for(options, n, &why_not);
+  if (k == 0 || !random.ran()) {
+    HonestyCheck alone = worse_look(random, nullptr, 0);
+    alone.runs_note = why_not;
+    return alone;
   }
-  // The worse look decides: the runs when they read overconfident beyond the random halves.
-  const bool runs_decide = runs.verdict == Honesty::Overconfident && runs.ratio > random.ratio;
-  HonestyCheck check = runs_decide ? runs : random;
-  check.random_ratio = random.ratio;
-  check.random_verdict = random.verdict;
-  check.runs_length = k;
-  check.runs_ratio = runs.ratio;
-  check.runs_verdict = runs.verdict;
-  return check;
+  const HonestyCheck runs =
+      one_look(session, simulated, failed_fits, solve_half, options, k, std::max(20, options.replicate_splits / 2));
+  return worse_look(random, &runs, k);
 }
 
 }  // namespace handeye

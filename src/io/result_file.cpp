@@ -296,7 +296,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     if (!e->not_fitted.empty()) {
       out << YAML::Key << "not_fitted" << YAML::Value << e->not_fitted;
     } else {
-      out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
+      out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "used" << YAML::Value << e->used;
+      out << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
     }
     if (e->not_fitted.empty() && e->chosen) {
       out << YAML::Key << "length_scale" << YAML::Value << e->length_scale;
@@ -304,6 +305,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       out << YAML::Key << "rotation_sigma" << YAML::Value << e->rotation_sigma;
       out << YAML::Key << "view_noise_scale" << YAML::Value << e->view_noise_scale;
       out << YAML::Key << "step_nees" << YAML::Value << e->step_nees;
+      out << YAML::Key << "covariance_inflation" << YAML::Value << e->covariance_inflation;
       out << YAML::Key << "X" << YAML::Value << YAML::BeginMap;
       emit_pose(out, e->T_parent_camera);
       out << YAML::Key << "covariance" << YAML::Value;
@@ -313,6 +315,14 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       out << YAML::Key << "per_view_covariance_under_it" << YAML::Value;
       const auto per_view = to_row_major_6x6(e->per_view_estimate_covariance);
       emit_numbers(out, per_view.data(), per_view.size());
+      if (e->used) {  // the per-view model's X and its own covariance, which the model's replaced
+        out << YAML::Key << "per_view_X" << YAML::Value << YAML::BeginMap;
+        emit_pose(out, e->per_view_T_parent_camera);
+        out << YAML::Key << "covariance" << YAML::Value;
+        const auto own = to_row_major_6x6(e->per_view_pose_covariance);
+        emit_numbers(out, own.data(), own.size());
+        out << YAML::EndMap;
+      }
     }
     out << YAML::EndMap;
   }

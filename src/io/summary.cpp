@@ -146,6 +146,9 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     out += c.covariance_kind == "sandwich"
                ? line("  covariance            ROBUST: Huber loss (%d sample(s) down-weighted), sandwich x%.2f", c.downweighted,
                       c.covariance_inflation)
+           : c.covariance_kind == "shared_robot_error"
+               ? line("  covariance            a robot error shared by nearby poses: generalised least squares x%.3f (X), "
+                      "x%.3f (pattern)", c.covariance_inflation, c.pattern_covariance_inflation)
                : line("  covariance            inverse information x%.3f (X), x%.3f (pattern)", c.covariance_inflation,
                       c.pattern_covariance_inflation);
   }
@@ -196,11 +199,31 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
     return line("  shared robot error    not preferred: the per-view noise explains the residuals (BIC gain %.1f)",
                 e.bic_gain);
   }
-  double ratio = 0.0;  // the largest of sigma_X under the model over sigma_X above, per axis
+  // The per-view model's X covariance: the calibration's, or, when the model is in
+  // use, the one it replaced.
+  const Matrix6d& per_view = e.used ? e.per_view_pose_covariance : c.pose_covariance;
+  double ratio = 0.0;  // the largest of sigma_X under the model over the per-view model's, per axis
   for (int k = 0; k < 6; ++k) {
-    if (c.pose_covariance(k, k) > 0.0) {
-      ratio = std::max(ratio, std::sqrt(std::max(e.per_view_estimate_covariance(k, k), 0.0) / c.pose_covariance(k, k)));
+    if (per_view(k, k) > 0.0) {
+      ratio = std::max(ratio, std::sqrt(std::max(e.per_view_estimate_covariance(k, k), 0.0) / per_view(k, k)));
     }
+  }
+  if (e.used) {
+    const Vector6d step = pose_error(e.T_parent_camera, e.per_view_T_parent_camera);
+    std::string out = line("  shared robot error    used: the likelihood prefers an error shared by nearby poses (BIC gain "
+                           "%.1f: %.2f mm and %.3f deg per axis over %.2f m)",
+                           e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale);
+    out += line("                        X and its covariance above are its generalised least squares (x%.3f for its "
+                "fitted numbers); the per-view model's X is [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg from it (step "
+                "NEES %.1f)",
+                e.covariance_inflation, -step(0) * 1e3, -step(1) * 1e3, -step(2) * 1e3, -degrees(step(3)),
+                -degrees(step(4)), -degrees(step(5)), e.step_nees);
+    if (ratio > 1.0) {
+      out += line("                        and the per-view model's sigma_X is up to %.1fx too small under it "
+                  "(shared_robot_error: advice keeps that model)",
+                  ratio);
+    }
+    return out;
   }
   const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);
   std::string out = line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: "

@@ -49,7 +49,8 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (vm.count("reference-sessions")) settings.honesty.replicates = honesty.options.replicates;
   if (vm.count("split-runs")) settings.honesty.run_length = honesty.options.run_length;
   if (honesty.no_inflation) settings.inflate_when_overconfident = false;
-  HonestyArgs{settings.honesty, !settings.inflate_when_overconfident}.apply(settings);  // checks the values
+  const std::string shared_robot_error = vm.count("shared-robot-error") ? honesty.shared_robot_error : config.shared_robot_error;
+  HonestyArgs{settings.honesty, !settings.inflate_when_overconfident, shared_robot_error}.apply(settings);  // checks the values
   settings.session_file.clear();  // the node's session file is the node's
   settings.refine_corners = corner_refiner();  // method corners
   CalibrationSession session(settings);

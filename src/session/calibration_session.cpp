@@ -1,13 +1,11 @@
 #include "handeye_covariance/session/calibration_session.h"
 
-#include "handeye_covariance/estimation/shared_robot_error.h"
-
-#include "handeye_covariance/estimation/calibration_check.h"
-
 #include <cstdlib>
 #include <filesystem>
 
+#include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/io/yaml_io.h"
 
@@ -43,6 +41,7 @@ SessionSettings session_settings(const SessionConfig& config) {
   s.honesty.replicates = config.honesty_sessions;
   s.honesty.run_length = config.honesty_run_length;
   s.inflate_when_overconfident = config.inflate_when_overconfident;
+  s.shared_robot_error = shared_error_use_from_string(config.shared_robot_error, "shared_robot_error");
   s.suggest.criterion = criterion_from_string(config.suggest_criterion);  // a typo is refused at start
   s.suggest.working_distance = config.working_distance;
   s.suggest.candidates = config.suggest_candidates;
@@ -274,30 +273,57 @@ Calibration CalibrationSession::calibrate_decided(const SessionSnapshot& snapsho
   return settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
 }
 
-Calibration::SharedError CalibrationSession::shared_error_advice(const SessionSnapshot& snapshot, const Calibration& c) const {
-  Calibration::SharedError advice;
+std::optional<SharedRobotErrorFit> CalibrationSession::shared_error_fit(const SessionSnapshot& snapshot, const Calibration& c,
+                                                                      std::string* not_fitted) const {
   if (c.method != Method::Joint || !c.pattern) {
-    advice.not_fitted = "it is a model of the joint estimator's residuals (method " + std::string(to_string(c.method)) + ")";
-    return advice;
+    *not_fitted = "it is a model of the joint estimator's residuals (method " + std::string(to_string(c.method)) + ")";
+    return std::nullopt;
   }
   if (c.covariance_kind == "sandwich") {
-    advice.not_fitted = "robust mode: the Huber-weighted fit is not the least-squares one the model is linearised at";
-    return advice;
+    *not_fitted = "robust mode: the Huber-weighted fit is not the least-squares one the model is linearised at";
+    return std::nullopt;
   }
   const SharedRobotErrorOptions options;
   const int kept = static_cast<int>(snapshot.samples.samples.size() - c.rejected.size());
   if (kept < options.min_samples || kept > options.max_samples) {
-    advice.not_fitted = std::to_string(kept) + " kept samples; it is fitted from " + std::to_string(options.min_samples) +
-                        " to " + std::to_string(options.max_samples);
-    return advice;
+    *not_fitted = std::to_string(kept) + " kept samples; it is fitted from " + std::to_string(options.min_samples) + " to " +
+                  std::to_string(options.max_samples);
+    return std::nullopt;
   }
   try {  // about c itself, on the samples as it decided them (its rejected left out by the fit)
-    advice = shared_error_record(fit_shared_robot_error(decided(snapshot.samples, c), c, options));
-  } catch (const HandEyeError& e) {  // advice: the calibration stands without it
-    advice.not_fitted = std::string("the fit was refused: ") + e.what();
+    return fit_shared_robot_error(decided(snapshot.samples, c), c, options);
+  } catch (const HandEyeError& e) {  // the calibration stands without it
+    *not_fitted = std::string("the fit was refused: ") + e.what();
   }
-  return advice;
+  return std::nullopt;
 }
+
+namespace {
+
+/// X, Y and their covariances become the shared robot error model's (its GLS step,
+/// shared_robot_error.h); the per-view model's X and covariance stay in the record.
+void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
+  Calibration::SharedError& record = *c.shared_robot_error;
+  record.used = true;
+  record.per_view_T_parent_camera = c.T_parent_camera;
+  record.per_view_pose_covariance = c.pose_covariance;
+  c.T_parent_camera = fit.T_parent_camera;
+  c.pose_covariance = fit.pose_covariance;
+  c.translation_covariance = fit.pose_covariance.topLeftCorner<3, 3>();
+  c.rotation_covariance = fit.pose_covariance.bottomRightCorner<3, 3>();
+  c.cross_covariance = fit.cross_covariance;
+  c.pattern->pose = fit.pattern.pose;
+  c.pattern->covariance = fit.pattern.covariance;
+  c.covariance_kind = "shared_robot_error";
+  c.covariance_inflation = fit.covariance_inflation;
+  c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
+  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(fit.best.translation_sigma * 1e3, 3) +
+                   " mm, " + number_text(fit.best.rotation_sigma * 180.0 / M_PI, 3) + " deg per axis over " +
+                   number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
+                   number_text(fit.best.view_noise_scale, 3) + "), chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")";
+}
+
+}  // namespace
 
 Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapshot) const {
   Calibration c = calibrate(snapshot);
@@ -316,7 +342,17 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
       return calibrate_decided({kept.generation, others});
     });
   }
-  if (settings_.shared_robot_error_advice) c.shared_robot_error = shared_error_advice(snapshot, c);
+  // The shared robot error, about the per-view calibration (kept as `per_view`).
+  const Calibration per_view = c;
+  std::optional<SharedRobotErrorFit> shared;
+  if (settings_.shared_robot_error != SharedErrorUse::Off) {
+    Calibration::SharedError record;
+    shared = shared_error_fit(snapshot, c, &record.not_fitted);
+    if (shared) record = shared_error_record(*shared);
+    c.shared_robot_error = record;
+  }
+  const bool use_shared = shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use;
+  if (use_shared) use_shared_error(c, *shared);
   if (settings_.honesty.splits <= 0) {
     not_run("the check is off (honesty_splits: 0)");
     return c;
@@ -327,6 +363,13 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   }
   if (kept.samples.samples.size() < 8) {
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
+    return c;
+  }
+  if (use_shared) {  // the model in use judges itself: its GLS halves, its bootstrap
+    record_honesty(c,
+                   check_shared_robot_error(decided(snapshot.samples, per_view), per_view, shared->best, settings_.honesty,
+                                            SharedErrorEstimator::Gls),
+                   settings_.inflate_when_overconfident);
     return c;
   }
   // The fit the reference simulates from is the kept samples' own (without the rejected).

@@ -93,7 +93,10 @@ void add_honesty_options(po::options_description& options, HonestyArgs& a) {
       "[2, 4] from 16 samples; 1: random halves alone; from 4 K samples")(
       "no-inflation", po::bool_switch(&a.no_inflation),
       "keep the noise model's covariance even when the honesty check finds it overconfident (by default it is "
-      "inflated by the measured factor)");
+      "inflated by the measured factor)")(
+      "shared-robot-error", po::value(&a.shared_robot_error),
+      "a robot error shared by nearby poses, fitted from 16 to 40 samples: use (default: where the likelihood prefers "
+      "it, X and its covariance are its own, and the honesty check judges it), advice (said, not used) or off");
 }
 
 void HonestyArgs::apply(SessionSettings& settings) const {
@@ -103,6 +106,7 @@ void HonestyArgs::apply(SessionSettings& settings) const {
   }
   settings.honesty = options;
   settings.inflate_when_overconfident = !no_inflation;
+  settings.shared_robot_error = shared_error_use_from_string(shared_robot_error, "--shared-robot-error");
 }
 
 int run_check(const std::string& calibration_path, const SampleSet& views, const std::string& output, double alpha,

@@ -65,10 +65,12 @@ class ProgressBar {
 };
 
 /// The honesty check's options of every command that calibrates (solve, images,
-/// bag): --split-check N (0: none), --reference-sessions N, --split-runs K, --no-inflation.
+/// bag): --split-check N (0: none), --reference-sessions N, --split-runs K, --no-inflation,
+/// --shared-robot-error use|advice|off.
 struct HonestyArgs {
   HonestyOptions options;
   bool no_inflation = false;
+  std::string shared_robot_error = "use";
   /// Into a session's settings, after checking the values (HandEyeError naming the option).
   void apply(SessionSettings& settings) const;
 };

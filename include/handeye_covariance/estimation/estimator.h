@@ -171,7 +171,9 @@ struct Calibration {
   };
   std::vector<ResidualCheck> residual_checks;
   std::string loss = "squared";              // or "huber": samples far out weigh less (robust mode)
-  std::string covariance_kind = "information";  // or "sandwich": model-robust (robust mode)
+  /// "information", "sandwich" (model-robust, robust mode) or "shared_robot_error" (the
+  /// GLS covariance of a robot error shared by nearby poses, shared_robot_error.h)
+  std::string covariance_kind = "information";
   int downweighted = 0;                      // robust mode: samples the Huber loss weighed below 1
   /// Joint: the factors on the inverse information for the noise estimate's (or the
   /// sandwich's) own uncertainty, X's and the pattern pose's (the X-pattern block
@@ -216,15 +218,20 @@ struct Calibration {
   /// A robot error shared by nearby poses (shared_robot_error.h), fitted about this
   /// calibration by CalibrationSession::calibrate_checked (a joint fit without robust
   /// mode, 16 to 40 kept samples; otherwise `not_fitted` says why): whether the
-  /// likelihood prefers it (BIC), its numbers, and what X and its
-  /// covariance would be under it. Advice, not yet used: X and the covariances above
-  /// stay the per-view model's (and the honesty check's). When `chosen`, the per-view
-  /// covariance understates X's by what per_view_estimate_covariance says.
+  /// likelihood prefers it (BIC), its numbers, and X and its covariance under it.
+  /// `used`: the session took them (X, Y and the covariances above are the model's);
+  /// otherwise advice, and when `chosen` the per-view covariance understates X's by
+  /// what per_view_estimate_covariance says.
   struct SharedError {
     /// Empty when fitted; otherwise why not (too few or too many samples, robust
     /// mode, method corners, the fit refused): the fields below are then unset.
     std::string not_fitted;
     bool chosen = false;
+    /// The calibration's X, Y and covariances are this model's (chosen, and the
+    /// session uses it); the per-view model's X and its covariance are kept below.
+    bool used = false;
+    Eigen::Isometry3d per_view_T_parent_camera = Eigen::Isometry3d::Identity();
+    Matrix6d per_view_pose_covariance = Matrix6d::Zero();
     double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
     double length_scale = 0.0;        // m, over the effector positions
     double translation_sigma = 0.0;   // m, per axis, base frame
@@ -232,6 +239,7 @@ struct Calibration {
     double view_noise_scale = 1.0;    // on the per-view model's residual covariances
     Eigen::Isometry3d T_parent_camera = Eigen::Isometry3d::Identity();  // after the GLS step
     Matrix6d pose_covariance = Matrix6d::Zero();                        // its covariance
+    double covariance_inflation = 1.0;  // in it, X's factor for (s, a, b)'s own error (Kenward-Roger)
     double step_nees = 0.0;           // X's step under its own covariance (about 6 when the model explains it)
     Matrix6d per_view_estimate_covariance = Matrix6d::Zero();  // the X above's covariance under the model
   };

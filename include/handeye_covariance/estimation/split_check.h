@@ -180,6 +180,20 @@ int runs_length_for(const HonestyOptions& options, int n, std::string* why_not =
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options = {});
 
+/// A SplitCheck's splits, mean and trimmed mean from its `nees`.
+void summarise_splits(SplitCheck& check);
+/// One look judged: the session's split check `observed` against `replicates`, the
+/// simulated sessions' checks, each by the session's first `replicate_splits`
+/// halves (`failed` sessions that could not be fitted). The reference's mean, its
+/// band corrected to the session's number of splits, the ratio and the verdict.
+/// What honesty_check does per look, and the shared robot error's check
+/// (shared_robot_error.h) with halves of its own.
+HonestyCheck judge_look(const SplitCheck& observed, const std::vector<SplitCheck>& replicates, int failed,
+                        int replicate_splits);
+/// The two looks as one check: the runs (of `run_length`; 0 or no `runs`: random
+/// halves alone) decide when they read overconfident beyond the random halves.
+HonestyCheck worse_look(HonestyCheck random, const HonestyCheck* runs, int run_length);
+
 /// `samples` with each sample's noise held at its residual covariance S[i] (its
 /// camera noise S_i, its robot noise zero; corners dropped): what
 /// solve_with_held_noise solves a half of.

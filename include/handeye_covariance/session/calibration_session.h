@@ -20,6 +20,7 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/session/sampler.h"
@@ -47,9 +48,12 @@ struct SessionSettings {
   /// whether an overconfident verdict inflates the covariance.
   HonestyOptions honesty;
   bool inflate_when_overconfident = true;
-  /// calibrate_checked also fits a robot error shared by nearby poses as advice
-  /// (shared_robot_error.h, Calibration::shared_robot_error; 16 to 40 kept samples).
-  bool shared_robot_error_advice = true;
+  /// calibrate_checked also fits a robot error shared by nearby poses
+  /// (shared_robot_error.h, Calibration::shared_robot_error; 16 to 40 kept samples of
+  /// a least-squares joint fit). Use: where the likelihood prefers it, X, Y and their
+  /// covariances are the model's and the honesty check judges it; Advice: recorded
+  /// and said, the per-view model's X kept; Off: not fitted.
+  SharedErrorUse shared_robot_error = SharedErrorUse::Use;
   /// Next-best pose. The minimum step between poses is the sampler's
   /// (min_translation, min_rotation); candidates are drawn with
   /// suggest.seed + the number of samples, so each new sample brings fresh ones.
@@ -65,6 +69,7 @@ struct SessionSettings {
 SessionSettings session_settings(const SessionConfig& config);
 /// "auto" / "on" / "off"; throws HandEyeError(MalformedFile) naming the valid values.
 JointOptions::Robust robust_from_string(const std::string& name);
+
 /// A session over a samples file: the file's setup, frames and noise block, the
 /// other settings from `config` (by default the node's defaults); nothing persisted.
 SessionSettings session_settings(const SampleSet& samples, const SessionConfig& config = {});
@@ -177,15 +182,20 @@ class CalibrationSession {
   SampleSet decided(const SampleSet& samples, const Calibration& calibration) const;
   /// calibrate() of samples decided already (decided()): no decision of turns.
   Calibration calibrate_decided(const SessionSnapshot& snapshot) const;
-  /// calibrate(), then the calibrated honesty check on the kept samples
-  /// (Calibration::honesty; split_check.h), the covariance inflated when it is
-  /// overconfident and the settings say so. The check needs 8 kept samples and a
-  /// pose-level method; otherwise the record says why it did not run. Seconds of
-  /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
+  /// calibrate(), then the shared robot error (settings' shared_robot_error: with
+  /// Use, where the likelihood prefers it, X, Y and their covariances become its
+  /// own), then the calibrated honesty check on the kept samples
+  /// (Calibration::honesty; split_check.h, or check_shared_robot_error of the model
+  /// in use), the covariance inflated when it is overconfident and the settings say
+  /// so. The check needs 8 kept samples and a pose-level method; otherwise the record
+  /// says why it did not run. Seconds of work for 30 samples: the node runs it on
+  /// its worker. Throws HandEyeError.
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
-  /// The shared robot error about `calibration` of `snapshot` (calibrate()), as the
-  /// advice calibrate_checked records (Calibration::shared_robot_error).
-  Calibration::SharedError shared_error_advice(const SessionSnapshot& snapshot, const Calibration& calibration) const;
+  /// The shared robot error about `calibration` of `snapshot` (calibrate()): the fit,
+  /// or none with why in `not_fitted` (too few or too many kept samples, robust mode,
+  /// another method, the fit refused).
+  std::optional<SharedRobotErrorFit> shared_error_fit(const SessionSnapshot& snapshot, const Calibration& calibration,
+                                                      std::string* not_fitted) const;
   /// The split-half check (split_check.h) of this session's calibration: `splits`
   /// random halves of the (decided) samples, each calibrated as calibrate_decided() does.
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;

@@ -39,6 +39,8 @@ struct SessionConfig {
   int honesty_sessions = 100;
   int honesty_run_length = 0;  // the second look's runs (split_check.h): 0 auto, 1 none, k runs of k
   bool inflate_when_overconfident = true;
+  // A robot error shared by nearby poses (shared_robot_error.h): use | advice | off.
+  std::string shared_robot_error = "use";
   // Next-best pose (/suggest_pose and ~status): criterion, sampled candidates
   // within one move of the last pose, or a file of candidate effector poses.
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
@@ -88,6 +90,7 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("honesty_sessions", c.honesty_sessions, 1.0);
   visit("honesty_run_length", c.honesty_run_length, 1.0);
   visit("inflate_when_overconfident", c.inflate_when_overconfident, 1.0);
+  visit("shared_robot_error", c.shared_robot_error, 1.0);
   visit("suggest_criterion", c.suggest_criterion, 1.0);
   visit("suggest_candidates", c.suggest_candidates, 1.0);
   visit("reach_translation_mm", c.reach_translation, mm);
