@@ -150,7 +150,7 @@ void BM_HonestyCheck(benchmark::State& state) {
   SessionSettings settings = session_settings(s.samples);
   settings.honesty.run_length = static_cast<int>(state.range(2));  // 0: both looks (the default); 1: random halves alone
   settings.honesty.hold_noise = state.range(3) == 1;  // 1: the halves under the session's noise (the default); 0: refitted
-  settings.shared_robot_error_advice = false;          // the check alone (BM_SharedRobotError times the advice)
+  settings.shared_robot_error = SharedErrorUse::Off;  // the check alone (BM_SharedRobotError times the model's fit)
   CalibrationSession session(settings);
   session.replace(s.samples.samples, "benchmark");
   std::string verdict;
@@ -178,6 +178,28 @@ void BM_SharedRobotError(benchmark::State& state) {
   state.SetLabel(chosen ? "chosen" : "not chosen");
 }
 BENCHMARK(BM_SharedRobotError)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
+// calibrate_checked of an n-sample session whose robot poses carry an error shared by
+// nearby poses (simulation.h add_shared_robot_error: 2 mm, 0.15 degree per axis), its
+// noise estimated, with the defaults: the model chosen and used, and the honesty check
+// of it (check_shared_robot_error: 200 GLS splits, 100 bootstrap sessions, both looks).
+void BM_SharedErrorSession(benchmark::State& state) {
+  Rng rng(5);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)), paper_noise(1e-6));
+  add_shared_robot_error(rng, s.samples, 2e-3, 0.15 * M_PI / 180.0);
+  s.samples.noise.reset();
+  CalibrationSession session(session_settings(s.samples));
+  session.replace(s.samples.samples, "benchmark");
+  std::string label;
+  for (auto _ : state) {
+    const Calibration c = session.calibrate_checked(session.snapshot());
+    label = std::string(c.shared_robot_error && c.shared_robot_error->used ? "used, " : "not used, ") + c.honesty->verdict +
+            " " + number_text(c.honesty->ratio, 3);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetLabel(label);
+}
+BENCHMARK(BM_SharedErrorSession)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_HonestyCheck)
     ->Args({10, 0, 0, 1})

@@ -119,6 +119,19 @@ TEST(Cli, SplitCheckSaysWhetherTheCovarianceIsHonest) {
   EXPECT_EQ(bad_mode.exit_code, 2);
   EXPECT_NE(bad_mode.err.find("unknown robust mode `sometimes`"), std::string::npos) << bad_mode.err;
   EXPECT_FALSE(std::filesystem::exists(temp("split_bad.yaml")));
+  // The shared robot error's setting: a bad value is refused naming the option; at 60
+  // samples (beyond its 40) the model is not fitted, and the summary says why.
+  const CliRun bad_shared = run("solve --input " + samples + " --output " + temp("shared_bad.yaml") + " --shared-robot-error yes");
+  EXPECT_EQ(bad_shared.exit_code, 2);
+  EXPECT_NE(bad_shared.err.find("unknown shared robot error setting `yes`"), std::string::npos) << bad_shared.err;
+  EXPECT_NE(bad_shared.err.find("--shared-robot-error"), std::string::npos) << bad_shared.err;
+  EXPECT_FALSE(std::filesystem::exists(temp("shared_bad.yaml")));
+  EXPECT_NE(r.out.find("shared robot error    not fitted: 60 kept samples; it is fitted from 16 to 40"), std::string::npos)
+      << r.out;
+  const CliRun shared_off = run("solve --input " + samples + " --output " + temp("shared_off.yaml") +
+                                " --split-check 0 --shared-robot-error off");
+  EXPECT_EQ(shared_off.exit_code, 0) << shared_off.err;
+  EXPECT_EQ(shared_off.out.find("shared robot error"), std::string::npos) << shared_off.out;
 }
 
 TEST(Cli, DegenerateInputExits2WithReasonAndWritesNothing) {

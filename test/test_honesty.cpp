@@ -269,6 +269,11 @@ TEST(Honesty, HalvesOfRunsSeeAnErrorSharedByNeighbouringPoses) {
       settings.honesty.replicates = 30;
       settings.honesty.replicate_splits = 20;
       settings.honesty.run_length = per_place;
+      // This reads the per-view model's check. The shared robot error's model
+      // (shared_robot_error.h) is chosen by BIC in 3 of these 8 sessions (l = 0.05 m)
+      // and, used, judges itself there: X's NEES against the truth as the check leaves
+      // it is then 11.0 over the 8, against 11.5 with the per-view model alone.
+      settings.shared_robot_error = SharedErrorUse::Off;
       CalibrationSession session(settings);
       session.replace(samples.samples, "simulated");
       const Calibration c = session.calibrate_checked(session.snapshot());

@@ -539,6 +539,8 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         whole.replace(samples->samples, c.name);
         const Calibration cal = whole.calibrate_checked(whole.snapshot());
         if (cal.honesty) inflation = cal.honesty->inflation;
+        // The check predicts with the per-view model where the shared one is used: its inflation.
+        if (cal.shared_robot_error && cal.shared_robot_error->used) inflation = cal.shared_robot_error->per_view_inflation;
       }
       const int n = static_cast<int>(samples->samples.size());
       const int k = std::min(5, n / 3);
@@ -573,7 +575,9 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         } catch (const HandEyeError&) {
           continue;  // a part the estimator refuses (too few turns) is no calibration to check
         }
-        if (inflation > 1.0) {
+        if (cal.shared_robot_error && cal.shared_robot_error->used) {
+          cal.shared_robot_error->per_view_inflation = inflation;
+        } else if (inflation > 1.0) {
           cal.pose_covariance *= inflation, cal.cross_covariance *= inflation, cal.pattern->covariance *= inflation;
           cal.honesty = Calibration::Honesty{};
           cal.honesty->inflation = inflation;

@@ -13,7 +13,10 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/result_file.h"
+#include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/session/report.h"
 #include "handeye_covariance/simulation/simulation.h"
 
 namespace handeye {
@@ -40,32 +43,7 @@ Session simulate(int n, unsigned seed, bool shared) {
   Session s{at.samples, at.X};
   if (!true_noise()) s.samples.noise.reset();
   if (!shared) return s;
-  std::vector<double> distances;
-  Eigen::MatrixXd K(n, n);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      const double d = (s.samples.samples[static_cast<std::size_t>(i)].T_base_effector.translation() -
-                        s.samples.samples[static_cast<std::size_t>(j)].T_base_effector.translation()).norm();
-      K(i, j) = d;
-      if (j > i) distances.push_back(d);
-    }
-  }
-  std::nth_element(distances.begin(), distances.begin() + static_cast<long>(distances.size() / 2), distances.end());
-  const double l = distances[distances.size() / 2];
-  K = (-K.array().square() / (2.0 * l * l)).exp().matrix() + 1e-9 * Eigen::MatrixXd::Identity(n, n);
-  const Eigen::MatrixXd lower = Eigen::LLT<Eigen::MatrixXd>(K).matrixL();
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::MatrixXd z(n, 6);
-  for (int i = 0; i < n; ++i) {
-    for (int a = 0; a < 6; ++a) z(i, a) = normal(rng);
-  }
-  const Eigen::MatrixXd g = lower * z;
-  for (int i = 0; i < n; ++i) {
-    PoseSample& sample = s.samples.samples[static_cast<std::size_t>(i)];
-    const Eigen::Vector3d t = 2e-3 * g.row(i).head<3>().transpose();
-    const Eigen::Vector3d w = 0.15 * M_PI / 180.0 * g.row(i).tail<3>().transpose();
-    sample.T_base_effector = se3::make_pose(so3::exp(w) * sample.T_base_effector.linear(), sample.T_base_effector.translation() + t);
-  }
+  add_shared_robot_error(rng, s.samples, 2e-3, 0.15 * M_PI / 180.0);
   return s;
 }
 
@@ -158,6 +136,92 @@ TEST(SharedRobotError, TheLinearisedCheckOfTheChosenModelReadsAboutOne) {
       EXPECT_GT(ratio, 0.7);
       EXPECT_LT(ratio, 1.4);
     }
+  }
+}
+
+// The session uses the model (shared_robot_error: use, the default) where the BIC
+// chooses it: calibrate_checked's X, Y and covariances are the fit's GLS ones, its
+// honesty check is the model's (check_shared_robot_error with GLS halves, the same
+// figures), the report judges the same model with the same figures, and
+// calibrate_modelled gives the same calibration without the check. A bad setting is
+// refused naming it.
+TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
+  const Session s = simulate(30, 31, true);
+  SessionSettings settings = session_settings(s.samples);
+  settings.honesty.splits = 60, settings.honesty.replicates = 20, settings.honesty.replicate_splits = 20;
+  CalibrationSession session(settings);
+  session.replace(s.samples.samples, "simulated");
+  const SessionSnapshot snapshot = session.snapshot();
+  const Calibration per_view = session.calibrate(snapshot);
+  const SharedRobotErrorFit fit = fit_shared_robot_error(session.decided(snapshot.samples, per_view), per_view);
+  ASSERT_TRUE(fit.chosen);
+  const Calibration c = session.calibrate_checked(snapshot);
+  ASSERT_TRUE(c.shared_robot_error && c.honesty);
+  EXPECT_TRUE(c.shared_robot_error->used);
+  EXPECT_EQ(c.covariance_kind, "shared_robot_error");
+  EXPECT_TRUE(c.T_parent_camera.isApprox(fit.T_parent_camera, 1e-12));
+  EXPECT_TRUE(c.pattern->pose.isApprox(fit.pattern.pose, 1e-12));
+  const double k = c.honesty->inflation;
+  EXPECT_TRUE(c.pose_covariance.isApprox(k * fit.pose_covariance, 1e-9));
+  EXPECT_TRUE(c.pattern->covariance.isApprox(k * fit.pattern.covariance, 1e-9));
+  EXPECT_TRUE(c.cross_covariance.isApprox(k * fit.cross_covariance, 1e-9));
+  EXPECT_TRUE(c.translation_covariance.isApprox(k * fit.pose_covariance.topLeftCorner<3, 3>(), 1e-9));
+  EXPECT_TRUE(c.rotation_covariance.isApprox(k * fit.pose_covariance.bottomRightCorner<3, 3>(), 1e-9));
+  EXPECT_TRUE(c.shared_robot_error->per_view_T_parent_camera.isApprox(per_view.T_parent_camera, 1e-12));
+  EXPECT_TRUE(c.shared_robot_error->per_view_pattern_pose.isApprox(per_view.pattern->pose, 1e-12));
+  // Its check is the model's, with GLS halves.
+  const HonestyCheck expected =
+      check_shared_robot_error(session.decided(snapshot.samples, per_view), per_view, fit.best, settings.honesty,
+                               SharedErrorEstimator::Gls);
+  EXPECT_NEAR(c.honesty->ratio, expected.ratio, 1e-9);
+  EXPECT_NEAR(c.honesty->random_ratio, expected.random_ratio, 1e-9);
+  EXPECT_NEAR(c.honesty->runs_ratio, expected.runs_ratio, 1e-9);
+  EXPECT_EQ(c.honesty->runs_length, 3);
+  EXPECT_EQ(c.honesty->replicates, 20);
+  std::printf("[ figures  ] the session's check of the model in use: %s (random halves %.3f, runs of 3 %.3f)\n",
+              c.honesty->text.c_str(), c.honesty->random_ratio, c.honesty->runs_ratio);
+  // calibrate_modelled: the same calibration before the check.
+  const Calibration modelled = session.calibrate_modelled(snapshot);
+  EXPECT_TRUE(modelled.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
+  EXPECT_TRUE(modelled.pose_covariance.isApprox(fit.pose_covariance, 1e-9));
+  EXPECT_FALSE(modelled.honesty);
+  // The report judges the same model: its split-half figures are the calibration's.
+  ReportOptions options;
+  options.splits = settings.honesty.splits, options.reference_sessions = settings.honesty.replicates;
+  const CalibrationReport report = make_report(session, snapshot, options);
+  EXPECT_TRUE(report.calibration.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
+  EXPECT_NEAR(report.honesty.random_ratio, c.honesty->random_ratio, 1e-9);
+  EXPECT_NEAR(report.honesty.runs_ratio, c.honesty->runs_ratio, 1e-9);
+  EXPECT_EQ(report.honesty.observed.differences.size(), static_cast<std::size_t>(report.honesty.observed.splits));
+  // The summary says so.
+  const std::string summary = io::human_summary(c, io::context_of(s.samples));
+  EXPECT_NE(summary.find("shared robot error    used:"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("covariance            a robot error shared by nearby poses"), std::string::npos) << summary;
+  // The per-view model is checked too, and kept for a check of new views; the result
+  // file carries both, and a check read from it predicts with the per-view one.
+  EXPECT_FALSE(c.shared_robot_error->per_view_honesty.empty());
+  EXPECT_GE(c.shared_robot_error->per_view_inflation, 1.0);
+  EXPECT_NE(summary.find("the per-view model's own honesty check: "), std::string::npos) << summary;
+  const Calibration per_view_basis = per_view_calibration(c);
+  EXPECT_TRUE(per_view_basis.T_parent_camera.isApprox(per_view.T_parent_camera, 1e-12));
+  EXPECT_TRUE(per_view_basis.pose_covariance.isApprox(c.shared_robot_error->per_view_inflation * per_view.pose_covariance, 1e-9));
+  const std::string file = io::format_result(c, io::context_of(s.samples));
+  const Calibration read = io::calibration_of(io::parse_result(file, "calibration.yaml"));
+  ASSERT_TRUE(read.shared_robot_error);
+  EXPECT_TRUE(read.shared_robot_error->used);
+  const Calibration read_basis = per_view_calibration(read);
+  EXPECT_TRUE(read_basis.T_parent_camera.isApprox(per_view.T_parent_camera, 1e-6));
+  EXPECT_TRUE(read_basis.pattern->pose.isApprox(per_view.pattern->pose, 1e-6));
+  EXPECT_TRUE(read_basis.pose_covariance.isApprox(per_view_basis.pose_covariance, 1e-6));
+  EXPECT_TRUE(read_basis.cross_covariance.isApprox(per_view_basis.cross_covariance, 1e-6));
+  // A bad setting is refused, naming it.
+  SessionConfig config;
+  config.shared_robot_error = "yes";
+  try {
+    session_settings(config);
+    ADD_FAILURE() << "shared_robot_error: yes was accepted";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("shared_robot_error"), std::string::npos) << e.what();
   }
 }
 

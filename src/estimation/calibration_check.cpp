@@ -13,6 +13,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/shared_robot_error.h"
 
 namespace handeye {
 
@@ -452,7 +453,13 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
 
 }  // namespace
 
-CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
+CalibrationCheck check_calibration(const Calibration& used, const SampleSet& views, const CheckOptions& options) {
+  // A calibration whose X is the shared robot error's GLS estimate is checked with the
+  // per-view model's X and Y kept beside it: a new view shares the error of the old
+  // poses near it, which that model's estimate absorbed and the GLS one does not, and
+  // predicting it under the shared model needs the old views (their conditional
+  // covariance), which a saved calibration does not hold.
+  const Calibration calibration = per_view_calibration(used);
   CalibrationCheck check = check_all(calibration, views, options);
   // One wrong detection is not a moved camera: a view beyond the outlier gate alone
   // (outliers.h, chi2(6) 0.9999) whose leaving out leaves the others consistent is left

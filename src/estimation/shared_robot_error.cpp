@@ -381,6 +381,32 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   return fit;
 }
 
+Calibration per_view_calibration(const Calibration& calibration) {
+  if (!calibration.shared_robot_error || !calibration.shared_robot_error->used || !calibration.pattern) return calibration;
+  const Calibration::SharedError& e = *calibration.shared_robot_error;
+  Calibration c = calibration;
+  c.T_parent_camera = e.per_view_T_parent_camera;
+  c.pose_covariance = e.per_view_pose_covariance;
+  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
+  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  c.pattern->pose = e.per_view_pattern_pose;
+  c.pattern->covariance = e.per_view_pattern_covariance;
+  c.cross_covariance = e.per_view_cross_covariance;
+  c.covariance_kind = "information";
+  c.shared_robot_error->used = false;
+  // Its own honesty check's inflation, as record_honesty applies it.
+  if (e.per_view_inflation > 1.0) {
+    const double k = e.per_view_inflation;
+    c.pose_covariance *= k, c.translation_covariance *= k, c.rotation_covariance *= k;
+    c.pattern->covariance *= k, c.cross_covariance *= k;
+  }
+  Calibration::Honesty h = c.honesty ? *c.honesty : Calibration::Honesty{};
+  h.inflation = e.per_view_inflation;
+  h.model_pose_covariance = e.per_view_pose_covariance;
+  c.honesty = h;
+  return c;
+}
+
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   Calibration::SharedError r;
   r.chosen = fit.chosen;

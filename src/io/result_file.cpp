@@ -322,6 +322,17 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
         const auto own = to_row_major_6x6(e->per_view_pose_covariance);
         emit_numbers(out, own.data(), own.size());
         out << YAML::EndMap;
+        out << YAML::Key << "per_view_pattern" << YAML::Value << YAML::BeginMap;
+        emit_pose(out, e->per_view_pattern_pose);
+        out << YAML::Key << "covariance" << YAML::Value;
+        const auto pattern = to_row_major_6x6(e->per_view_pattern_covariance);
+        emit_numbers(out, pattern.data(), pattern.size());
+        out << YAML::EndMap;
+        out << YAML::Key << "per_view_cross_covariance" << YAML::Value;
+        const auto cross = to_row_major_6x6(e->per_view_cross_covariance);
+        emit_numbers(out, cross.data(), cross.size());
+        out << YAML::Key << "per_view_honesty" << YAML::Value << e->per_view_honesty;
+        out << YAML::Key << "per_view_inflation" << YAML::Value << e->per_view_inflation;
       }
     }
     out << YAML::EndMap;
@@ -541,6 +552,33 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
     }
     file.prediction = p;
   }
+  // A calibration that uses the shared robot error's model: the per-view X, Y and
+  // their covariances kept beside it, which a check predicts new views with.
+  if (const YAML::Node shared = root["shared_robot_error"];
+      shared && shared.IsMap() && shared["used"] && as_bool(shared["used"], top / "shared_robot_error" / "used")) {
+    const Location at = top / "shared_robot_error";
+    const std::string shared_hint = "a used shared_robot_error block has per_view_X, per_view_pattern and per_view_cross_covariance";
+    Calibration::SharedError e;
+    e.used = e.chosen = true;
+    const YAML::Node x = require(shared, "per_view_X", at, shared_hint), y = require(shared, "per_view_pattern", at, shared_hint);
+    e.per_view_T_parent_camera = read_pose(x, at / "per_view_X");
+    const auto matrix = [&](const YAML::Node& node, const Location& where) {
+      const Matrix6d m = from_row_major_6x6(as_numbers<36>(node, where, "6x6 covariance, ROS order"));
+      check_covariance(m, where.str());
+      return m;
+    };
+    e.per_view_pose_covariance = matrix(require(x, "covariance", at / "per_view_X", shared_hint), at / "per_view_X" / "covariance");
+    e.per_view_pattern_pose = read_pose(y, at / "per_view_pattern");
+    e.per_view_pattern_covariance =
+        matrix(require(y, "covariance", at / "per_view_pattern", shared_hint), at / "per_view_pattern" / "covariance");
+    e.per_view_cross_covariance = from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance", at, shared_hint),
+                                                                    at / "per_view_cross_covariance", "6x6 Cov(X, Y)"));
+    if (shared["per_view_inflation"]) {
+      e.per_view_inflation = as_finite(shared["per_view_inflation"], at / "per_view_inflation", "NaN in the inflation",
+                                       "the per-view model's inflation is a number >= 1");
+    }
+    file.shared_robot_error = e;
+  }
   if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
     file.inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
                                "the honesty check's inflation is a number >= 1");
@@ -570,6 +608,7 @@ Calibration calibration_of(const CalibrationFile& file) {
   c.noise_origin = file.noise_origin;
   if (file.noise) c.noise = *file.noise;
   c.samples_used = file.samples_used;
+  c.shared_robot_error = file.shared_robot_error;
   if (file.inflation > 1.0) {
     Calibration::Honesty h;
     h.inflation = file.inflation;

@@ -223,6 +223,10 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
                   "(shared_robot_error: advice keeps that model)",
                   ratio);
     }
+    if (!e.per_view_honesty.empty()) {
+      out += "                        the per-view model's own honesty check: " + e.per_view_honesty +
+             " (a check of new views predicts with it)\n";
+    }
     return out;
   }
   const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);

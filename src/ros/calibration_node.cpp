@@ -425,6 +425,13 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.honest_nees_band = {h.reference_low, h.reference_high};
     res.covariance_inflation = h.inflation;
   }
+  res.shared_robot_error = "off";
+  if (const auto& e = c.shared_robot_error) {
+    res.shared_robot_error = !e->not_fitted.empty() ? "not fitted: " + e->not_fitted
+                             : e->used              ? "used"
+                             : e->chosen            ? "advice"
+                                                    : "not preferred";
+  }
   res.warnings = c.warnings;
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
@@ -434,6 +441,12 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                 std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
                 number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
                 number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+  if (c.shared_robot_error && c.shared_robot_error->used) {
+    res.message += "; with a robot error shared by nearby poses (" +
+                   number_text(c.shared_robot_error->translation_sigma * 1e3) + " mm, " +
+                   number_text(c.shared_robot_error->rotation_sigma / kDeg) + " deg over " +
+                   number_text(c.shared_robot_error->length_scale, 2) + " m)";
+  }
   if (c.honesty && c.honesty->verdict != "not run") res.message += "; " + c.honesty->text;
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);

@@ -307,6 +307,9 @@ void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
   record.used = true;
   record.per_view_T_parent_camera = c.T_parent_camera;
   record.per_view_pose_covariance = c.pose_covariance;
+  record.per_view_pattern_pose = c.pattern->pose;
+  record.per_view_pattern_covariance = c.pattern->covariance;
+  record.per_view_cross_covariance = c.cross_covariance;
   c.T_parent_camera = fit.T_parent_camera;
   c.pose_covariance = fit.pose_covariance;
   c.translation_covariance = fit.pose_covariance.topLeftCorner<3, 3>();
@@ -325,8 +328,27 @@ void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
 
 }  // namespace
 
-Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapshot) const {
+Calibration CalibrationSession::calibrate_modelled(const SessionSnapshot& snapshot) const {
   Calibration c = calibrate(snapshot);
+  // How well it predicts a view it has not seen (leave-one-out), for a later check of new views.
+  if (settings_.method != Method::Corners && c.pattern) {
+    const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
+    c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
+      return calibrate_decided({kept.generation, others});
+    });
+  }
+  // The shared robot error, about the per-view calibration.
+  if (settings_.shared_robot_error == SharedErrorUse::Off) return c;
+  Calibration::SharedError record;
+  const std::optional<SharedRobotErrorFit> shared = shared_error_fit(snapshot, c, &record.not_fitted);
+  if (shared) record = shared_error_record(*shared);
+  c.shared_robot_error = record;
+  if (shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use) use_shared_error(c, *shared);
+  return c;
+}
+
+Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapshot) const {
+  Calibration c = calibrate_modelled(snapshot);
   const auto not_run = [&c](const std::string& why) {
     Calibration::Honesty h;
     h.verdict = "not run";
@@ -334,25 +356,6 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     h.model_pose_covariance = c.pose_covariance;
     c.honesty = h;
   };
-  // The kept samples, as the calibration decided them: what both checks below judge.
-  const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
-  // How well it predicts a view it has not seen (leave-one-out), for a later check of new views.
-  if (settings_.method != Method::Corners && c.pattern) {
-    c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
-      return calibrate_decided({kept.generation, others});
-    });
-  }
-  // The shared robot error, about the per-view calibration (kept as `per_view`).
-  const Calibration per_view = c;
-  std::optional<SharedRobotErrorFit> shared;
-  if (settings_.shared_robot_error != SharedErrorUse::Off) {
-    Calibration::SharedError record;
-    shared = shared_error_fit(snapshot, c, &record.not_fitted);
-    if (shared) record = shared_error_record(*shared);
-    c.shared_robot_error = record;
-  }
-  const bool use_shared = shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use;
-  if (use_shared) use_shared_error(c, *shared);
   if (settings_.honesty.splits <= 0) {
     not_run("the check is off (honesty_splits: 0)");
     return c;
@@ -361,20 +364,29 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     not_run("method corners: the check solves simulated sessions at the pose level; run it on the joint estimate");
     return c;
   }
+  // The kept samples, as the calibration decided them: what the check judges.
+  const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
   if (kept.samples.samples.size() < 8) {
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
     return c;
   }
-  if (use_shared) {  // the model in use judges itself: its GLS halves, its bootstrap
-    record_honesty(c,
-                   check_shared_robot_error(decided(snapshot.samples, per_view), per_view, shared->best, settings_.honesty,
-                                            SharedErrorEstimator::Gls),
-                   settings_.inflate_when_overconfident);
+  // The per-view model's reference simulates from the kept samples' own fit (without the rejected).
+  const auto per_view_fit = [&](const Calibration& per_view) {
+    return per_view.rejected.empty() ? per_view : calibrate_decided(kept);
+  };
+  if (c.shared_robot_error && c.shared_robot_error->used) {
+    // The per-view model is checked too: the check of a saved calibration predicts new
+    // views with it (per_view_calibration), inflated as its own check says.
+    Calibration::SharedError& e = *c.shared_robot_error;
+    Calibration per_view = per_view_calibration(c);
+    per_view.honesty.reset();
+    const HonestyCheck own = honesty_check(kept, per_view_fit(per_view), settings_.honesty);
+    e.per_view_inflation = settings_.inflate_when_overconfident && own.verdict == Honesty::Overconfident ? own.inflation : 1.0;
+    e.per_view_honesty = own.ran() ? own.text : "not run: " + own.text;
+    record_honesty(c, honesty_check(kept, c, settings_.honesty), settings_.inflate_when_overconfident);
     return c;
   }
-  // The fit the reference simulates from is the kept samples' own (without the rejected).
-  const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
-  record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
+  record_honesty(c, honesty_check(kept, per_view_fit(c), settings_.honesty), settings_.inflate_when_overconfident);
   return c;
 }
 
@@ -386,6 +398,21 @@ SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int 
 
 HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
                                                const HonestyOptions& options) const {
+  if (calibration.shared_robot_error && calibration.shared_robot_error->used) {
+    // The model in use judges itself (its GLS halves, its bootstrap), linearised where
+    // it was fitted: at the per-view X and Y, on these kept samples.
+    const Calibration::SharedError& e = *calibration.shared_robot_error;
+    Calibration per_view = calibration;
+    per_view.T_parent_camera = e.per_view_T_parent_camera;
+    per_view.pattern->pose = e.per_view_pattern_pose;
+    per_view.rejected.clear();
+    SharedRobotError model;
+    model.length_scale = e.length_scale;
+    model.view_noise_scale = e.view_noise_scale;
+    model.translation_sigma = e.translation_sigma;
+    model.rotation_sigma = e.rotation_sigma;
+    return check_shared_robot_error(snapshot.samples, per_view, model, options, SharedErrorEstimator::Gls);
+  }
   return handeye::honesty_check(
       snapshot.samples, calibration,
       [this, &snapshot](const SampleSet& half) { return calibrate_decided({snapshot.generation, half}); }, options);

@@ -223,7 +223,7 @@ std::string camera_axis_name(const Eigen::Vector3d& direction) {
 
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
                               const ReportOptions& options) {
-  return make_report(session, snapshot, session.calibrate(snapshot), options);
+  return make_report(session, snapshot, session.calibrate_modelled(snapshot), options);
 }
 
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,

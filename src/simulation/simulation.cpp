@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
+#include <random>
 
 namespace handeye {
 
@@ -134,6 +135,37 @@ RigTrajectory make_rig_trajectory(Rng& rng, Setup setup, const Isometry3d& X, in
   trajectory.pause = pause;
   trajectory.move = move;
   return trajectory;
+}
+
+void add_shared_robot_error(Rng& rng, SampleSet& samples, double translation_sigma, double rotation_sigma) {
+  const int n = static_cast<int>(samples.samples.size());
+  if (n < 2) return;
+  std::vector<double> distances;
+  Eigen::MatrixXd K(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double d = (samples.samples[static_cast<std::size_t>(i)].T_base_effector.translation() -
+                        samples.samples[static_cast<std::size_t>(j)].T_base_effector.translation()).norm();
+      K(i, j) = d;
+      if (j > i) distances.push_back(d);
+    }
+  }
+  std::nth_element(distances.begin(), distances.begin() + static_cast<long>(distances.size() / 2), distances.end());
+  const double l = distances[distances.size() / 2];
+  K = (-K.array().square() / (2.0 * l * l)).exp().matrix() + 1e-9 * Eigen::MatrixXd::Identity(n, n);
+  const Eigen::MatrixXd lower = Eigen::LLT<Eigen::MatrixXd>(K).matrixL();
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd z(n, 6);
+  for (int i = 0; i < n; ++i) {
+    for (int a = 0; a < 6; ++a) z(i, a) = normal(rng);
+  }
+  const Eigen::MatrixXd g = lower * z;
+  for (int i = 0; i < n; ++i) {
+    PoseSample& sample = samples.samples[static_cast<std::size_t>(i)];
+    const Eigen::Vector3d t = translation_sigma * g.row(i).head<3>().transpose();
+    const Eigen::Vector3d w = rotation_sigma * g.row(i).tail<3>().transpose();
+    sample.T_base_effector = se3::make_pose(so3::exp(w) * sample.T_base_effector.linear(), sample.T_base_effector.translation() + t);
+  }
 }
 
 }  // namespace handeye

@@ -232,6 +232,13 @@ struct Calibration {
     bool used = false;
     Eigen::Isometry3d per_view_T_parent_camera = Eigen::Isometry3d::Identity();
     Matrix6d per_view_pose_covariance = Matrix6d::Zero();
+    Eigen::Isometry3d per_view_pattern_pose = Eigen::Isometry3d::Identity();  // Y, where the model is linearised
+    Matrix6d per_view_pattern_covariance = Matrix6d::Zero(), per_view_cross_covariance = Matrix6d::Zero();
+    /// The per-view model's own honesty check (calibrate_checked runs it too): its
+    /// inflation (1 unless overconfident and inflate_when_overconfident) and verdict.
+    /// The check of a saved calibration predicts with the per-view model times it.
+    double per_view_inflation = 1.0;
+    std::string per_view_honesty;
     double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
     double length_scale = 0.0;        // m, over the effector positions
     double translation_sigma = 0.0;   // m, per axis, base frame

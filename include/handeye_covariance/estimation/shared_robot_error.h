@@ -116,6 +116,14 @@ struct SharedRobotErrorFit {
 SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calibration& calibration,
                                            const SharedRobotErrorOptions& options = {});
 
+/// `calibration` as the per-view model had it, when it uses the shared robot error's
+/// model (Calibration::SharedError::used): the per-view X, Y and their covariances kept
+/// beside the model's (covariance_kind "information"), inflated by its own honesty
+/// check's factor (per_view_inflation, recorded as the honesty inflation); otherwise
+/// `calibration` itself.
+/// What the check of a saved calibration predicts new views with (calibration_check.h).
+Calibration per_view_calibration(const Calibration& calibration);
+
 /// The fit as Calibration::shared_robot_error records it.
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit);
 

@@ -67,6 +67,9 @@ struct CalibrationFile {
   std::vector<Calibration::NoiseComponent> noise_components;  // `noise.estimated`: how well each number is known
   std::optional<Calibration::Prediction> prediction;  // `prediction`: the leave-one-out scale
   double inflation = 1.0;
+  /// A calibration that uses the shared robot error's model (`shared_robot_error.used`):
+  /// the per-view X, Y and their covariances kept beside it (per_view_* only).
+  std::optional<Calibration::SharedError> shared_robot_error;
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);

@@ -182,14 +182,16 @@ class CalibrationSession {
   SampleSet decided(const SampleSet& samples, const Calibration& calibration) const;
   /// calibrate() of samples decided already (decided()): no decision of turns.
   Calibration calibrate_decided(const SessionSnapshot& snapshot) const;
-  /// calibrate(), then the shared robot error (settings' shared_robot_error: with
-  /// Use, where the likelihood prefers it, X, Y and their covariances become its
-  /// own), then the calibrated honesty check on the kept samples
-  /// (Calibration::honesty; split_check.h, or check_shared_robot_error of the model
-  /// in use), the covariance inflated when it is overconfident and the settings say
-  /// so. The check needs 8 kept samples and a pose-level method; otherwise the record
-  /// says why it did not run. Seconds of work for 30 samples: the node runs it on
-  /// its worker. Throws HandEyeError.
+  /// calibrate(), its leave-one-out prediction (Calibration::prediction), then the
+  /// shared robot error (settings' shared_robot_error; Calibration::shared_robot_error):
+  /// with Use, where the likelihood prefers it, X, Y and their covariances become its
+  /// own. What calibrate_checked and the report judge. Throws HandEyeError.
+  Calibration calibrate_modelled(const SessionSnapshot& snapshot) const;
+  /// calibrate_modelled(), then the calibrated honesty check on the kept samples
+  /// (Calibration::honesty; honesty_check below), the covariance inflated when it is
+  /// overconfident and the settings say so. The check needs 8 kept samples and a
+  /// pose-level method; otherwise the record says why it did not run. Seconds of
+  /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
   /// The shared robot error about `calibration` of `snapshot` (calibrate()): the fit,
   /// or none with why in `not_fitted` (too few or too many kept samples, robust mode,
@@ -201,7 +203,9 @@ class CalibrationSession {
   SplitCheck split_check(const SessionSnapshot& snapshot, int splits = 40, unsigned seed = 1) const;
   /// The split-half check against its parametric-bootstrap reference at this
   /// session's own poses and fitted noise (split_check.h, honesty_check), from
-  /// `calibration` (calibrate()'s of the snapshot). Throws HandEyeError.
+  /// `calibration` (calibrate_modelled()'s of the snapshot, which holds its kept
+  /// samples); of the shared robot error's model when the calibration uses it
+  /// (check_shared_robot_error, its GLS halves). Throws HandEyeError.
   HonestyCheck honesty_check(const SessionSnapshot& snapshot, const Calibration& calibration,
                              const HonestyOptions& options = {}) const;
   /// Ranked next poses and the plan to the target. Throws HandEyeError (no

@@ -48,12 +48,15 @@ struct ReportOptions {
   std::size_t max_rotation_axes = 2000;  // motions kept for the figure (M uses every pair)
 };
 
-/// The report of `snapshot` as `session` calibrates it. Throws HandEyeError as
-/// calibrate() does (too few samples, degenerate motions).
+/// The report of `snapshot` as `session` calibrates it (calibrate_modelled: with the
+/// shared robot error's model where the session uses it, whose check the split-half
+/// section then is). Throws HandEyeError as calibrate() does (too few samples,
+/// degenerate motions).
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
                               const ReportOptions& options = {});
-/// The same of `calibration`, which session.calibrate(snapshot) gave already (the
-/// node's last /calibrate): it is not solved again.
+/// The same of `calibration`, which session.calibrate_modelled(snapshot) or
+/// calibrate_checked(snapshot) gave already (the node's last /calibrate): it is not
+/// solved again.
 CalibrationReport make_report(const CalibrationSession& session, const SessionSnapshot& snapshot,
                               Calibration calibration, const ReportOptions& options = {});
 

@@ -41,6 +41,14 @@ struct SimulatedSession {
 SimulatedSession simulate_session(Rng& rng, Setup setup, const Eigen::Isometry3d& X, int n,
                                   const MeasurementNoise& noise, const ViewpointOptions& views = {});
 
+/// A robot error shared by nearby poses (estimation/shared_robot_error.h), added to
+/// the recorded robot poses of `samples`: per axis one draw of a Gaussian process
+/// over the effector positions, exp(-d^2 / (2 l^2)), l the median distance between
+/// two poses, `translation_sigma` (m) and `rotation_sigma` (rad) per axis in the
+/// base frame (R = exp(w) R, t + dt), as a real arm's kinematic error is a smooth
+/// function of where it is.
+void add_shared_robot_error(Rng& rng, SampleSet& samples, double translation_sigma, double rotation_sigma);
+
 /// A robot that holds each pose for `pause` seconds, then moves smoothly to the
 /// next in `move` seconds (slerp + lerp with a smoothstep), and stays at the
 /// last pose. Shared by the simulated rig node and the simulated bags.
