@@ -479,12 +479,12 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       const Vector6d s0 = cal.pose_covariance.diagonal().cwiseSqrt(), s1 = fit.pose_covariance.diagonal().cwiseSqrt();
       const Vector6d e0 = pose_error(cal.T_parent_camera, c.published), e1 = pose_error(fit.T_parent_camera, c.published);
       std::printf("[shared robot error, real %s, %s, %zu samples] chosen %d (BIC gain %.1f): l %.2f m, %.2f mm, %.3f deg, "
-                  "view noise x%.3f; split-half ratio random / runs of 3: %.2f / %.2f (GLS halves %.2f / %.2f; per-view model %.2f / %.2f); "
+                  "view noise x%.3f, Kenward-Roger x%.3f; split-half ratio random / runs of 3: %.2f / %.2f (GLS halves %.2f / %.2f; per-view model %.2f / %.2f); "
                   "sigma_X / per-view [%.2f %.2f %.2f %.2f %.2f %.2f]; X - published in sigma: per-view [%.1f %.1f %.1f "
                   "%.1f %.1f %.1f], shared [%.1f %.1f %.1f %.1f %.1f %.1f]; X's step NEES %.2f; the per-view sigma_X "
                   "under the model / its own [%.2f %.2f %.2f %.2f %.2f %.2f]\n",
                   c.name, path.c_str(), fit.used.size(), fit.chosen ? 1 : 0, fit.bic_gain, fit.best.length_scale,
-                  fit.best.translation_sigma * 1e3, fit.best.rotation_sigma * 180.0 / M_PI, fit.best.view_noise_scale,
+                  fit.best.translation_sigma * 1e3, fit.best.rotation_sigma * 180.0 / M_PI, fit.best.view_noise_scale, fit.covariance_inflation,
                   shared.random_ratio, shared.runs_ratio, gls.random_ratio, gls.runs_ratio, per_view.random_ratio,
                   per_view.runs_ratio, s1(0) / s0(0),
                   s1(1) / s0(1), s1(2) / s0(2), s1(3) / s0(3), s1(4) / s0(4), s1(5) / s0(5), e0(0) / s0(0), e0(1) / s0(1),

@@ -303,10 +303,6 @@ SplitCheck linear_split_check(const MatrixXd& C, const MatrixXd& W, const Matrix
   check.half_size = static_cast<int>(r.size() / 12);
   for (std::size_t s = 0; s < std::min(count, splits.size()); ++s) add_split(C, W, J, r, splits[s], check);
   summarise_splits(check);
-  if (check.splits > 0) {
-    check.mean_nees_translation /= check.splits;
-    check.mean_nees_rotation /= check.splits;
-  }
   return check;
 }
 

@@ -96,10 +96,6 @@ SplitCheck split_check(const SampleSet& samples, const SolveSamples& solve, int 
     check.mean_nees_rotation += d.tail<3>().dot(S.bottomRightCorner<3, 3>().ldlt().solve(d.tail<3>()));
   }
   summarise_splits(check);
-  if (check.splits > 0) {
-    check.mean_nees_translation /= check.splits;
-    check.mean_nees_rotation /= check.splits;
-  }
   return check;
 }
 
@@ -202,6 +198,8 @@ void summarise_splits(SplitCheck& check) {
   const std::size_t cut = sorted.size() / 20;
   check.trimmed_mean_nees = std::accumulate(sorted.begin() + static_cast<long>(cut), sorted.end() - static_cast<long>(cut), 0.0) /
                             static_cast<double>(sorted.size() - 2 * cut);
+  check.mean_nees_translation /= check.splits;
+  check.mean_nees_rotation /= check.splits;
 }
 
 HonestyCheck judge_look(const SplitCheck& observed, const std::vector<SplitCheck>& replicates, int failed, int replicate_splits) {

@@ -402,10 +402,8 @@ HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, 
     // The model in use judges itself (its GLS halves, its bootstrap), linearised where
     // it was fitted: at the per-view X and Y, on these kept samples.
     const Calibration::SharedError& e = *calibration.shared_robot_error;
-    Calibration per_view = calibration;
-    per_view.T_parent_camera = e.per_view_T_parent_camera;
-    per_view.pattern->pose = e.per_view_pattern_pose;
-    per_view.rejected.clear();
+    Calibration per_view = per_view_calibration(calibration);
+    per_view.rejected.clear();  // the snapshot holds the kept samples
     SharedRobotError model;
     model.length_scale = e.length_scale;
     model.view_noise_scale = e.view_noise_scale;

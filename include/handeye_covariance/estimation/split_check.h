@@ -180,7 +180,8 @@ int runs_length_for(const HonestyOptions& options, int n, std::string* why_not =
 HonestyCheck honesty_check(const SampleSet& samples, const Calibration& fitted, const SolveSamples& solve,
                            const HonestyOptions& options = {});
 
-/// A SplitCheck's splits, mean and trimmed mean from its `nees`.
+/// A SplitCheck's splits, mean and trimmed mean from its `nees`; its 3-dof blocks'
+/// sums (mean_nees_translation, mean_nees_rotation) become their means.
 void summarise_splits(SplitCheck& check);
 /// One look judged: the session's split check `observed` against `replicates`, the
 /// simulated sessions' checks, each by the session's first `replicate_splits`
