@@ -465,7 +465,7 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       EXPECT_TRUE(fit.chosen) << c.name << ", " << path << ": BIC gain " << fit.bic_gain;
       HonestyOptions options;
       options.run_length = 3, options.replicates = 40;
-      const HonestyCheck shared = check_shared_robot_error(decided, cal, fit.best, options);
+      const HonestyCheck shared = check_shared_robot_error(decided, cal, fit.best, options, SharedErrorEstimator::PerView);
       const HonestyCheck gls = check_shared_robot_error(decided, cal, fit.best, options, SharedErrorEstimator::Gls);
       const HonestyCheck per_view = check_shared_robot_error(decided, cal, fit.per_view, options);
       // The model in use (its GLS halves): random halves within [0.8, 1.25] of its

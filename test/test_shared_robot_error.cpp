@@ -193,6 +193,9 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   EXPECT_NEAR(report.honesty.random_ratio, c.honesty->random_ratio, 1e-9);
   EXPECT_NEAR(report.honesty.runs_ratio, c.honesty->runs_ratio, 1e-9);
   EXPECT_EQ(report.honesty.observed.differences.size(), static_cast<std::size_t>(report.honesty.observed.splits));
+  ASSERT_TRUE(report.calibration.shared_robot_error);  // the per-view model checked beside it, as calibrate_checked does
+  EXPECT_EQ(report.calibration.shared_robot_error->per_view_honesty, c.shared_robot_error->per_view_honesty);
+  EXPECT_EQ(report.calibration.shared_robot_error->per_view_inflation, c.shared_robot_error->per_view_inflation);
   // The summary says so.
   const std::string summary = io::human_summary(c, io::context_of(s.samples));
   EXPECT_NE(summary.find("shared robot error    used:"), std::string::npos) << summary;
@@ -208,7 +211,16 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   const std::string file = io::format_result(c, io::context_of(s.samples));
   const Calibration read = io::calibration_of(io::parse_result(file, "calibration.yaml"));
   ASSERT_TRUE(read.shared_robot_error);
-  EXPECT_TRUE(read.shared_robot_error->used);
+  const Calibration::SharedError& back = *read.shared_robot_error;
+  EXPECT_TRUE(back.used && back.chosen);
+  EXPECT_NEAR(back.bic_gain, c.shared_robot_error->bic_gain, 1e-6 * std::abs(c.shared_robot_error->bic_gain));
+  EXPECT_NEAR(back.length_scale, c.shared_robot_error->length_scale, 1e-9);
+  EXPECT_NEAR(back.translation_sigma, c.shared_robot_error->translation_sigma, 1e-9);
+  EXPECT_NEAR(back.covariance_inflation, c.shared_robot_error->covariance_inflation, 1e-6);
+  EXPECT_TRUE(back.T_parent_camera.isApprox(c.T_parent_camera, 1e-6));
+  EXPECT_EQ(back.per_view_honesty, c.shared_robot_error->per_view_honesty);
+  EXPECT_NEAR(back.per_view_inflation, c.shared_robot_error->per_view_inflation, 1e-9);
+  EXPECT_EQ(per_view_calibration(read).honesty->text, c.shared_robot_error->per_view_honesty);
   const Calibration read_basis = per_view_calibration(read);
   EXPECT_TRUE(read_basis.T_parent_camera.isApprox(per_view.T_parent_camera, 1e-6));
   EXPECT_TRUE(read_basis.pattern->pose.isApprox(per_view.pattern->pose, 1e-6));
@@ -239,9 +251,10 @@ TEST(SharedRobotError, AShortSessionKeepsThePerViewModel) {
   }
 }
 
-// The session's advice (CalibrationSession::shared_error_advice, calibrate_checked):
-// fitted from 16 to 40 kept samples of a least-squares joint fit, otherwise a note of
-// why not; off when the settings say so. X stays the calibration's either way.
+// The session's model as advice (shared_robot_error: advice; CalibrationSession::
+// shared_error_fit, calibrate_checked): fitted from 16 to 40 kept samples of a
+// least-squares joint fit, otherwise a note of why not; off when the settings say so.
+// X stays the per-view calibration's either way.
 TEST(SharedRobotError, TheSessionsAdviceSaysWhyItWasNotFitted) {
   auto advice = [](int n, JointOptions::Robust robust, bool on) {
     const Session s = simulate(n, 31, true);

@@ -3,9 +3,10 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
-#include <numeric>
+#include <random>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
@@ -226,7 +227,9 @@ MatrixXd kenward_roger(const Parts& P, const Theta& theta, const MatrixXd& J, co
   for (int x = 0; x < m; ++x) {
     for (int y = 0; y < m; ++y) I(x, y) = at.information(active[static_cast<std::size_t>(x)], active[static_cast<std::size_t>(y)]);
   }
-  const MatrixXd W = I.inverse();
+  const Eigen::LDLT<MatrixXd> information(I);
+  if (information.info() != Eigen::Success || !information.isPositive() || information.rcond() < 1e-12) return Phi;
+  const MatrixXd W = information.solve(MatrixXd::Identity(m, m));
   std::vector<MatrixXd> U, CiU, Pk;  // U_k = C_k C^-1 J
   for (int k : active) {
     U.push_back(P.part[static_cast<std::size_t>(k)] * CiJ);
@@ -389,17 +392,23 @@ Calibration per_view_calibration(const Calibration& calibration) {
   c.pattern->covariance = e.per_view_pattern_covariance;
   c.cross_covariance = e.per_view_cross_covariance;
   c.covariance_kind = "information";
+  c.covariance_inflation = e.per_view_covariance_inflation;
+  c.pattern_covariance_inflation = e.per_view_pattern_covariance_inflation;
+  if (!e.per_view_noise_model.empty()) c.noise_model = e.per_view_noise_model;
+  c.warnings.clear();  // the model's (its check's inflation among them)
   c.shared_robot_error->used = false;
-  // Its own honesty check's inflation, as record_honesty applies it.
+  // Its own honesty check: the verdict it gave and its inflation, as record_honesty applies it.
+  Calibration::Honesty h;
+  h.inflation = e.per_view_inflation;
+  h.model_pose_covariance = e.per_view_pose_covariance;
+  h.verdict = e.per_view_honesty.empty() ? "not run" : e.per_view_inflation > 1.0 ? "overconfident" : "honest";
+  h.text = e.per_view_honesty.empty() ? "the per-view model was not checked" : e.per_view_honesty;
+  c.honesty = h;
   if (e.per_view_inflation > 1.0) {
     const double k = e.per_view_inflation;
     c.pose_covariance *= k, c.translation_covariance *= k, c.rotation_covariance *= k;
     c.pattern->covariance *= k, c.cross_covariance *= k;
   }
-  Calibration::Honesty h = c.honesty ? *c.honesty : Calibration::Honesty{};
-  h.inflation = e.per_view_inflation;
-  h.model_pose_covariance = e.per_view_pose_covariance;
-  c.honesty = h;
   return c;
 }
 
@@ -411,7 +420,6 @@ Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   r.translation_sigma = fit.best.translation_sigma;
   r.rotation_sigma = fit.best.rotation_sigma;
   r.view_noise_scale = fit.best.view_noise_scale;
-  r.covariance_inflation = fit.covariance_inflation;
   r.covariance_inflation = fit.covariance_inflation;
   r.T_parent_camera = fit.T_parent_camera;
   r.pose_covariance = fit.pose_covariance;

@@ -291,7 +291,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     }
     out << YAML::EndMap;
   }
-  if (const auto& e = calibration.shared_robot_error) {  // advice: a robot error shared by nearby poses
+  if (const auto& e = calibration.shared_robot_error) {  // a robot error shared by nearby poses, used or said
     out << YAML::Key << "shared_robot_error" << YAML::Value << YAML::BeginMap;
     if (!e->not_fitted.empty()) {
       out << YAML::Key << "not_fitted" << YAML::Value << e->not_fitted;
@@ -306,28 +306,22 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       out << YAML::Key << "view_noise_scale" << YAML::Value << e->view_noise_scale;
       out << YAML::Key << "step_nees" << YAML::Value << e->step_nees;
       out << YAML::Key << "covariance_inflation" << YAML::Value << e->covariance_inflation;
-      out << YAML::Key << "X" << YAML::Value << YAML::BeginMap;
-      emit_pose(out, e->T_parent_camera);
-      out << YAML::Key << "covariance" << YAML::Value;
-      const auto shared = to_row_major_6x6(e->pose_covariance);
-      emit_numbers(out, shared.data(), shared.size());
-      out << YAML::EndMap;
+      // A pose and its covariance (36 numbers, ROS order, row-major) under `key`.
+      const auto pose_block = [&out](const char* key, const Eigen::Isometry3d& pose, const Matrix6d& covariance) {
+        out << YAML::Key << key << YAML::Value << YAML::BeginMap;
+        emit_pose(out, pose);
+        out << YAML::Key << "covariance" << YAML::Value;
+        const auto numbers = to_row_major_6x6(covariance);
+        emit_numbers(out, numbers.data(), numbers.size());
+        out << YAML::EndMap;
+      };
+      pose_block("X", e->T_parent_camera, e->pose_covariance);
       out << YAML::Key << "per_view_covariance_under_it" << YAML::Value;
       const auto per_view = to_row_major_6x6(e->per_view_estimate_covariance);
       emit_numbers(out, per_view.data(), per_view.size());
-      if (e->used) {  // the per-view model's X and its own covariance, which the model's replaced
-        out << YAML::Key << "per_view_X" << YAML::Value << YAML::BeginMap;
-        emit_pose(out, e->per_view_T_parent_camera);
-        out << YAML::Key << "covariance" << YAML::Value;
-        const auto own = to_row_major_6x6(e->per_view_pose_covariance);
-        emit_numbers(out, own.data(), own.size());
-        out << YAML::EndMap;
-        out << YAML::Key << "per_view_pattern" << YAML::Value << YAML::BeginMap;
-        emit_pose(out, e->per_view_pattern_pose);
-        out << YAML::Key << "covariance" << YAML::Value;
-        const auto pattern = to_row_major_6x6(e->per_view_pattern_covariance);
-        emit_numbers(out, pattern.data(), pattern.size());
-        out << YAML::EndMap;
+      if (e->used) {  // the per-view model's X and Y with their own covariances, which the model's replaced
+        pose_block("per_view_X", e->per_view_T_parent_camera, e->per_view_pose_covariance);
+        pose_block("per_view_pattern", e->per_view_pattern_pose, e->per_view_pattern_covariance);
         out << YAML::Key << "per_view_cross_covariance" << YAML::Value;
         const auto cross = to_row_major_6x6(e->per_view_cross_covariance);
         emit_numbers(out, cross.data(), cross.size());
@@ -552,30 +546,57 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
     }
     file.prediction = p;
   }
-  // A calibration that uses the shared robot error's model: the per-view X, Y and
-  // their covariances kept beside it, which a check predicts new views with.
-  if (const YAML::Node shared = root["shared_robot_error"];
-      shared && shared.IsMap() && shared["used"] && as_bool(shared["used"], top / "shared_robot_error" / "used")) {
+  // The shared robot error's block (format_result writes it): its numbers, X under
+  // it, and where the calibration uses it, the per-view X, Y and covariances kept
+  // beside it, which a check predicts new views with.
+  if (const YAML::Node shared = root["shared_robot_error"]; shared && shared.IsMap()) {
     const Location at = top / "shared_robot_error";
-    const std::string shared_hint = "a used shared_robot_error block has per_view_X, per_view_pattern and per_view_cross_covariance";
-    Calibration::SharedError e;
-    e.used = e.chosen = true;
-    const YAML::Node x = require(shared, "per_view_X", at, shared_hint), y = require(shared, "per_view_pattern", at, shared_hint);
-    e.per_view_T_parent_camera = read_pose(x, at / "per_view_X");
-    const auto matrix = [&](const YAML::Node& node, const Location& where) {
+    const std::string shared_hint =
+        "the block /calibrate and `handeye solve` write: not_fitted, or chosen, used, bic_gain, ...; a used one has "
+        "per_view_X, per_view_pattern and per_view_cross_covariance";
+    const auto number = [&](const char* key) {
+      return as_finite(require(shared, key, at, shared_hint), at / key, std::string("NaN in ") + key, shared_hint);
+    };
+    const auto covariance = [&](const YAML::Node& node, const Location& where) {
       const Matrix6d m = from_row_major_6x6(as_numbers<36>(node, where, "6x6 covariance, ROS order"));
       check_covariance(m, where.str());
       return m;
     };
-    e.per_view_pose_covariance = matrix(require(x, "covariance", at / "per_view_X", shared_hint), at / "per_view_X" / "covariance");
-    e.per_view_pattern_pose = read_pose(y, at / "per_view_pattern");
-    e.per_view_pattern_covariance =
-        matrix(require(y, "covariance", at / "per_view_pattern", shared_hint), at / "per_view_pattern" / "covariance");
-    e.per_view_cross_covariance = from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance", at, shared_hint),
-                                                                    at / "per_view_cross_covariance", "6x6 Cov(X, Y)"));
-    if (shared["per_view_inflation"]) {
-      e.per_view_inflation = as_finite(shared["per_view_inflation"], at / "per_view_inflation", "NaN in the inflation",
-                                       "the per-view model's inflation is a number >= 1");
+    const auto pose_block = [&](const char* key, Eigen::Isometry3d& pose, Matrix6d& cov) {
+      const YAML::Node node = require(shared, key, at, shared_hint);
+      pose = read_pose(node, at / key);
+      cov = covariance(require(node, "covariance", at / key, shared_hint), at / key / "covariance");
+    };
+    Calibration::SharedError e;
+    if (shared["not_fitted"]) {
+      e.not_fitted = as_text(shared["not_fitted"], at / "not_fitted");
+    } else {
+      e.chosen = as_bool(require(shared, "chosen", at, shared_hint), at / "chosen");
+      e.used = shared["used"] && as_bool(shared["used"], at / "used");
+      e.bic_gain = number("bic_gain");
+    }
+    if (e.not_fitted.empty() && e.chosen) {
+      e.length_scale = number("length_scale");
+      e.translation_sigma = number("translation_sigma");
+      e.rotation_sigma = number("rotation_sigma");
+      e.view_noise_scale = number("view_noise_scale");
+      e.step_nees = number("step_nees");
+      e.covariance_inflation = number("covariance_inflation");
+      pose_block("X", e.T_parent_camera, e.pose_covariance);
+      e.per_view_estimate_covariance =
+          covariance(require(shared, "per_view_covariance_under_it", at, shared_hint), at / "per_view_covariance_under_it");
+    }
+    if (e.used) {
+      pose_block("per_view_X", e.per_view_T_parent_camera, e.per_view_pose_covariance);
+      pose_block("per_view_pattern", e.per_view_pattern_pose, e.per_view_pattern_covariance);
+      e.per_view_cross_covariance = from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance", at, shared_hint),
+                                                                      at / "per_view_cross_covariance", "6x6 Cov(X, Y)"));
+      e.per_view_honesty = as_text(require(shared, "per_view_honesty", at, shared_hint), at / "per_view_honesty");
+      e.per_view_inflation = number("per_view_inflation");
+      if (e.per_view_inflation < 1.0) {
+        throw HandEyeError(ErrorCode::MalformedFile, "the per-view model's inflation must be >= 1, got " + number_text(e.per_view_inflation),
+                           (at / "per_view_inflation").str(), "write the factor its honesty check gave (1: none)");
+      }
     }
     file.shared_robot_error = e;
   }

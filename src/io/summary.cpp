@@ -219,9 +219,7 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
                 e.covariance_inflation, -step(0) * 1e3, -step(1) * 1e3, -step(2) * 1e3, -degrees(step(3)),
                 -degrees(step(4)), -degrees(step(5)), e.step_nees);
     if (ratio > 1.0) {
-      out += line("                        and the per-view model's sigma_X is up to %.1fx too small under it "
-                  "(shared_robot_error: advice keeps that model)",
-                  ratio);
+      out += line("                        under it the per-view model's sigma_X is up to %.1fx too small", ratio);
     }
     if (!e.per_view_honesty.empty()) {
       out += "                        the per-view model's own honesty check: " + e.per_view_honesty +
@@ -252,9 +250,13 @@ std::string report_summary(const CalibrationReport& report) {
   };
   std::string out = "  1 sigma of X          x [mm]  y [mm]  z [mm]   rx [deg] ry [deg] rz [deg]\n";
   out += row("predicted", report.predicted_sigma, "");
+  // Where X is the shared robot error's GLS estimate, the leave-one-out solves are the
+  // per-view estimator's: their spread cannot see an error the samples share.
+  const bool shared = report.calibration.shared_robot_error && report.calibration.shared_robot_error->used;
   out += row("leave-one-out", report.leave_one_out_sigma,
              "   (" + std::to_string(report.leave_one_out_solved) + " solves" +
-                 (report.leave_one_out_failed ? ", " + std::to_string(report.leave_one_out_failed) + " failed" : "") + ")");
+                 (report.leave_one_out_failed ? ", " + std::to_string(report.leave_one_out_failed) + " failed" : "") +
+                 (shared ? "; the per-view estimator's" : "") + ")");
   if (report.honesty.observed.splits > 0) {
     const HonestyCheck& h = report.honesty;
     out += row("split-half", report.split_half_sigma,

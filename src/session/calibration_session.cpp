@@ -310,6 +310,9 @@ void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
   record.per_view_pattern_pose = c.pattern->pose;
   record.per_view_pattern_covariance = c.pattern->covariance;
   record.per_view_cross_covariance = c.cross_covariance;
+  record.per_view_covariance_inflation = c.covariance_inflation;
+  record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
+  record.per_view_noise_model = c.noise_model;
   c.T_parent_camera = fit.T_parent_camera;
   c.pose_covariance = fit.pose_covariance;
   c.translation_covariance = fit.pose_covariance.topLeftCorner<3, 3>();
@@ -370,24 +373,35 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
     not_run("it needs 8 kept samples (two halves of 4), there are " + std::to_string(kept.samples.samples.size()));
     return c;
   }
-  // The per-view model's reference simulates from the kept samples' own fit (without the rejected).
-  const auto per_view_fit = [&](const Calibration& per_view) {
-    return per_view.rejected.empty() ? per_view : calibrate_decided(kept);
-  };
   if (c.shared_robot_error && c.shared_robot_error->used) {
-    // The per-view model is checked too: the check of a saved calibration predicts new
-    // views with it (per_view_calibration), inflated as its own check says.
-    Calibration::SharedError& e = *c.shared_robot_error;
-    Calibration per_view = per_view_calibration(c);
-    per_view.honesty.reset();
-    const HonestyCheck own = honesty_check(kept, per_view_fit(per_view), settings_.honesty);
-    e.per_view_inflation = settings_.inflate_when_overconfident && own.verdict == Honesty::Overconfident ? own.inflation : 1.0;
-    e.per_view_honesty = own.ran() ? own.text : "not run: " + own.text;
-    record_honesty(c, honesty_check(kept, c, settings_.honesty), settings_.inflate_when_overconfident);
+    check_per_view(kept, c, settings_.honesty);
+    try {  // the model in use judges itself
+      record_honesty(c, honesty_check(kept, c, settings_.honesty), settings_.inflate_when_overconfident);
+    } catch (const HandEyeError& e) {  // the calibration stands; the record says why there is no verdict
+      not_run(std::string("the shared robot error's check was refused: ") + e.what());
+    }
     return c;
   }
-  record_honesty(c, honesty_check(kept, per_view_fit(c), settings_.honesty), settings_.inflate_when_overconfident);
+  // The reference simulates from the kept samples' own fit (without the rejected).
+  const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
+  record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
   return c;
+}
+
+void CalibrationSession::check_per_view(const SessionSnapshot& kept, Calibration& c, const HonestyOptions& options) const {
+  if (!c.shared_robot_error || !c.shared_robot_error->used) return;
+  Calibration::SharedError& e = *c.shared_robot_error;
+  Calibration per_view = per_view_calibration(c);
+  per_view.honesty.reset();
+  try {
+    // Its reference simulates from the kept samples' own fit (without the rejected).
+    const HonestyCheck own = honesty_check(kept, per_view.rejected.empty() ? per_view : calibrate_decided(kept), options);
+    e.per_view_inflation = settings_.inflate_when_overconfident && own.verdict == Honesty::Overconfident ? own.inflation : 1.0;
+    e.per_view_honesty = own.ran() ? own.text : "not run: " + own.text;
+  } catch (const HandEyeError& error) {
+    e.per_view_inflation = 1.0;
+    e.per_view_honesty = std::string("not run: ") + error.what();
+  }
 }
 
 SplitCheck CalibrationSession::split_check(const SessionSnapshot& snapshot, int splits, unsigned seed) const {

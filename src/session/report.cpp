@@ -75,9 +75,12 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& kept, 
     return;
   }
   // The calibration records the verdict unless its /calibrate ran the check already
-  // (the same seed and splits: the same figures).
+  // (the same seed and splits: the same figures), and, where it uses the shared robot
+  // error's model, the per-view model's own check beside it (a check of new views
+  // predicts with that one).
   if (!r.calibration.honesty || r.calibration.honesty->verdict == "not run") {
     record_honesty(r.calibration, r.honesty, session.settings().inflate_when_overconfident);
+    session.check_per_view(kept, r.calibration, honesty);
   }
   if (r.honesty.observed.splits == 0) r.split_problem = "no split could be solved: " + r.honesty.observed.first_failure;
 }

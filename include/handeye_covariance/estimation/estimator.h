@@ -239,6 +239,10 @@ struct Calibration {
     /// The check of a saved calibration predicts with the per-view model times it.
     double per_view_inflation = 1.0;
     std::string per_view_honesty;
+    /// The per-view fit's own factors for its noise estimate's error and its noise
+    /// model's text, which the model's replaced in the calibration.
+    double per_view_covariance_inflation = 1.0, per_view_pattern_covariance_inflation = 1.0;
+    std::string per_view_noise_model;
     double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
     double length_scale = 0.0;        // m, over the effector positions
     double translation_sigma = 0.0;   // m, per axis, base frame

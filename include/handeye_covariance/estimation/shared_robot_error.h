@@ -39,7 +39,6 @@
 // split the same way.
 #pragma once
 
-#include <random>
 #include <string>
 #include <vector>
 
@@ -144,6 +143,6 @@ enum class SharedErrorEstimator { PerView, Gls };
 /// splits or replicate_splits below 1 or replicates below 2.
 HonestyCheck check_shared_robot_error(const SampleSet& samples, const Calibration& calibration, const SharedRobotError& model,
                                       const HonestyOptions& options = {},
-                                      SharedErrorEstimator estimator = SharedErrorEstimator::PerView);
+                                      SharedErrorEstimator estimator = SharedErrorEstimator::Gls);
 
 }  // namespace handeye

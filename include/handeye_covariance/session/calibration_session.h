@@ -193,6 +193,11 @@ class CalibrationSession {
   /// pose-level method; otherwise the record says why it did not run. Seconds of
   /// work for 30 samples: the node runs it on its worker. Throws HandEyeError.
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
+  /// Where `calibration` uses the shared robot error's model: the per-view model's own
+  /// honesty check on `kept` (its kept samples), recorded as per_view_inflation and
+  /// per_view_honesty (the check of a saved calibration predicts with that model,
+  /// per_view_calibration). Never throws: a refused check is recorded as not run.
+  void check_per_view(const SessionSnapshot& kept, Calibration& calibration, const HonestyOptions& options) const;
   /// The shared robot error about `calibration` of `snapshot` (calibrate()): the fit,
   /// or none with why in `not_fitted` (too few or too many kept samples, robust mode,
   /// another method, the fit refused).
