@@ -581,7 +581,7 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
           continue;  // a part the estimator refuses (too few turns) is no calibration to check
         }
         if (inflation > 1.0) {
-          cal.pose_covariance *= inflation, cal.cross_covariance *= inflation, cal.pattern->covariance *= inflation;
+          scale_covariances(cal, inflation);
           cal.honesty = Calibration::Honesty{};
           cal.honesty->inflation = inflation;
         }

@@ -941,9 +941,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   c = pose_level;
   c.method = Method::Corners;
   c.T_parent_camera = f.X;
-  c.pose_covariance = f.covariance.topLeftCorner<6, 6>();
-  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
-  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  set_pose_covariance(c, f.covariance.topLeftCorner<6, 6>());
   c.pattern = PoseWithCovariance{f.Y, f.covariance.bottomRightCorner<6, 6>()};
   c.cross_covariance = f.covariance.topRightCorner<6, 6>();
   c.samples_used = static_cast<int>(views.size());

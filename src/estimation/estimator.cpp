@@ -870,11 +870,9 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
   result.T_parent_camera = se3::make_pose(s.R, s.translation.state.t);
   result.rotation_stage = s.rotation_stage;
   result.translation_stage = s.translation.diagnostics;
-  result.pose_covariance = pose_covariance(problem, scale, s.R, s.translation, s.gains);
-  result.translation_covariance = result.pose_covariance.topLeftCorner<3, 3>();
+  set_pose_covariance(result, pose_covariance(problem, scale, s.R, s.translation, s.gains));
   result.per_pair_covariance.rotation = s.per_pair_rotation_covariance;
   result.per_pair_covariance.translation = s.translation.linearization.information.inverse();
-  result.rotation_covariance = result.pose_covariance.bottomRightCorner<3, 3>();
   const auto [expected_rotation, expected_translation] = expected_chi2(s, result.pose_covariance);
   result.rotation_stage.dof = static_cast<int>(std::lround(expected_rotation));
   result.translation_stage.dof = static_cast<int>(std::lround(expected_translation));
@@ -903,6 +901,20 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
 }
 
 }  // namespace
+
+void set_pose_covariance(Calibration& c, const Matrix6d& covariance) {
+  c.pose_covariance = covariance;
+  c.translation_covariance = covariance.topLeftCorner<3, 3>();
+  c.rotation_covariance = covariance.bottomRightCorner<3, 3>();
+}
+
+void scale_covariances(Calibration& c, double k) {
+  c.pose_covariance *= k;
+  c.rotation_covariance *= k;
+  c.translation_covariance *= k;
+  c.cross_covariance *= k;
+  if (c.pattern) c.pattern->covariance *= k;
+}
 
 Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration) {
   Eigen::Matrix<double, 12, 12> sigma = Eigen::Matrix<double, 12, 12>::Zero();

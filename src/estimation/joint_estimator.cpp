@@ -1589,9 +1589,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   }
   const Matrix12d symmetric = 0.5 * (covariance + covariance.transpose());
   result.T_parent_camera = s.X;
-  result.pose_covariance = symmetric.topLeftCorner<6, 6>();
-  result.translation_covariance = result.pose_covariance.topLeftCorner<3, 3>();
-  result.rotation_covariance = result.pose_covariance.bottomRightCorner<3, 3>();
+  set_pose_covariance(result, symmetric.topLeftCorner<6, 6>());
   result.pattern = PoseWithCovariance{s.Y, symmetric.bottomRightCorner<6, 6>()};
   result.cross_covariance = symmetric.topRightCorner<6, 6>();
   result.rotation_stage = result.translation_stage = s.diagnostics;

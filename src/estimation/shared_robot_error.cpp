@@ -73,7 +73,7 @@ Linearised linearise(const SampleSet& samples, const Calibration& calibration, s
 /// kernel's translation and rotation parts, k(p_i, p_j) D_i E D_j^T.
 struct Parts {
   std::array<MatrixXd, kComponents> part;
-  std::vector<int> present;  // the components C has: the view part, and the kernel's when there is one
+  int components = 1;  // C's: the view part alone (1), or with the kernel's two (3)
   const MatrixXd& view() const { return part[0]; }
 };
 
@@ -82,7 +82,6 @@ Parts make_parts(const Linearised& L, double length_scale) {
   const int m = 6 * L.n;
   P.part[0] = MatrixXd::Zero(m, m);
   for (int i = 0; i < L.n; ++i) P.part[0].block<6, 6>(6 * i, 6 * i) = L.S[static_cast<std::size_t>(i)];
-  P.present.push_back(0);
   if (length_scale <= 0.0) return P;
   P.part[1] = MatrixXd::Zero(m, m);
   P.part[2] = MatrixXd::Zero(m, m);
@@ -96,13 +95,13 @@ Parts make_parts(const Linearised& L, double length_scale) {
       P.part[2].block<6, 6>(6 * i, 6 * j) = k * Di.rightCols<3>() * Dj.rightCols<3>().transpose();
     }
   }
-  P.present.push_back(1), P.present.push_back(2);
+  P.components = 3;
   return P;
 }
 
 MatrixXd combine(const Parts& P, const Theta& theta) {
   MatrixXd C = MatrixXd::Zero(P.part[0].rows(), P.part[0].cols());
-  for (int c : P.present) C += theta(c) * P.part[static_cast<std::size_t>(c)];
+  for (int c = 0; c < P.components; ++c) C += theta(c) * P.part[static_cast<std::size_t>(c)];
   return C;
 }
 
@@ -130,13 +129,13 @@ Reml evaluate(const Parts& P, const Theta& theta, const MatrixXd& J, const Vecto
   const double log_det_A = 2.0 * lla.matrixLLT().diagonal().array().log().sum();
   out.log_likelihood = -0.5 * (log_det_C + log_det_A + r.dot(Pr));
   std::array<MatrixXd, kComponents> PC;
-  for (int a : P.present) {
+  for (int a = 0; a < P.components; ++a) {
     const MatrixXd& Ca = P.part[static_cast<std::size_t>(a)];
     PC[static_cast<std::size_t>(a)] = Pm * Ca;
     out.score(a) = 0.5 * (Pr.dot(Ca * Pr) - PC[static_cast<std::size_t>(a)].trace());
   }
-  for (int a : P.present) {
-    for (int b : P.present) {
+  for (int a = 0; a < P.components; ++a) {
+    for (int b = 0; b < P.components; ++b) {
       // tr(P C_a P C_b) = sum_ij (P C_a)_ij (P C_b)_ji
       out.information(a, b) = 0.5 * PC[static_cast<std::size_t>(a)].cwiseProduct(PC[static_cast<std::size_t>(b)].transpose()).sum();
     }
@@ -147,24 +146,19 @@ Reml evaluate(const Parts& P, const Theta& theta, const MatrixXd& J, const Vecto
 
 /// Fisher scoring from `theta` within theta >= 0 (the view scale >= 1e-6): a
 /// component at its bound whose score points out of the region stays there; a step
-/// is halved until the likelihood does not fall. Only P's present components move.
+/// is halved until the likelihood does not fall. Only P's components move.
 Theta fit_theta(const Parts& P, Theta theta, const MatrixXd& J, const VectorXd& r, int max_iterations, double* log_likelihood) {
-  const int k = static_cast<int>(P.present.size());
+  const int k = P.components;
   Reml at = evaluate(P, theta, J, r);
   if (!at.ok) {
     *log_likelihood = -std::numeric_limits<double>::infinity();
     return theta;
   }
   for (int it = 0; it < max_iterations; ++it) {
-    Eigen::MatrixXd F(k, k);
-    Eigen::VectorXd g(k);
+    Eigen::MatrixXd F = at.information.topLeftCorner(k, k);
+    Eigen::VectorXd g = at.score.head(k);
     for (int x = 0; x < k; ++x) {
-      g(x) = at.score(P.present[static_cast<std::size_t>(x)]);
-      for (int y = 0; y < k; ++y) F(x, y) = at.information(P.present[static_cast<std::size_t>(x)], P.present[static_cast<std::size_t>(y)]);
-    }
-    for (int x = 0; x < k; ++x) {
-      const int a = P.present[static_cast<std::size_t>(x)];
-      if (theta(a) <= kFloor[a] && g(x) < 0.0) {  // held at its bound
+      if (theta(x) <= kFloor[x] && g(x) < 0.0) {  // held at its bound
         g(x) = 0.0;
         F.row(x).setZero(), F.col(x).setZero(), F(x, x) = 1.0;
       }
@@ -174,10 +168,7 @@ Theta fit_theta(const Parts& P, Theta theta, const MatrixXd& J, const VectorXd& 
     bool moved = false;
     for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
       Theta candidate = theta;
-      for (int x = 0; x < k; ++x) {
-        const int a = P.present[static_cast<std::size_t>(x)];
-        candidate(a) = std::max(kFloor[a], theta(a) + t * step(x));
-      }
+      for (int x = 0; x < k; ++x) candidate(x) = std::max(kFloor[x], theta(x) + t * step(x));
       const Reml next = evaluate(P, candidate, J, r);
       if (next.ok && next.log_likelihood >= at.log_likelihood - 1e-9) {
         const double gain = next.log_likelihood - at.log_likelihood;
@@ -218,7 +209,7 @@ MatrixXd kenward_roger(const Parts& P, const Theta& theta, const MatrixXd& J, co
   const Reml at = evaluate(P, theta, J, r);
   if (!at.ok) return Phi;
   std::vector<int> active;
-  for (int k : P.present) {
+  for (int k = 0; k < P.components; ++k) {
     if (theta(k) > kFloor[k]) active.push_back(k);
   }
   if (active.empty()) return Phi;
@@ -341,7 +332,8 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   fit.bic_gain = 2.0 * (fit.best.log_likelihood - fit.per_view.log_likelihood) - 4.0 * std::log(6.0 * L.n - 12.0);
   fit.chosen = fit.best.length_scale > 0.0 && fit.bic_gain > 0.0;
   const SharedRobotError& model = fit.chosen ? fit.best : fit.per_view;
-  const MatrixXd C = combine(make_parts(L, model.length_scale), theta_of(model));
+  const Parts model_parts = make_parts(L, model.length_scale);
+  const MatrixXd C = combine(model_parts, theta_of(model));
   const Eigen::LLT<MatrixXd> llt(C);
   const MatrixXd CiJ = llt.solve(L.J);
   const MatrixXd A = L.J.transpose() * CiJ;
@@ -349,7 +341,7 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   const Vector12d step = fit.chosen ? Vector12d(-information_inverse * (CiJ.transpose() * L.r)) : Vector12d::Zero();
   // (J^T C^-1 J)^-1 takes C as known; (s, a, b) were fitted from these residuals.
   const MatrixXd covariance =
-      fit.chosen ? kenward_roger(make_parts(L, model.length_scale), theta_of(model), L.J, L.r, llt, CiJ, information_inverse)
+      fit.chosen ? kenward_roger(model_parts, theta_of(model), L.J, L.r, llt, CiJ, information_inverse)
                  : information_inverse;
   if (fit.chosen) {  // their mean effect, tr(Phi^-1 Phi_A) / 6 on X's block and on Y's
     fit.covariance_inflation = information_inverse.topLeftCorner<6, 6>().ldlt().solve(covariance.topLeftCorner<6, 6>()).trace() / 6.0;
@@ -385,9 +377,7 @@ Calibration per_view_calibration(const Calibration& calibration) {
   const Calibration::SharedError& e = *calibration.shared_robot_error;
   Calibration c = calibration;
   c.T_parent_camera = e.per_view_T_parent_camera;
-  c.pose_covariance = e.per_view_pose_covariance;
-  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
-  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
+  set_pose_covariance(c, e.per_view_pose_covariance);
   c.pattern->pose = e.per_view_pattern_pose;
   c.pattern->covariance = e.per_view_pattern_covariance;
   c.cross_covariance = e.per_view_cross_covariance;
@@ -404,11 +394,7 @@ Calibration per_view_calibration(const Calibration& calibration) {
   h.verdict = e.per_view_honesty.empty() ? "not run" : e.per_view_inflation > 1.0 ? "overconfident" : "honest";
   h.text = e.per_view_honesty.empty() ? "the per-view model was not checked" : e.per_view_honesty;
   c.honesty = h;
-  if (e.per_view_inflation > 1.0) {
-    const double k = e.per_view_inflation;
-    c.pose_covariance *= k, c.translation_covariance *= k, c.rotation_covariance *= k;
-    c.pattern->covariance *= k, c.cross_covariance *= k;
-  }
+  if (e.per_view_inflation > 1.0) scale_covariances(c, e.per_view_inflation);
   return c;
 }
 

@@ -127,11 +127,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   if (inflate && check.verdict == Honesty::Overconfident && check.inflation > 1.0) {
     const double k = check.inflation;
     h.inflation = k;
-    c.pose_covariance *= k;
-    c.rotation_covariance *= k;
-    c.translation_covariance *= k;
-    c.cross_covariance *= k;
-    if (c.pattern) c.pattern->covariance *= k;
+    scale_covariances(c, k);
     c.warnings.insert(c.warnings.begin(),
                       "the split-half check says the noise model is " + check.text + "; the covariance is the model's x" +
                           number_text(k, 3) + " (the model's alone: --no-inflation)");

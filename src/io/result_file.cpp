@@ -618,9 +618,7 @@ Calibration calibration_of(const CalibrationFile& file) {
   Calibration c;
   c.method = Method::Joint;
   c.T_parent_camera = file.T_parent_camera.pose;
-  c.pose_covariance = file.T_parent_camera.covariance;
-  c.rotation_covariance = c.pose_covariance.bottomRightCorner<3, 3>();
-  c.translation_covariance = c.pose_covariance.topLeftCorner<3, 3>();
+  set_pose_covariance(c, file.T_parent_camera.covariance);
   c.pattern = file.pattern;
   c.cross_covariance = file.cross_covariance;
   c.residual_noise = file.residual_noise;

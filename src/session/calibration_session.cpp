@@ -314,9 +314,7 @@ void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
   record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
   record.per_view_noise_model = c.noise_model;
   c.T_parent_camera = fit.T_parent_camera;
-  c.pose_covariance = fit.pose_covariance;
-  c.translation_covariance = fit.pose_covariance.topLeftCorner<3, 3>();
-  c.rotation_covariance = fit.pose_covariance.bottomRightCorner<3, 3>();
+  set_pose_covariance(c, fit.pose_covariance);
   c.cross_covariance = fit.cross_covariance;
   c.pattern->pose = fit.pattern.pose;
   c.pattern->covariance = fit.pattern.covariance;

@@ -302,6 +302,10 @@ struct Calibration {
 /// The 12x12 covariance of (X, Y): X's, Y's and their cross block (Y's blocks zero when the
 /// calibration has no Y), symmetrised.
 Eigen::Matrix<double, 12, 12> joint_covariance(const Calibration& calibration);
+/// X's covariance (ROS order) and its translation and rotation blocks, set together.
+void set_pose_covariance(Calibration& calibration, const Matrix6d& covariance);
+/// X's, Y's and their cross covariance times k (an inflation), the 3x3 blocks with them.
+void scale_covariances(Calibration& calibration, double k);
 
 /// Park-Martin closed form (the paper's [3]): R from the polar decomposition of
 /// sum beta_i alpha_i^T, then t by linear least squares. Throws on < 2 motions.
