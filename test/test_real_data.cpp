@@ -534,13 +534,16 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
     for (const auto& [path, samples_on_path] : both_paths(c)) {
       const SampleSet* samples = &samples_on_path;
       double inflation = 1.0;
+      std::optional<SharedRobotError> shared;  // the whole session's, where it uses one
       {
         CalibrationSession whole(session_settings(*samples));
         whole.replace(samples->samples, c.name);
         const Calibration cal = whole.calibrate_checked(whole.snapshot());
         if (cal.honesty) inflation = cal.honesty->inflation;
-        // The check predicts with the per-view model where the shared one is used: its inflation.
-        if (cal.shared_robot_error && cal.shared_robot_error->used) inflation = cal.shared_robot_error->per_view_inflation;
+        if (cal.shared_robot_error && cal.shared_robot_error->used) {
+          const Calibration::SharedError& e = *cal.shared_robot_error;
+          shared = SharedRobotError{e.length_scale, e.view_noise_scale, e.translation_sigma, e.rotation_sigma, 0.0};
+        }
       }
       const int n = static_cast<int>(samples->samples.size());
       const int k = std::min(5, n / 3);
@@ -567,10 +570,9 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         }
         SessionSettings settings = session_settings(part);
         settings.honesty.splits = 0;  // the whole session's inflation stands in for it
-        // A part's shared robot error is not fitted: where the whole session uses it, the
-        // check predicts with the per-view calibration (per_view_calibration) and its
-        // inflation, which is this one (test_shared_robot_error checks that path); the
-        // fit would cost 200 x 0.2 s per session.
+        // Where the whole session uses the shared robot error, a part takes its model
+        // (length, s, a, b) as it takes its inflation: fitting it again would cost 200 x
+        // 0.2 s per session (test_shared_robot_error checks the fitted path).
         settings.shared_robot_error = SharedErrorUse::Off;
         CalibrationSession session(settings);
         session.replace(part.samples, c.name);
@@ -579,6 +581,13 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
           cal = session.calibrate_checked(session.snapshot());  // with its leave-one-out prediction
         } catch (const HandEyeError&) {
           continue;  // a part the estimator refuses (too few turns) is no calibration to check
+        }
+        if (shared) {
+          SharedRobotErrorOptions options;
+          options.model = shared;
+          const SharedRobotErrorFit fit = fit_shared_robot_error(part, cal, options);
+          cal.shared_robot_error = shared_error_record(fit);
+          use_shared_robot_error(cal, fit);
         }
         if (inflation > 1.0) {
           scale_covariances(cal, inflation);

@@ -171,6 +171,44 @@ class NullDistribution {
   std::vector<std::pair<Eigen::MatrixXd, double>> parts_;
 };
 
+/// The new views' residual covariance under the shared robot error, beside their own
+/// noise s S_i (shared_robot_error.h): about the per-view X and Y, whose error is
+/// -H0 eps over the old views' errors eps, a new view's residual is e_i - J_i H0 eps, so
+///   Cov = K_new + J P J^T - J M - (J M)^T,
+/// K_new the kernel among the new views, P = H0 C H0^T the per-view estimate's covariance
+/// under the model, and M's block i = H0 Cov(eps, e_i) = sum_j k(p_j, p_i) H0_j D_j E D_i^T
+/// (E = diag(a I3, b I3)): the old views near a new one share its robot error, which the
+/// per-view estimate took in. `D` each new view's D_i, `J` their stacked Jacobian.
+Eigen::MatrixXd shared_error_prediction(const Calibration::SharedError& shared, const SampleSet& views,
+                                        const std::vector<Matrix6d>& D, const Eigen::MatrixXd& J) {
+  const int k = static_cast<int>(D.size());
+  const double l = shared.length_scale;
+  const auto kernel = [l](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+    return std::exp(-(p - q).squaredNorm() / (2.0 * l * l));
+  };
+  Matrix6d E = Matrix6d::Zero();
+  E.topLeftCorner<3, 3>().diagonal().setConstant(shared.translation_sigma * shared.translation_sigma);
+  E.bottomRightCorner<3, 3>().diagonal().setConstant(shared.rotation_sigma * shared.rotation_sigma);
+  Matrix12d P;
+  P << shared.per_view_estimate_covariance, shared.per_view_estimate_cross_covariance,
+      shared.per_view_estimate_cross_covariance.transpose(), shared.per_view_estimate_pattern_covariance;
+  Eigen::MatrixXd C = J * P * J.transpose();
+  Eigen::MatrixXd M(12, 6 * k);
+  for (int i = 0; i < k; ++i) {
+    const Eigen::Vector3d p = views.samples[static_cast<std::size_t>(i)].T_base_effector.translation();
+    for (int m = 0; m < k; ++m) {
+      const Eigen::Vector3d q = views.samples[static_cast<std::size_t>(m)].T_base_effector.translation();
+      C.block<6, 6>(6 * i, 6 * m) += kernel(p, q) * D[static_cast<std::size_t>(i)] * E * D[static_cast<std::size_t>(m)].transpose();
+    }
+    Eigen::Matrix<double, 12, 6> G = Eigen::Matrix<double, 12, 6>::Zero();
+    for (const Calibration::SharedError::View& old : shared.views) G += kernel(old.position, p) * old.gain;
+    M.middleCols<6>(6 * i) = G * E * D[static_cast<std::size_t>(i)].transpose();
+  }
+  const Eigen::MatrixXd JM = J * M;
+  C -= JM + JM.transpose();
+  return C;
+}
+
 EstimatedChange::Delta delta_of(const Fit& fit, int offset) {
   EstimatedChange::Delta d;
   d.value = fit.value.segment<6>(offset);
@@ -241,7 +279,11 @@ std::optional<Calibration::Prediction> prediction_check(
 
 namespace {
 
-CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options) {
+/// `shared`: the robot error shared by nearby poses that the calibration uses
+/// (shared_robot_error.h), with the views it was fitted on, or null; `shared_inflation`
+/// its own honesty check's factor.
+CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options,
+                           const Calibration::SharedError* shared, double shared_inflation) {
   require_checkable(calibration);
   const int k = static_cast<int>(views.samples.size());
   if (k == 0) {
@@ -275,9 +317,10 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
       }
     }
   }
-  double inflation = calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
+  double inflation = shared ? std::max(1.0, shared_inflation)
+                            : calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
   const Matrix12d sigma = joint_covariance(calibration);
-  const std::vector<Matrix6d> noise = residual_covariances(decided, calibration);
+  std::vector<Matrix6d> noise = residual_covariances(decided, calibration);
   // The estimated noise parts: the views' noise is the known remainder plus each part
   // times its true-over-estimated ratio g ~ nu / chi2(nu), whose mean nu / (nu - 2) the
   // prediction takes (a variance estimated from few dof is more often too small than
@@ -293,7 +336,8 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   const auto expected_ratio = [](double dof) { return dof / (dof - 2.0); };
   std::vector<NoisePart> parts;
   double prediction_scale = 1.0;
-  const bool use_prediction = calibration.prediction && prediction_disagrees(*calibration.prediction);
+  // Under the shared robot error the leave-one-out scale (the per-view model's) does not apply.
+  const bool use_prediction = !shared && calibration.prediction && prediction_disagrees(*calibration.prediction);
   if (use_prediction) {
     prediction_scale = calibration.prediction->scale;
     inflation = 1.0;
@@ -301,20 +345,32 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
     parts = noise_parts(decided, calibration);
     for (NoisePart& part : parts) part.dof = std::max(part.dof, kMinimumDof);
   }
+  if (shared) {  // the per-view S_i times the model's s
+    for (Matrix6d& S : noise) S *= shared->view_noise_scale;
+    for (NoisePart& part : parts) {
+      for (Matrix6d& m : part.per_view) m *= shared->view_noise_scale;
+    }
+  }
 
   const int n = 6 * k;
   Eigen::VectorXd e(n);
   Eigen::MatrixXd J(n, 12), C = Eigen::MatrixXd::Zero(n, n);
+  std::vector<Matrix6d> D;  // each view's d residual / d robot error
   for (int i = 0; i < k; ++i) {
     const std::size_t v = static_cast<std::size_t>(i);
     const JointResidual r = joint_residual(views.rig, decided.samples[v], X, Y);
     e.segment<6>(6 * i) = r.error;
     J.middleRows<6>(6 * i) = r.jacobian;
+    D.push_back(r.d_effector);
     Matrix6d S = noise[v];
     for (const NoisePart& part : parts) S += (expected_ratio(part.dof) - 1.0) * part.per_view[v];
     C.block<6, 6>(6 * i, 6 * i) = inflation * S;
   }
-  C += J * sigma * J.transpose();
+  if (shared) {
+    C += inflation * shared_error_prediction(*shared, decided, D, J);
+  } else {
+    C += J * sigma * J.transpose();
+  }
   C = 0.5 * (C + C.transpose());
   const Eigen::MatrixXd C_model = C;
   if (use_prediction) C *= prediction_scale * expected_ratio(std::max(calibration.prediction->dof, kMinimumDof));
@@ -460,7 +516,12 @@ CalibrationCheck check_calibration(const Calibration& used, const SampleSet& vie
   // predicting it under the shared model needs the old views (their conditional
   // covariance), which a saved calibration does not hold.
   const Calibration calibration = per_view_calibration(used);
-  CalibrationCheck check = check_all(calibration, views, options);
+  const Calibration::SharedError* shared =
+      used.shared_robot_error && used.shared_robot_error->used && !used.shared_robot_error->views.empty()
+          ? &*used.shared_robot_error
+          : nullptr;
+  const double shared_inflation = used.honesty ? used.honesty->inflation : 1.0;
+  CalibrationCheck check = check_all(calibration, views, options, shared, shared_inflation);
   // One wrong detection is not a moved camera: a view beyond the outlier gate alone
   // (outliers.h, chi2(6) 0.9999) whose leaving out leaves the others consistent is left
   // out and named, as the calibration leaves out its own; a real change moves every view.
@@ -473,7 +534,7 @@ CalibrationCheck check_calibration(const Calibration& used, const SampleSet& vie
   if (check.views[worst].mahalanobis * check.views[worst].mahalanobis <= gate) return check;
   SampleSet rest = views;
   rest.samples.erase(rest.samples.begin() + static_cast<std::ptrdiff_t>(worst));
-  CalibrationCheck without = check_all(calibration, rest, options);
+  CalibrationCheck without = check_all(calibration, rest, options, shared, shared_inflation);
   if (without.changed) return check;
   without.views = check.views;  // the table keeps every view, the left-out one marked
   without.left_out = {static_cast<int>(worst)};

@@ -321,7 +321,8 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
   // bound slowly. Each next length starts where the last ended.
   Theta start(0.875, 1e-6, 1e-8);
   const std::vector<double> none;
-  for (double l : L.n >= options.min_samples && L.n <= options.max_samples ? options.length_scales : none) {
+  const bool fitted = !options.model && L.n >= options.min_samples && L.n <= options.max_samples;
+  for (double l : fitted ? options.length_scales : none) {
     const Parts parts = make_parts(L, l);
     double log_likelihood = 0.0;
     const Theta theta = fit_theta(parts, start, L.J, L.r, options.max_iterations, &log_likelihood);
@@ -329,8 +330,13 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
     if (std::isfinite(log_likelihood)) start = theta;  // the next length starts here
     if (log_likelihood > fit.best.log_likelihood) fit.best = fit.candidates.back();
   }
-  fit.bic_gain = 2.0 * (fit.best.log_likelihood - fit.per_view.log_likelihood) - 4.0 * std::log(6.0 * L.n - 12.0);
-  fit.chosen = fit.best.length_scale > 0.0 && fit.bic_gain > 0.0;
+  if (options.model) {
+    fit.best = *options.model;
+    fit.chosen = fit.best.length_scale > 0.0;
+  } else {
+    fit.bic_gain = 2.0 * (fit.best.log_likelihood - fit.per_view.log_likelihood) - 4.0 * std::log(6.0 * L.n - 12.0);
+    fit.chosen = fit.best.length_scale > 0.0 && fit.bic_gain > 0.0;
+  }
   const SharedRobotError& model = fit.chosen ? fit.best : fit.per_view;
   const Parts model_parts = make_parts(L, model.length_scale);
   const MatrixXd C = combine(model_parts, theta_of(model));
@@ -357,7 +363,16 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
     const MatrixXd H0 = (L.J.transpose() * SiJ).ldlt().solve(SiJ.transpose());
     const MatrixXd gain = H0 - information_inverse * CiJ.transpose();
     const Matrix6d move = (gain * C * gain.transpose()).topLeftCorner<6, 6>();
-    fit.per_view_estimate_covariance = (H0 * C * H0.transpose()).topLeftCorner<6, 6>();
+    const MatrixXd under_model = H0 * C * H0.transpose();
+    fit.per_view_estimate_covariance = under_model.topLeftCorner<6, 6>();
+    fit.per_view_estimate_pattern_covariance = under_model.bottomRightCorner<6, 6>();
+    fit.per_view_estimate_cross_covariance = under_model.topRightCorner<6, 6>();
+    for (int j = 0; j < L.n; ++j) {
+      Calibration::SharedError::View v;
+      v.position = L.position[static_cast<std::size_t>(j)];
+      v.gain = H0.middleCols<6>(6 * j) * L.D[static_cast<std::size_t>(j)];
+      fit.views.push_back(v);
+    }
     const Vector6d x = step.head<6>();
     fit.step_nees = fit.chosen ? x.dot(move.ldlt().solve(x)) : 0.0;
   }
@@ -398,6 +413,31 @@ Calibration per_view_calibration(const Calibration& calibration) {
   return c;
 }
 
+void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
+  Calibration::SharedError& record = *c.shared_robot_error;
+  record.used = true;
+  record.per_view_T_parent_camera = c.T_parent_camera;
+  record.per_view_pose_covariance = c.pose_covariance;
+  record.per_view_pattern_pose = c.pattern->pose;
+  record.per_view_pattern_covariance = c.pattern->covariance;
+  record.per_view_cross_covariance = c.cross_covariance;
+  record.per_view_covariance_inflation = c.covariance_inflation;
+  record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
+  record.per_view_noise_model = c.noise_model;
+  c.T_parent_camera = fit.T_parent_camera;
+  set_pose_covariance(c, fit.pose_covariance);
+  c.cross_covariance = fit.cross_covariance;
+  c.pattern->pose = fit.pattern.pose;
+  c.pattern->covariance = fit.pattern.covariance;
+  c.covariance_kind = "shared_robot_error";
+  c.covariance_inflation = fit.covariance_inflation;
+  c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
+  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(fit.best.translation_sigma * 1e3, 3) +
+                   " mm, " + number_text(fit.best.rotation_sigma * 180.0 / M_PI, 3) + " deg per axis over " +
+                   number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
+                   number_text(fit.best.view_noise_scale, 3) + "), chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")";
+}
+
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   Calibration::SharedError r;
   r.chosen = fit.chosen;
@@ -411,6 +451,9 @@ Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   r.pose_covariance = fit.pose_covariance;
   r.step_nees = fit.step_nees;
   r.per_view_estimate_covariance = fit.per_view_estimate_covariance;
+  r.per_view_estimate_pattern_covariance = fit.per_view_estimate_pattern_covariance;
+  r.per_view_estimate_cross_covariance = fit.per_view_estimate_cross_covariance;
+  r.views = fit.views;
   return r;
 }
 

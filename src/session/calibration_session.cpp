@@ -298,37 +298,6 @@ std::optional<SharedRobotErrorFit> CalibrationSession::shared_error_fit(const Se
   return std::nullopt;
 }
 
-namespace {
-
-/// X, Y and their covariances become the shared robot error model's (its GLS step,
-/// shared_robot_error.h); the per-view model's X and covariance stay in the record.
-void use_shared_error(Calibration& c, const SharedRobotErrorFit& fit) {
-  Calibration::SharedError& record = *c.shared_robot_error;
-  record.used = true;
-  record.per_view_T_parent_camera = c.T_parent_camera;
-  record.per_view_pose_covariance = c.pose_covariance;
-  record.per_view_pattern_pose = c.pattern->pose;
-  record.per_view_pattern_covariance = c.pattern->covariance;
-  record.per_view_cross_covariance = c.cross_covariance;
-  record.per_view_covariance_inflation = c.covariance_inflation;
-  record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
-  record.per_view_noise_model = c.noise_model;
-  c.T_parent_camera = fit.T_parent_camera;
-  set_pose_covariance(c, fit.pose_covariance);
-  c.cross_covariance = fit.cross_covariance;
-  c.pattern->pose = fit.pattern.pose;
-  c.pattern->covariance = fit.pattern.covariance;
-  c.covariance_kind = "shared_robot_error";
-  c.covariance_inflation = fit.covariance_inflation;
-  c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
-  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(fit.best.translation_sigma * 1e3, 3) +
-                   " mm, " + number_text(fit.best.rotation_sigma * 180.0 / M_PI, 3) + " deg per axis over " +
-                   number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
-                   number_text(fit.best.view_noise_scale, 3) + "), chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")";
-}
-
-}  // namespace
-
 Calibration CalibrationSession::calibrate_modelled(const SessionSnapshot& snapshot) const {
   Calibration c = calibrate(snapshot);
   // How well it predicts a view it has not seen (leave-one-out), for a later check of new views.
@@ -344,7 +313,7 @@ Calibration CalibrationSession::calibrate_modelled(const SessionSnapshot& snapsh
   const std::optional<SharedRobotErrorFit> shared = shared_error_fit(snapshot, c, &record.not_fitted);
   if (shared) record = shared_error_record(*shared);
   c.shared_robot_error = record;
-  if (shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use) use_shared_error(c, *shared);
+  if (shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use) use_shared_robot_error(c, *shared);
   return c;
 }
 

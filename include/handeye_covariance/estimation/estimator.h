@@ -253,6 +253,17 @@ struct Calibration {
     double covariance_inflation = 1.0;  // in it, X's factor for (s, a, b)'s own error (Kenward-Roger)
     double step_nees = 0.0;           // X's step under its own covariance (about 6 when the model explains it)
     Matrix6d per_view_estimate_covariance = Matrix6d::Zero();  // the X above's covariance under the model
+    /// What a check of new views needs to predict them under the model (calibration_check.h),
+    /// about the per-view X and Y: their joint covariance under the model, H0 C H0^T (X's
+    /// block is per_view_estimate_covariance), and for each view the fit used, the
+    /// effector's position and H0_j D_j, how the per-view estimate moves with that view's
+    /// robot error: a new view's shared error is correlated with theirs.
+    Matrix6d per_view_estimate_pattern_covariance = Matrix6d::Zero(), per_view_estimate_cross_covariance = Matrix6d::Zero();
+    struct View {
+      Eigen::Vector3d position = Eigen::Vector3d::Zero();          // m, the effector's, base frame
+      Eigen::Matrix<double, 12, 6> gain = Eigen::Matrix<double, 12, 6>::Zero();  // H0_j D_j: (xi_X, xi_Y) per xi_E
+    };
+    std::vector<View> views;
   };
   std::optional<SharedError> shared_robot_error;
 

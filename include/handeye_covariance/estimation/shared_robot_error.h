@@ -39,6 +39,7 @@
 // split the same way.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,9 @@ struct SharedRobotErrorOptions {
   /// ... and up to this many (more: none). The dense 6n x 6n fit grows as n^3: 0.2 s
   /// at 30 samples, about 0.5 s at 40, one core.
   int max_samples = 40;
+  /// Set: this model (its length, s, a and b) is taken as chosen, nothing fitted or
+  /// compared (bic_gain 0): a part of a session judged with the whole session's model.
+  std::optional<SharedRobotError> model;
 };
 
 struct SharedRobotErrorFit {
@@ -107,6 +111,10 @@ struct SharedRobotErrorFit {
   /// The per-view estimate's X covariance under the chosen model, H0 C H0^T: what
   /// the calibration's own covariance would have to be, were the model true.
   Matrix6d per_view_estimate_covariance = Matrix6d::Zero();
+  /// ... with Y's block and the cross block, and each used view's position and H0_j D_j
+  /// (Calibration::SharedError::views): what a check of new views predicts them with.
+  Matrix6d per_view_estimate_pattern_covariance = Matrix6d::Zero(), per_view_estimate_cross_covariance = Matrix6d::Zero();
+  std::vector<Calibration::SharedError::View> views;
 };
 
 /// The shared error fitted to `samples` about `calibration` (a joint fit of them:
@@ -125,6 +133,11 @@ Calibration per_view_calibration(const Calibration& calibration);
 
 /// The fit as Calibration::shared_robot_error records it.
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit);
+
+/// X, Y and their covariances become the chosen model's (its GLS step); the per-view
+/// model's X, Y, covariances and noise text stay in `c.shared_robot_error` (which must
+/// hold shared_error_record(fit)), marked used.
+void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit);
 
 /// Whose halves the linearised check splits: the calibration's own estimator (the
 /// per-view weights S_i, X as the session reports it) or the GLS one under the model.
