@@ -520,7 +520,9 @@ std::vector<std::vector<int>> every_split(int n, int k, int most) {
 // paths: 200 random splits (each distinct split once where there are fewer) into a
 // calibration part and a check part of 5 views (a third of a short session), the calibration as a user gets it (the session's noise model and
 // its leave-one-out prediction scale, its covariance inflated by the honesty check's
-// factor of the whole session: the splits' own would cost 200 honesty checks). A view
+// factor of the whole session: the splits' own would cost 200 honesty checks; where the
+// whole session uses the shared robot error, the part uses its model too, and the check
+// predicts the new views under it). A view
 // beyond the outlier gate alone is left out as a wrong detection, as the check does. Without a change the check says
 // "changed" in at most 3% of the splits at alpha 1%; with the camera moved 2 mm on its
 // mount (the check part's detected poses shifted by 2 mm in the camera frame, a random
@@ -622,11 +624,12 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       EXPECT_GE(splits, std::min(150, planned)) << c.name << ", " << path;
       // Not reached on the images of the two 8-view Franka sessions (1 and 4 of their 28
       // splits): a calibration of 6 views and checks of 2, where one alarm is 3.6%; the
-      // eye-in-hand session's 4 all hold its 8th image, whose detector covariance
-      // understates its error beyond the scale the other views fit. Their poses without a
-      // covariance: none. kuka_2's poses: 3.5% (7 of 200). Asserted as reached; the note says so.
+      // eye-in-hand session's 4 all hold its 8th image, the closest (0.21 m, the others
+      // 0.28-0.41 m), off by 1 degree where the views without it predict 0.3 per axis.
+      // Their poses without a covariance: none. The KUKA sessions, whose calibration uses
+      // the shared robot error, predicted under it: at most 3%.
       const bool short_images = n < 10 && path == "images";
-      EXPECT_LE(alarm_rate, short_images ? 0.2 : 0.04) << c.name << ", " << path;
+      EXPECT_LE(alarm_rate, short_images ? 0.2 : 0.03) << c.name << ", " << path;
       if (allowed >= 20) {
         EXPECT_GE(static_cast<double>(detected_allowed) / allowed, 0.9) << c.name << ", " << path;
       }

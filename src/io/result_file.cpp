@@ -327,6 +327,24 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
         emit_numbers(out, cross.data(), cross.size());
         out << YAML::Key << "per_view_honesty" << YAML::Value << e->per_view_honesty;
         out << YAML::Key << "per_view_inflation" << YAML::Value << e->per_view_inflation;
+        // What a check of new views predicts them with under the model (calibration_check.h).
+        out << YAML::Key << "per_view_pattern_covariance_under_it" << YAML::Value;
+        const auto pattern = to_row_major_6x6(e->per_view_estimate_pattern_covariance);
+        emit_numbers(out, pattern.data(), pattern.size());
+        out << YAML::Key << "per_view_cross_covariance_under_it" << YAML::Value;
+        const auto cross_under = to_row_major_6x6(e->per_view_estimate_cross_covariance);
+        emit_numbers(out, cross_under.data(), cross_under.size());
+        out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;
+        for (const Calibration::SharedError::View& v : e->views) {
+          out << YAML::Flow << YAML::BeginMap << YAML::Key << "position" << YAML::Value;
+          emit_numbers(out, v.position.data(), 3);
+          // H0_j D_j, 12 x 6 row-major: (xi_X, xi_Y) in ROS order per the robot error xi_E.
+          const Eigen::Matrix<double, 12, 6, Eigen::RowMajor> gain = v.gain;
+          out << YAML::Key << "gain" << YAML::Value;
+          emit_numbers(out, gain.data(), gain.size());
+          out << YAML::EndMap;
+        }
+        out << YAML::EndSeq;
       }
     }
     out << YAML::EndMap;
@@ -596,6 +614,29 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       if (e.per_view_inflation < 1.0) {
         throw HandEyeError(ErrorCode::MalformedFile, "the per-view model's inflation must be >= 1, got " + number_text(e.per_view_inflation),
                            (at / "per_view_inflation").str(), "write the factor its honesty check gave (1: none)");
+      }
+      // Without them (a file of an earlier version) a check predicts with the per-view model alone.
+      if (shared["views"]) {
+        e.per_view_estimate_pattern_covariance = covariance(
+            require(shared, "per_view_pattern_covariance_under_it", at, shared_hint), at / "per_view_pattern_covariance_under_it");
+        e.per_view_estimate_cross_covariance =
+            from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance_under_it", at, shared_hint),
+                                              at / "per_view_cross_covariance_under_it", "6x6 Cov(X, Y) under the model"));
+        const YAML::Node list = shared["views"];
+        if (!list.IsSequence()) {
+          throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list", (at / "views").str(),
+                             "write one {position: [3 numbers], gain: [72 numbers]} per view the model was fitted on");
+        }
+        for (std::size_t i = 0; i < list.size(); ++i) {
+          const Location where = at / "views" / std::to_string(i);
+          const std::string view_hint = "{position: [x, y, z] m, gain: 72 numbers, 12 x 6 row-major}";
+          Calibration::SharedError::View v;
+          const auto p = as_numbers<3>(require(list[i], "position", where, view_hint), where / "position", "x, y, z in m");
+          v.position = Eigen::Vector3d(p[0], p[1], p[2]);
+          const auto g = as_numbers<72>(require(list[i], "gain", where, view_hint), where / "gain", "12 x 6, row-major");
+          v.gain = Eigen::Map<const Eigen::Matrix<double, 12, 6, Eigen::RowMajor>>(g.data());
+          e.views.push_back(v);
+        }
       }
     }
     file.shared_robot_error = e;
