@@ -386,11 +386,11 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
 // noise model). The KUKA sessions (28 and 29 poses) choose it by BIC on both paths,
 // and calibrate_checked uses it: X, Y and their covariances are its GLS ones (with
 // `advice`, the per-view ones). Its linearised split-half check with GLS halves
-// (cross-half terms, 40 bootstrap sessions at the session's poses) reads random
-// halves within [0.8, 1.25] and runs of 3 never overconfident. The 8-pose Franka
+// (cross-half terms, 100 bootstrap sessions at the session's poses, calibrate_checked's)
+// reads random halves within [0.8, 1.25] and runs of 3 never overconfident. The 8-pose Franka
 // sessions are below its 16 samples: the per-view model alone. Printed per session:
-// the ratios of the model with the per-view estimator's halves and with the GLS
-// ones and of the per-view model, the length and size of the shared error, sigma_X's
+// the ratios of the model (and with HANDEYE_SHARED_COMPARE=1, of the model with the
+// per-view estimator's halves and of the per-view model), the length and size of the shared error, sigma_X's
 // change and X against X_park (the data's README) in each model's sigma.
 TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
   for (const RealCase& c : real_cases()) {
@@ -463,30 +463,41 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       EXPECT_NE(advised_summary.find("advice only"), std::string::npos) << advised_summary;
       EXPECT_GE(fit.used.size(), 28u) << c.name;  // none rejected
       EXPECT_TRUE(fit.chosen) << c.name << ", " << path << ": BIC gain " << fit.bic_gain;
-      HonestyOptions options;
-      options.run_length = 3, options.replicates = 40;
-      const HonestyCheck shared = check_shared_robot_error(decided, cal, fit.best, options, SharedErrorEstimator::PerView);
-      const HonestyCheck gls = check_shared_robot_error(decided, cal, fit.best, options, SharedErrorEstimator::Gls);
-      const HonestyCheck per_view = check_shared_robot_error(decided, cal, fit.per_view, options);
-      // The model in use (its GLS halves): random halves within [0.8, 1.25] of its
-      // reference, its runs never overconfident (the per-view model's are, on kuka_3).
-      EXPECT_GE(gls.random_ratio, 0.8) << c.name << ", " << path;
-      EXPECT_LE(gls.random_ratio, 1.25) << c.name << ", " << path;
-      EXPECT_LE(gls.runs_ratio, 1.25) << c.name << ", " << path;
-      EXPECT_NE(gls.runs_verdict, Honesty::Overconfident) << c.name << ", " << path;
+      // The model in use judged itself in calibrate_checked (GLS halves, 100 bootstrap
+      // sessions): random halves within [0.8, 1.25] of its reference, its runs never
+      // overconfident (the per-view model's are, on kuka_3).
+      const Calibration::Honesty& own = *checked.honesty;
+      EXPECT_GE(own.random_ratio, 0.8) << c.name << ", " << path;
+      EXPECT_LE(own.random_ratio, 1.25) << c.name << ", " << path;
+      EXPECT_LE(own.runs_ratio, 1.25) << c.name << ", " << path;
+      EXPECT_NE(own.verdict, "overconfident") << c.name << ", " << path;
+      // The alternatives of how_it_works.md, judged the same way (40 bootstrap sessions):
+      // the model with the per-view estimator's halves (its X with H0 C H0^T) and the
+      // per-view model; HANDEYE_SHARED_COMPARE=1 prints them (20 s more).
+      HonestyCheck shared, per_view;
+      if (std::getenv("HANDEYE_SHARED_COMPARE")) {
+        HonestyOptions options;
+        options.run_length = 3, options.replicates = 40;
+        shared = check_shared_robot_error(decided, cal, fit.best, options, SharedErrorEstimator::PerView);
+        per_view = check_shared_robot_error(decided, cal, fit.per_view, options);
+      }
+      const std::string compared =
+          shared.ran() ? "per-view halves " + number_text(shared.random_ratio, 3) + " / " + number_text(shared.runs_ratio, 3) +
+                             "; per-view model " + number_text(per_view.random_ratio, 3) + " / " +
+                             number_text(per_view.runs_ratio, 3)
+                       : "HANDEYE_SHARED_COMPARE=1: the per-view halves and model";
       EXPECT_LT(fit.step_nees, 22.46) << c.name << ", " << path;  // chi2(6) 99.9%: the model explains why X moved
       const Vector6d s_true = fit.per_view_estimate_covariance.diagonal().cwiseSqrt();
       const Vector6d s0 = cal.pose_covariance.diagonal().cwiseSqrt(), s1 = fit.pose_covariance.diagonal().cwiseSqrt();
       const Vector6d e0 = pose_error(cal.T_parent_camera, c.published), e1 = pose_error(fit.T_parent_camera, c.published);
       std::printf("[shared robot error, real %s, %s, %zu samples] chosen %d (BIC gain %.1f): l %.2f m, %.2f mm, %.3f deg, "
-                  "view noise x%.3f, Kenward-Roger x%.3f; split-half ratio random / runs of 3: %.2f / %.2f (GLS halves %.2f / %.2f; per-view model %.2f / %.2f); "
+                  "view noise x%.3f, Kenward-Roger x%.3f; split-half ratio random / runs of 3: %.2f / %.2f (%s); "
                   "sigma_X / per-view [%.2f %.2f %.2f %.2f %.2f %.2f]; X - published in sigma: per-view [%.1f %.1f %.1f "
                   "%.1f %.1f %.1f], shared [%.1f %.1f %.1f %.1f %.1f %.1f]; X's step NEES %.2f; the per-view sigma_X "
                   "under the model / its own [%.2f %.2f %.2f %.2f %.2f %.2f]\n",
                   c.name, path.c_str(), fit.used.size(), fit.chosen ? 1 : 0, fit.bic_gain, fit.best.length_scale,
                   fit.best.translation_sigma * 1e3, fit.best.rotation_sigma * 180.0 / M_PI, fit.best.view_noise_scale, fit.covariance_inflation,
-                  shared.random_ratio, shared.runs_ratio, gls.random_ratio, gls.runs_ratio, per_view.random_ratio,
-                  per_view.runs_ratio, s1(0) / s0(0),
+                  own.random_ratio, own.runs_ratio, compared.c_str(), s1(0) / s0(0),
                   s1(1) / s0(1), s1(2) / s0(2), s1(3) / s0(3), s1(4) / s0(4), s1(5) / s0(5), e0(0) / s0(0), e0(1) / s0(1),
                   e0(2) / s0(2), e0(3) / s0(3), e0(4) / s0(4), e0(5) / s0(5), e1(0) / s1(0), e1(1) / s1(1), e1(2) / s1(2),
                   e1(3) / s1(3), e1(4) / s1(4), e1(5) / s1(5), fit.step_nees, s_true(0) / s0(0), s_true(1) / s0(1),
@@ -580,7 +591,9 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         session.replace(part.samples, c.name);
         Calibration cal;
         try {
-          cal = session.calibrate_checked(session.snapshot());  // with its leave-one-out prediction
+          // With its leave-one-out prediction; under the shared robot error the session
+          // makes none (the check predicts under the model), as here.
+          cal = shared ? session.calibrate(session.snapshot()) : session.calibrate_checked(session.snapshot());
         } catch (const HandEyeError&) {
           continue;  // a part the estimator refuses (too few turns) is no calibration to check
         }

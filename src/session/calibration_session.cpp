@@ -300,20 +300,23 @@ std::optional<SharedRobotErrorFit> CalibrationSession::shared_error_fit(const Se
 
 Calibration CalibrationSession::calibrate_modelled(const SessionSnapshot& snapshot) const {
   Calibration c = calibrate(snapshot);
-  // How well it predicts a view it has not seen (leave-one-out), for a later check of new views.
-  if (settings_.method != Method::Corners && c.pattern) {
+  // The shared robot error, about the per-view calibration.
+  if (settings_.shared_robot_error != SharedErrorUse::Off) {
+    Calibration::SharedError record;
+    const std::optional<SharedRobotErrorFit> shared = shared_error_fit(snapshot, c, &record.not_fitted);
+    if (shared) record = shared_error_record(*shared);
+    c.shared_robot_error = record;
+    if (shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use) use_shared_robot_error(c, *shared);
+  }
+  // How well it predicts a view it has not seen (leave-one-out), for a later check of
+  // new views; one under the shared robot error predicts them under that model instead.
+  const bool shared_used = c.shared_robot_error && c.shared_robot_error->used;
+  if (settings_.method != Method::Corners && c.pattern && !shared_used) {
     const SessionSnapshot kept{snapshot.generation, without_rejected(decided(snapshot.samples, c), c)};
     c.prediction = prediction_check(kept.samples, [this, &kept](const SampleSet& others) {
       return calibrate_decided({kept.generation, others});
     });
   }
-  // The shared robot error, about the per-view calibration.
-  if (settings_.shared_robot_error == SharedErrorUse::Off) return c;
-  Calibration::SharedError record;
-  const std::optional<SharedRobotErrorFit> shared = shared_error_fit(snapshot, c, &record.not_fitted);
-  if (shared) record = shared_error_record(*shared);
-  c.shared_robot_error = record;
-  if (shared && shared->chosen && settings_.shared_robot_error == SharedErrorUse::Use) use_shared_robot_error(c, *shared);
   return c;
 }
 
