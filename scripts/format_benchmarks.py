@@ -119,6 +119,7 @@ _, detectors = medians(f"{run}/detectors.json")
 _, motion = medians(f"{run}/motion.json")
 auto_study = open(f"{run}/auto_study.md").read()
 check_study = open(f"{run}/check_study.md").read()
+check_study_rendered = open(f"{run}/check_study_rendered.md").read()
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 
 
@@ -350,9 +351,17 @@ lines += [
     "",
     check_study.strip(),
     "",
+    "Through the images (`handeye_check_study --rendered config/tag_board_2x2.yaml --checks 600`,",
+    "simulation/rendered_views.h): each calibration's 20 views and each check's 5 rendered and detected as",
+    "`handeye images` and `handeye check --images` detect them (the pixel sigma pooled over the set, the",
+    "robot's noise estimated beside the detections' covariance); chi2 / dof of the new views beside:",
+    "",
+    check_study_rendered.strip().split("\n", 2)[2],
+    "",
     "Real sessions (`test_real_data`, `ChecksOfACalibrationOnEverySession`): 200 random splits of each into a",
     "calibration and 5 check views (the 8-view Franka sessions: each of their 28 splits into 6 and 2 once), the",
-    "calibration as a user gets it; false",
+    "calibration as a user gets it (the KUKA ones, which use the shared robot error, predicted under it, each part",
+    "taking the whole session's model numbers as it takes its inflation); false",
     "alarms without a change, and a 2 mm move of the camera on its mount detected, in the splits whose 5 sigma",
     "allows it:",
     "",

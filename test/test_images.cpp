@@ -14,7 +14,9 @@
 #include "handeye_covariance/images/pooled_detector.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_session.h"
+#include "handeye_covariance/simulation/check_study.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
+#include "handeye_covariance/simulation/rendered_views.h"
 #include "test_helpers.h"
 
 namespace handeye {
@@ -312,6 +314,32 @@ TEST(ImageFolder, RenderedSessionsOfEveryKindGiveAnHonestCovarianceOfX) {
     EXPECT_GT(nees, low) << name;
     EXPECT_LT(nees, high) << name;
   }
+}
+
+// The check of a saved calibration (calibration_check.h) through the images, as `handeye
+// images` and `handeye check --images` see them (simulation/rendered_views.h): each
+// calibration's 20 rendered views and each check's 5 detected with the pixel sigma pooled
+// over the set, the robot's noise estimated beside the detections' covariance. Without a
+// change the new views fit the prediction: chi2 / dof over the 16 checks within its
+// 99.9% band (chi2(480) / 480, 0.80-1.23: the checks are independent), at most one
+// false alarm at alpha 1%. The long run is handeye_check_study --rendered (BENCHMARKS.md).
+TEST(RenderedCheck, NewViewsOfAnUnchangedRigFitTheirPrediction) {
+  const Target target = io::read_target(std::string(HANDEYE_SOURCE_DIR) + "/config/tag_board_2x2.yaml");
+  const PatternRenderer renderer(target, simulated_camera());
+  CheckStudyOptions options;
+  options.checks = 16;
+  options.seed = 5;
+  options.observe = [&](Rng& rng, const Rig& rig, const std::vector<Eigen::Isometry3d>& effectors,
+                        const Eigen::Isometry3d& X, const Eigen::Isometry3d& Y) {
+    return rendered_views(rng, rig, effectors, X, Y, renderer, target, check_study_noise().robot);
+  };
+  const CheckStudyResult r = run_check_study(options);
+  std::printf("[ figures  ] %d checks of 5 rendered views: chi2 / dof %.3f, changed in %d\n", r.checks, r.mean_chi2_over_dof,
+              r.changed);
+  EXPECT_EQ(r.checks, 16);
+  EXPECT_GT(r.mean_chi2_over_dof, 0.80);
+  EXPECT_LT(r.mean_chi2_over_dof, 1.23);
+  EXPECT_LE(r.changed, 1);
 }
 
 }  // namespace

@@ -67,6 +67,10 @@ void check_covariance(const Matrix6d& covariance, const std::string& where) {
   check_square_covariance<6>(covariance, where);
 }
 
+void check_covariance(const Eigen::Matrix<double, 12, 12>& covariance, const std::string& where) {
+  check_square_covariance<12>(covariance, where);
+}
+
 void check_covariance(const DecoupledCovariance& covariance, const std::string& where) {
   check_covariance(covariance.rotation, where + ".rotation");
   check_covariance(covariance.translation, where + ".translation");

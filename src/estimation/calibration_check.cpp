@@ -179,25 +179,21 @@ class NullDistribution {
 /// under the model, and M's block i = H0 Cov(eps, e_i) = sum_j k(p_j, p_i) H0_j D_j E D_i^T
 /// (E = diag(a I3, b I3)): the old views near a new one share its robot error, which the
 /// per-view estimate took in. `D` each new view's D_i, `J` their stacked Jacobian.
-Eigen::MatrixXd shared_error_prediction(const Calibration::SharedError& shared, const SampleSet& views,
+Eigen::MatrixXd shared_error_prediction(const Calibration::SharedError& shared, const SampleSet& new_views,
                                         const std::vector<Matrix6d>& D, const Eigen::MatrixXd& J) {
   const int k = static_cast<int>(D.size());
   const double l = shared.length_scale;
-  const auto kernel = [l](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
-    return std::exp(-(p - q).squaredNorm() / (2.0 * l * l));
-  };
-  Matrix6d E = Matrix6d::Zero();
-  E.topLeftCorner<3, 3>().diagonal().setConstant(shared.translation_sigma * shared.translation_sigma);
-  E.bottomRightCorner<3, 3>().diagonal().setConstant(shared.rotation_sigma * shared.rotation_sigma);
+  const auto kernel = [l](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return shared_error_kernel(p, q, l); };
+  const Matrix6d E = shared_error_covariance(model_of(shared));
   Matrix12d P;
   P << shared.per_view_estimate_covariance, shared.per_view_estimate_cross_covariance,
       shared.per_view_estimate_cross_covariance.transpose(), shared.per_view_estimate_pattern_covariance;
   Eigen::MatrixXd C = J * P * J.transpose();
   Eigen::MatrixXd M(12, 6 * k);
   for (int i = 0; i < k; ++i) {
-    const Eigen::Vector3d p = views.samples[static_cast<std::size_t>(i)].T_base_effector.translation();
+    const Eigen::Vector3d p = new_views.samples[static_cast<std::size_t>(i)].T_base_effector.translation();
     for (int m = 0; m < k; ++m) {
-      const Eigen::Vector3d q = views.samples[static_cast<std::size_t>(m)].T_base_effector.translation();
+      const Eigen::Vector3d q = new_views.samples[static_cast<std::size_t>(m)].T_base_effector.translation();
       C.block<6, 6>(6 * i, 6 * m) += kernel(p, q) * D[static_cast<std::size_t>(i)] * E * D[static_cast<std::size_t>(m)].transpose();
     }
     Eigen::Matrix<double, 12, 6> G = Eigen::Matrix<double, 12, 6>::Zero();
@@ -319,7 +315,6 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   }
   double inflation = shared ? std::max(1.0, shared_inflation)
                             : calibration.honesty ? std::max(1.0, calibration.honesty->inflation) : 1.0;
-  const Matrix12d sigma = joint_covariance(calibration);
   std::vector<Matrix6d> noise = residual_covariances(decided, calibration);
   // The estimated noise parts: the views' noise is the known remainder plus each part
   // times its true-over-estimated ratio g ~ nu / chi2(nu), whose mean nu / (nu - 2) the
@@ -355,7 +350,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   const int n = 6 * k;
   Eigen::VectorXd e(n);
   Eigen::MatrixXd J(n, 12), C = Eigen::MatrixXd::Zero(n, n);
-  std::vector<Matrix6d> D;  // each view's d residual / d robot error
+  std::vector<Matrix6d> D;  // each view's D_i = d P_hat_i / d xi_E (the robot error's pull on it)
   for (int i = 0; i < k; ++i) {
     const std::size_t v = static_cast<std::size_t>(i);
     const JointResidual r = joint_residual(views.rig, decided.samples[v], X, Y);
@@ -369,7 +364,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   if (shared) {
     C += inflation * shared_error_prediction(*shared, decided, D, J);
   } else {
-    C += J * sigma * J.transpose();
+    C += J * joint_covariance(calibration) * J.transpose();
   }
   C = 0.5 * (C + C.transpose());
   const Eigen::MatrixXd C_model = C;
@@ -510,16 +505,26 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
 }  // namespace
 
 CalibrationCheck check_calibration(const Calibration& used, const SampleSet& views, const CheckOptions& options) {
-  // A calibration whose X is the shared robot error's GLS estimate is checked with the
-  // per-view model's X and Y kept beside it: a new view shares the error of the old
-  // poses near it, which that model's estimate absorbed and the GLS one does not, and
-  // predicting it under the shared model needs the old views (their conditional
-  // covariance), which a saved calibration does not hold.
+  // A calibration whose X is the shared robot error's GLS estimate is checked about the
+  // per-view model's X and Y kept beside it, under the model: a new view shares the
+  // robot error of the old poses near it, which the per-view estimate took in, and the
+  // record's `views` (each old view's position and H0_j D_j) give that correlation
+  // (shared_error_prediction). A record without them (a file of an earlier version) is
+  // checked with the per-view model alone, its inflation and leave-one-out scale.
   const Calibration calibration = per_view_calibration(used);
   const Calibration::SharedError* shared =
       used.shared_robot_error && used.shared_robot_error->used && !used.shared_robot_error->views.empty()
           ? &*used.shared_robot_error
           : nullptr;
+  if (shared && !(shared->length_scale > 0.0 && shared->view_noise_scale > 0.0 && shared->translation_sigma >= 0.0 &&
+                  shared->rotation_sigma >= 0.0)) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "the shared robot error in use has no positive length scale and view noise scale (or a negative "
+                       "sigma): the new views cannot be predicted under it",
+                       "the calibration's shared_robot_error",
+                       "save the calibration again with this version, or check its length_scale, view_noise_scale, "
+                       "translation_sigma and rotation_sigma");
+  }
   const double shared_inflation = used.honesty ? used.honesty->inflation : 1.0;
   CalibrationCheck check = check_all(calibration, views, options, shared, shared_inflation);
   // One wrong detection is not a moved camera: a view beyond the outlier gate alone

@@ -87,8 +87,8 @@ Parts make_parts(const Linearised& L, double length_scale) {
   P.part[2] = MatrixXd::Zero(m, m);
   for (int i = 0; i < L.n; ++i) {
     for (int j = 0; j < L.n; ++j) {
-      const double d = (L.position[static_cast<std::size_t>(i)] - L.position[static_cast<std::size_t>(j)]).norm();
-      const double k = std::exp(-d * d / (2.0 * length_scale * length_scale));
+      const double k = shared_error_kernel(L.position[static_cast<std::size_t>(i)], L.position[static_cast<std::size_t>(j)],
+                                           length_scale);
       const Matrix6d& Di = L.D[static_cast<std::size_t>(i)];
       const Matrix6d& Dj = L.D[static_cast<std::size_t>(j)];
       P.part[1].block<6, 6>(6 * i, 6 * j) = k * Di.leftCols<3>() * Dj.leftCols<3>().transpose();
@@ -355,9 +355,10 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
         information_inverse.bottomRightCorner<6, 6>().ldlt().solve(covariance.bottomRightCorner<6, 6>()).trace() / 6.0;
   }
   {
-    // The per-view estimate's error is H0 eps and the GLS one's -G eps (eps the
-    // errors under C), so the step is (H0 + G) eps: its covariance under the model
-    // is (H0 + G) C (H0 + G)^T, and H0 C H0^T is the per-view estimate's own.
+    // The per-view estimate's error is -H0 eps and the GLS one's -G eps (eps the
+    // errors under C, G = Phi J^T C^-1), so the step from one to the other is
+    // (H0 - G) eps: its covariance under the model is (H0 - G) C (H0 - G)^T, and
+    // H0 C H0^T is the per-view estimate's own.
     const Eigen::LLT<MatrixXd> per_view_llt(per_view.view());
     const MatrixXd SiJ = per_view_llt.solve(L.J);
     const MatrixXd H0 = (L.J.transpose() * SiJ).ldlt().solve(SiJ.transpose());
@@ -413,7 +414,33 @@ Calibration per_view_calibration(const Calibration& calibration) {
   return c;
 }
 
+double shared_error_kernel(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double length_scale) {
+  const double d = (p - q).norm();
+  return std::exp(-d * d / (2.0 * length_scale * length_scale));
+}
+
+Matrix6d shared_error_covariance(const SharedRobotError& model) {
+  Matrix6d E = Matrix6d::Zero();
+  E.topLeftCorner<3, 3>().diagonal().setConstant(model.translation_sigma * model.translation_sigma);
+  E.bottomRightCorner<3, 3>().diagonal().setConstant(model.rotation_sigma * model.rotation_sigma);
+  return E;
+}
+
+SharedRobotError model_of(const Calibration::SharedError& record) {
+  SharedRobotError model;
+  model.length_scale = record.length_scale;
+  model.view_noise_scale = record.view_noise_scale;
+  model.translation_sigma = record.translation_sigma;
+  model.rotation_sigma = record.rotation_sigma;
+  return model;
+}
+
 void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
+  if (!fit.chosen || !c.shared_robot_error || !c.pattern) {
+    throw HandEyeError(ErrorCode::InvalidNoise,
+                       "the shared robot error can only be used where its fit chose it, on a joint calibration that "
+                       "records it", "calibration", "use it only when fit_shared_robot_error says chosen");
+  }
   Calibration::SharedError& record = *c.shared_robot_error;
   record.used = true;
   record.per_view_T_parent_camera = c.T_parent_camera;
@@ -435,7 +462,8 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   c.noise_model += "; with a robot error shared by nearby poses (" + number_text(fit.best.translation_sigma * 1e3, 3) +
                    " mm, " + number_text(fit.best.rotation_sigma * 180.0 / M_PI, 3) + " deg per axis over " +
                    number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
-                   number_text(fit.best.view_noise_scale, 3) + "), chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")";
+                   number_text(fit.best.view_noise_scale, 3) + ")" +
+                   (fit.candidates.empty() ? ", given" : ", chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")");
 }
 
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {

@@ -566,12 +566,13 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   }
   // The shared robot error's block (format_result writes it): its numbers, X under
   // it, and where the calibration uses it, the per-view X, Y and covariances kept
-  // beside it, which a check predicts new views with.
+  // beside it, about which a check predicts new views under the model (its `views`).
   if (const YAML::Node shared = root["shared_robot_error"]; shared && shared.IsMap()) {
     const Location at = top / "shared_robot_error";
     const std::string shared_hint =
         "the block /calibrate and `handeye solve` write: not_fitted, or chosen, used, bic_gain, ...; a used one has "
-        "per_view_X, per_view_pattern and per_view_cross_covariance";
+        "per_view_X, per_view_pattern, per_view_cross_covariance, per_view_pattern_covariance_under_it, "
+        "per_view_cross_covariance_under_it and views";
     const auto number = [&](const char* key) {
       return as_finite(require(shared, key, at, shared_hint), at / key, std::string("NaN in ") + key, shared_hint);
     };
@@ -593,11 +594,20 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       e.used = shared["used"] && as_bool(shared["used"], at / "used");
       e.bic_gain = number("bic_gain");
     }
+    if (e.used && !e.chosen) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the shared robot error is used but not chosen", (at / "used").str(),
+                         "a model is used only where its fit chose it: write `used: false`, or save the calibration again");
+    }
     if (e.not_fitted.empty() && e.chosen) {
       e.length_scale = number("length_scale");
       e.translation_sigma = number("translation_sigma");
       e.rotation_sigma = number("rotation_sigma");
       e.view_noise_scale = number("view_noise_scale");
+      if (!(e.length_scale > 0.0 && e.view_noise_scale > 0.0 && e.translation_sigma >= 0.0 && e.rotation_sigma >= 0.0)) {
+        throw HandEyeError(ErrorCode::MalformedFile,
+                           "the shared robot error's length_scale and view_noise_scale must be > 0 and its sigmas >= 0",
+                           at.str(), "write the numbers the fit gave (metres, radians), or save the calibration again");
+      }
       e.step_nees = number("step_nees");
       e.covariance_inflation = number("covariance_inflation");
       pose_block("X", e.T_parent_camera, e.pose_covariance);
@@ -622,13 +632,18 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
         e.per_view_estimate_cross_covariance =
             from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance_under_it", at, shared_hint),
                                               at / "per_view_cross_covariance_under_it", "6x6 Cov(X, Y) under the model"));
+        Eigen::Matrix<double, 12, 12> joint;
+        joint << e.per_view_estimate_covariance, e.per_view_estimate_cross_covariance,
+            e.per_view_estimate_cross_covariance.transpose(), e.per_view_estimate_pattern_covariance;
+        check_covariance(joint, (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
         const YAML::Node list = shared["views"];
-        if (!list.IsSequence()) {
-          throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list", (at / "views").str(),
-                             "write one {position: [3 numbers], gain: [72 numbers]} per view the model was fitted on");
+        if (!list.IsSequence() || list.size() == 0) {
+          throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",
+                             (at / "views").str(),
+                             "write one {position: [3 numbers], gain: [72 numbers]} per view, or save the calibration again");
         }
         for (std::size_t i = 0; i < list.size(); ++i) {
-          const Location where = at / "views" / std::to_string(i);
+          const Location where = (at / "views")[i];
           const std::string view_hint = "{position: [x, y, z] m, gain: 72 numbers, 12 x 6 row-major}";
           Calibration::SharedError::View v;
           const auto p = as_numbers<3>(require(list[i], "position", where, view_hint), where / "position", "x, y, z in m");

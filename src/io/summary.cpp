@@ -223,7 +223,7 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
     }
     if (!e.per_view_honesty.empty()) {
       out += "                        the per-view model's own honesty check: " + e.per_view_honesty +
-             " (a check of new views predicts with it)\n";
+             " (a check of new views predicts about its X and Y, under the shared error)\n";
     }
     return out;
   }

@@ -388,11 +388,7 @@ HonestyCheck CalibrationSession::honesty_check(const SessionSnapshot& snapshot, 
     const Calibration::SharedError& e = *calibration.shared_robot_error;
     Calibration per_view = per_view_calibration(calibration);
     per_view.rejected.clear();  // the snapshot holds the kept samples
-    SharedRobotError model;
-    model.length_scale = e.length_scale;
-    model.view_noise_scale = e.view_noise_scale;
-    model.translation_sigma = e.translation_sigma;
-    model.rotation_sigma = e.rotation_sigma;
+    const SharedRobotError model = model_of(e);
     return check_shared_robot_error(snapshot.samples, per_view, model, options, SharedErrorEstimator::Gls);
   }
   return handeye::honesty_check(

@@ -106,24 +106,46 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
   result.planted = options.change;
   result.bound = chi2_test_power(6, options.change == PlantedChange::None ? 0.0 : options.multiple * options.multiple,
                                  options.check.alpha);
+  // A set of views at the robot's true poses, as options.observe or the pose-level noise sees them.
+  const auto observed = [&](Rng& rng, const Rig& rig, const std::vector<Eigen::Isometry3d>& effectors,
+                            const Eigen::Isometry3d& X_true, const Eigen::Isometry3d& Y_true) {
+    if (options.observe) return options.observe(rng, rig, effectors, X_true, Y_true);
+    SampleSet set;
+    set.rig = rig;
+    if (options.noise_given) set.noise = noise;
+    for (const Eigen::Isometry3d& E : effectors) set.samples.push_back(observe(rng, rig, E, X_true, Y_true, noise));
+    return set;
+  };
   Rng rng(options.seed);
   for (int trial = 0; trial < options.checks; ++trial) {
-    SimulatedSession session = simulate_session(rng, options.setup, X, options.calibration_samples, noise, options.viewpoints);
-    if (!options.noise_given) session.samples.noise.reset();
+    SimulatedSession session = simulate_session(rng, options.setup, X, options.calibration_samples,
+                                                options.observe ? MeasurementNoise{} : noise, options.viewpoints);
+    const Rig& rig = session.samples.rig;
+    const Eigen::Isometry3d& Y = session.T_world_pattern;
+    if (options.observe) {  // the session's robot poses are the truth: observe them
+      std::vector<Eigen::Isometry3d> effectors;
+      for (const PoseSample& s : session.samples.samples) effectors.push_back(s.T_base_effector);
+      session.samples = observed(rng, rig, effectors, X, Y);
+    } else if (!options.noise_given) {
+      session.samples.noise.reset();
+    }
     Calibration calibration = solve_joint(session.samples);
     if (options.prediction) {
       calibration.prediction = prediction_check(session.samples, [](const SampleSet& s) { return solve_joint(s); });
     }
-    const Rig& rig = session.samples.rig;
-    const Eigen::Isometry3d& Y = session.T_world_pattern;
 
-    SampleSet views;
-    views.rig = rig;
-    if (options.noise_given) views.noise = noise;
     std::vector<Eigen::Isometry3d> effectors;
-    for (int i = 0; i < options.views; ++i) {
-      effectors.push_back(rig.effector_for_view(X, Y, random_view(rng, options.viewpoints)));
-      views.samples.push_back(observe(rng, rig, effectors.back(), X, Y, noise));
+    SampleSet views;
+    if (options.observe) {
+      for (int i = 0; i < options.views; ++i) effectors.push_back(rig.effector_for_view(X, Y, random_view(rng, options.viewpoints)));
+      views = options.observe(rng, rig, effectors, X, Y);
+    } else {  // each view drawn and observed in turn (the seeded figures of BENCHMARKS.md)
+      views.rig = rig;
+      if (options.noise_given) views.noise = noise;
+      for (int i = 0; i < options.views; ++i) {
+        effectors.push_back(rig.effector_for_view(X, Y, random_view(rng, options.viewpoints)));
+        views.samples.push_back(observe(rng, rig, effectors.back(), X, Y, noise));
+      }
     }
     Eigen::Isometry3d X_now = X, Y_now = Y;
     if (options.change != PlantedChange::None) {
@@ -136,9 +158,7 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
       const double sigma = 1.0 / std::sqrt(u.dot(covariance.ldlt().solve(u)));
       const Eigen::Vector3d move = options.multiple * sigma * u.head<3>();
       (x ? X_now : Y_now).translation() += move;  // a left perturbation's translation part
-      for (int i = 0; i < options.views; ++i) {
-        views.samples[static_cast<std::size_t>(i)] = observe(rng, rig, effectors[static_cast<std::size_t>(i)], X_now, Y_now, noise);
-      }
+      views = observed(rng, rig, effectors, X_now, Y_now);
     }
     const CalibrationCheck check = check_calibration(calibration, views, options.check);
     ++result.checks;

@@ -111,7 +111,11 @@ struct CalibrationCheck {
 /// the noise model it was computed with (residual_noise): one without them is refused
 /// (NoiseUnidentifiable, saying to save it again with `handeye solve` or the node).
 /// When its honesty check inflated the covariance, the views' noise is inflated by the
-/// same factor (the check that found the model short found its noise short). `views`:
+/// same factor (the check that found the model short found its noise short). One that
+/// uses the shared robot error (Calibration::SharedError::used, with its `views`) is
+/// checked about its per-view X and Y under that model, scaled by the model's honesty
+/// factor (no leave-one-out scale). Throws MalformedFile for a model in use without a
+/// positive length or view noise scale. `views`:
 /// the new samples (the calibration's setup; their own noise when the detector states
 /// one; `views.rig` must be the calibration's setup). Throws NoData for no view.
 CalibrationCheck check_calibration(const Calibration& calibration, const SampleSet& views, const CheckOptions& options = {});

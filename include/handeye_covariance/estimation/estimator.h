@@ -236,7 +236,8 @@ struct Calibration {
     Matrix6d per_view_pattern_covariance = Matrix6d::Zero(), per_view_cross_covariance = Matrix6d::Zero();
     /// The per-view model's own honesty check (calibrate_checked runs it too): its
     /// inflation (1 unless overconfident and inflate_when_overconfident) and verdict.
-    /// The check of a saved calibration predicts with the per-view model times it.
+    /// A check of new views from a file without `views` below predicts with the per-view
+    /// model times it; with them, under the model (whose own honesty factor applies).
     double per_view_inflation = 1.0;
     std::string per_view_honesty;
     /// The per-view fit's own factors for its noise estimate's error and its noise

@@ -128,15 +128,26 @@ SharedRobotErrorFit fit_shared_robot_error(const SampleSet& samples, const Calib
 /// beside the model's (covariance_kind "information"), inflated by its own honesty
 /// check's factor (per_view_inflation, recorded as the honesty inflation); otherwise
 /// `calibration` itself.
-/// What the check of a saved calibration predicts new views with (calibration_check.h).
+/// What the check of a saved calibration predicts new views about (calibration_check.h):
+/// under the model where the record holds its `views`, with this alone where not.
 Calibration per_view_calibration(const Calibration& calibration);
 
 /// The fit as Calibration::shared_robot_error records it.
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit);
+/// The model a record holds (its length, s and sigmas).
+SharedRobotError model_of(const Calibration::SharedError& record);
+
+/// k(p, q) = exp(-|p - q|^2 / (2 l^2)): how much of their robot error two poses whose
+/// effectors are at p and q (base frame) share, l > 0.
+double shared_error_kernel(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double length_scale);
+/// E = diag(a I3, b I3): the shared error's covariance per pose (translation, rotation;
+/// left perturbation in the base frame), so that Cov(e_i, e_j) = k(p_i, p_j) D_i E D_j^T.
+Matrix6d shared_error_covariance(const SharedRobotError& model);
 
 /// X, Y and their covariances become the chosen model's (its GLS step); the per-view
 /// model's X, Y, covariances and noise text stay in `c.shared_robot_error` (which must
-/// hold shared_error_record(fit)), marked used.
+/// hold shared_error_record(fit)), marked used. Throws InvalidNoise when the fit did not
+/// choose a model or `c` has no record or no pattern pose.
 void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit);
 
 /// Whose halves the linearised check splits: the calibration's own estimator (the

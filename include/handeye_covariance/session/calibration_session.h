@@ -182,10 +182,11 @@ class CalibrationSession {
   SampleSet decided(const SampleSet& samples, const Calibration& calibration) const;
   /// calibrate() of samples decided already (decided()): no decision of turns.
   Calibration calibrate_decided(const SessionSnapshot& snapshot) const;
-  /// calibrate(), its leave-one-out prediction (Calibration::prediction), then the
-  /// shared robot error (settings' shared_robot_error; Calibration::shared_robot_error):
-  /// with Use, where the likelihood prefers it, X, Y and their covariances become its
-  /// own. What calibrate_checked and the report judge. Throws HandEyeError.
+  /// calibrate(), then the shared robot error (settings' shared_robot_error;
+  /// Calibration::shared_robot_error): with Use, where the likelihood prefers it, X, Y and
+  /// their covariances become its own; then, unless it is used, the leave-one-out
+  /// prediction (Calibration::prediction) a check of new views scales by. What
+  /// calibrate_checked and the report judge. Throws HandEyeError.
   Calibration calibrate_modelled(const SessionSnapshot& snapshot) const;
   /// calibrate_modelled(), then the calibrated honesty check on the kept samples
   /// (Calibration::honesty; honesty_check below), the covariance inflated when it is
@@ -195,7 +196,8 @@ class CalibrationSession {
   Calibration calibrate_checked(const SessionSnapshot& snapshot) const;
   /// Where `calibration` uses the shared robot error's model: the per-view model's own
   /// honesty check on `kept` (its kept samples), recorded as per_view_inflation and
-  /// per_view_honesty (the check of a saved calibration predicts with that model,
+  /// per_view_honesty (the check of a saved calibration predicts about that model's X and
+  /// Y under the shared error, and with that model alone from a file without its views:
   /// per_view_calibration). Never throws: a refused check is recorded as not run.
   void check_per_view(const SessionSnapshot& kept, Calibration& calibration, const HonestyOptions& options) const;
   /// The shared robot error about `calibration` of `snapshot` (calibrate()): the fit,

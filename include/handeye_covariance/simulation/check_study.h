@@ -10,7 +10,13 @@
 // reports it at these views: 1 / sqrt(u^T Cov(d)^-1 u), so that the planted change's
 // noncentrality is multiple^2 and a 6-dof test at alpha can detect it no more often
 // than the noncentral chi2(6, multiple^2) beyond the chi2(6) 1 - alpha quantile.
+//
+// By default a view is observed at the pose level (each pose perturbed by `noise`);
+// `observe` can see it otherwise: handeye_check_study --rendered renders each set of
+// views and detects them as `handeye images` does (simulation/rendered_views.h).
 #pragma once
+
+#include <functional>
 
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/simulation/simulation.h"
@@ -35,6 +41,12 @@ struct CheckStudyOptions {
   /// as the session does; false: the check draws each estimated noise number instead.
   bool prediction = true;
   int bound_draws = 5000;  // of the two-hypothesis bound per check (0: not computed; +-0.4% each)
+  /// How a set of views is observed: the rig, the robot's true poses and the true X and
+  /// Y to the samples with their noise (a view may be left out). Unset: each pose
+  /// perturbed by `noise`, stated as `noise_given` says.
+  std::function<SampleSet(Rng& rng, const Rig& rig, const std::vector<Eigen::Isometry3d>& effectors,
+                          const Eigen::Isometry3d& X, const Eigen::Isometry3d& Y)>
+      observe;
 };
 
 struct CheckStudyResult {
