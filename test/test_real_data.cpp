@@ -24,6 +24,7 @@
 #include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
+#include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/result_file.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/report.h"
@@ -538,12 +539,98 @@ std::vector<std::vector<int>> every_split(int n, int k, int most) {
 // whole session uses the shared robot error, the part uses its model too, and the check
 // predicts the new views under it). A view
 // beyond the outlier gate alone is left out as a wrong detection, as the check does. Without a change the check says
-// "changed" in at most 3% of the splits at alpha 1%; with the camera moved 2 mm on its
+// "changed" in at most 3% of the splits at alpha 1% (a short session's few splits: their
+// count of alarms against a parametric-bootstrap reference at its size and noise); with the camera moved 2 mm on its
 // mount (the check part's detected poses shifted by 2 mm in the camera frame, a random
 // direction per split) it detects it in at least 90% of the splits whose calibration's
 // sigma allows it: where 2 mm is at least the check's own 5 sigma along the move, the
 // change the bound lets any such test detect about 90% of the time. The detectable
 // change (5 sigma, median over the splits) is printed per session.
+/// What the checks of one session's splits found.
+struct SplitChecks {
+  int splits = 0, alarms = 0, allowed = 0, detected_allowed = 0, detected = 0, per_view_parts = 0;
+  std::vector<double> detectable;  // 5 sigma along each move, m
+};
+
+/// The checks of `samples`' splits (`distinct`, else `planned` random ones drawn from
+/// `rng`), each calibrated as a user's would be (see above); with `moves`, each split's
+/// check views are checked again with the camera moved 2 mm on its mount.
+SplitChecks check_splits(const SampleSet& samples, const char* name, int k, const std::vector<std::vector<int>>& distinct,
+                         int planned, double inflation, const std::optional<SharedRobotError>& shared, bool moves,
+                         std::mt19937_64& rng) {
+  const int n = static_cast<int>(samples.samples.size());
+  const bool own_model = std::getenv("HANDEYE_CHECK_OWN_MODEL") != nullptr;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  SplitChecks found;
+  for (int split = 0; split < planned; ++split) {
+    std::vector<int> order(static_cast<std::size_t>(n));
+    std::iota(order.begin(), order.end(), 0);
+    if (distinct.empty()) {
+      std::shuffle(order.begin(), order.end(), rng);
+    } else {
+      order = distinct[static_cast<std::size_t>(split)];
+    }
+    SampleSet part = samples, views = samples;
+    part.samples.clear(), views.samples.clear();
+    for (int i = 0; i < n; ++i) {
+      (i < k ? views : part).samples.push_back(samples.samples[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])]);
+    }
+    SessionSettings settings = session_settings(part);
+    settings.honesty.splits = 0;  // the whole session's inflation stands in for it
+    // Where the whole session uses the shared robot error, a part takes its model
+    // (length, s, a, b) as it takes its inflation, fitted with the check's views among
+    // the session's: fitting each part's own would cost 200 x 0.1 s per session and
+    // path. HANDEYE_CHECK_OWN_MODEL=1 fits each part's own, as a user's would be (the
+    // figures of both in docs/how_it_works.md).
+    settings.shared_robot_error = SharedErrorUse::Off;
+    CalibrationSession session(settings);
+    session.replace(part.samples, name);
+    Calibration cal;
+    try {
+      // With its leave-one-out prediction; under the shared robot error the session
+      // makes none (the check predicts under the model), as here.
+      cal = shared ? session.calibrate(session.snapshot()) : session.calibrate_checked(session.snapshot());
+    } catch (const HandEyeError&) {
+      continue;  // a part the estimator refuses (too few turns) is no calibration to check
+    }
+    if (shared) {
+      SharedRobotErrorOptions options;
+      if (!own_model) options.model = shared;
+      const SharedRobotErrorFit fit = fit_shared_robot_error(session.decided(part, cal), cal, options);
+      if (fit.chosen) {
+        cal.shared_robot_error = shared_error_record(fit);
+        use_shared_robot_error(cal, fit);
+      } else {  // the part's own fit keeps the per-view model: its leave-one-out too
+        cal = session.calibrate_checked(session.snapshot());
+        ++found.per_view_parts;
+      }
+    }
+    if (inflation > 1.0) {
+      scale_covariances(cal, inflation);
+      cal.honesty = Calibration::Honesty{};
+      cal.honesty->inflation = inflation;
+    }
+    ++found.splits;
+    const CalibrationCheck unchanged = check_calibration(cal, views);
+    found.alarms += unchanged.changed;
+    if (!moves) continue;
+    // The camera moved by 2 mm on its mount: X' = X T(delta), so each detected pose
+    // T_camera_pattern becomes T(-delta) T_camera_pattern.
+    Eigen::Vector3d delta(normal(rng), normal(rng), normal(rng));
+    delta = 2e-3 * delta.normalized();
+    SampleSet moved = views;
+    for (PoseSample& s : moved.samples) s.T_camera_pattern.translation() -= delta;
+    const CalibrationCheck check = check_calibration(cal, moved);
+    Vector6d u = Vector6d::Zero();
+    u.head<3>() = cal.T_parent_camera.linear() * delta.normalized();  // the move as X's left perturbation
+    const double sigma = 1.0 / std::sqrt(u.dot(unchanged.X_alone.X_change->covariance.ldlt().solve(u)));
+    found.detectable.push_back(5.0 * sigma);
+    found.detected += check.changed;
+    if (5.0 * sigma <= 2e-3) ++found.allowed, found.detected_allowed += check.changed;
+  }
+  return found;
+}
+
 TEST(RealData, ChecksOfACalibrationOnEverySession) {
   for (const RealCase& c : real_cases()) {
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
@@ -551,109 +638,78 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       const SampleSet* samples = &samples_on_path;
       double inflation = 1.0;
       std::optional<SharedRobotError> shared;  // the whole session's, where it uses one
+      Calibration whole_calibration;
       {
         CalibrationSession whole(session_settings(*samples));
         whole.replace(samples->samples, c.name);
-        const Calibration cal = whole.calibrate_checked(whole.snapshot());
-        if (cal.honesty) inflation = cal.honesty->inflation;
-        if (cal.shared_robot_error && cal.shared_robot_error->used) shared = model_of(*cal.shared_robot_error);
+        whole_calibration = whole.calibrate_checked(whole.snapshot());
+        if (whole_calibration.honesty) inflation = whole_calibration.honesty->inflation;
+        if (whole_calibration.shared_robot_error && whole_calibration.shared_robot_error->used) {
+          shared = model_of(*whole_calibration.shared_robot_error);
+        }
       }
       const int n = static_cast<int>(samples->samples.size());
       const int k = std::min(5, n / 3);
       std::mt19937_64 rng(17);
-      std::normal_distribution<double> normal(0.0, 1.0);
       // 200 random splits; or, where a session has fewer distinct ones (8 views, checks
       // of 2: 28), each of them once: repeating a split would only weight it again.
       const std::vector<std::vector<int>> distinct = every_split(n, k, 200);
       const int planned = distinct.empty() ? 200 : static_cast<int>(distinct.size());
-      int splits = 0, alarms = 0, allowed = 0, detected_allowed = 0, detected = 0, per_view_parts = 0;
-      const bool own_model = std::getenv("HANDEYE_CHECK_OWN_MODEL") != nullptr;
-      std::vector<double> detectable;
-      for (int split = 0; split < planned; ++split) {
-        std::vector<int> order(static_cast<std::size_t>(n));
-        std::iota(order.begin(), order.end(), 0);
-        if (distinct.empty()) {
-          std::shuffle(order.begin(), order.end(), rng);
-        } else {
-          order = distinct[static_cast<std::size_t>(split)];
-        }
-        SampleSet part = *samples, views = *samples;
-        part.samples.clear(), views.samples.clear();
-        for (int i = 0; i < n; ++i) {
-          (i < k ? views : part).samples.push_back(samples->samples[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])]);
-        }
-        SessionSettings settings = session_settings(part);
-        settings.honesty.splits = 0;  // the whole session's inflation stands in for it
-        // Where the whole session uses the shared robot error, a part takes its model
-        // (length, s, a, b) as it takes its inflation, fitted with the check's views among
-        // the session's: fitting each part's own would cost 200 x 0.1 s per session and
-        // path. HANDEYE_CHECK_OWN_MODEL=1 fits each part's own, as a user's would be (the
-        // figures of both in docs/how_it_works.md).
-        settings.shared_robot_error = SharedErrorUse::Off;
-        CalibrationSession session(settings);
-        session.replace(part.samples, c.name);
-        Calibration cal;
-        try {
-          // With its leave-one-out prediction; under the shared robot error the session
-          // makes none (the check predicts under the model), as here.
-          cal = shared ? session.calibrate(session.snapshot()) : session.calibrate_checked(session.snapshot());
-        } catch (const HandEyeError&) {
-          continue;  // a part the estimator refuses (too few turns) is no calibration to check
-        }
-        if (shared) {
-          SharedRobotErrorOptions options;
-          if (!own_model) options.model = shared;
-          const SharedRobotErrorFit fit = fit_shared_robot_error(session.decided(part, cal), cal, options);
-          if (fit.chosen) {
-            cal.shared_robot_error = shared_error_record(fit);
-            use_shared_robot_error(cal, fit);
-          } else {  // the part's own fit keeps the per-view model: its leave-one-out too
-            cal = session.calibrate_checked(session.snapshot());
-            ++per_view_parts;
-          }
-        }
-        if (inflation > 1.0) {
-          scale_covariances(cal, inflation);
-          cal.honesty = Calibration::Honesty{};
-          cal.honesty->inflation = inflation;
-        }
-        ++splits;
-        const CalibrationCheck unchanged = check_calibration(cal, views);
-        alarms += unchanged.changed;
-        // The camera moved by 2 mm on its mount: X' = X T(delta), so each detected pose
-        // T_camera_pattern becomes T(-delta) T_camera_pattern.
-        Eigen::Vector3d delta(normal(rng), normal(rng), normal(rng));
-        delta = 2e-3 * delta.normalized();
-        SampleSet moved = views;
-        for (PoseSample& s : moved.samples) s.T_camera_pattern.translation() -= delta;
-        const CalibrationCheck check = check_calibration(cal, moved);
-        Vector6d u = Vector6d::Zero();
-        u.head<3>() = cal.T_parent_camera.linear() * delta.normalized();  // the move as X's left perturbation
-        const double sigma = 1.0 / std::sqrt(u.dot(unchanged.X_alone.X_change->covariance.ldlt().solve(u)));
-        detectable.push_back(5.0 * sigma);
-        detected += check.changed;
-        if (5.0 * sigma <= 2e-3) ++allowed, detected_allowed += check.changed;
-      }
+      SplitChecks found = check_splits(*samples, c.name, k, distinct, planned, inflation, shared, true, rng);
+      std::vector<double>& detectable = found.detectable;
       std::sort(detectable.begin(), detectable.end());
       const double median = detectable.empty() ? 0.0 : detectable[detectable.size() / 2];
+      const int splits = found.splits, alarms = found.alarms;
       const double alarm_rate = splits ? static_cast<double>(alarms) / splits : 1.0;
-      if (own_model && shared) std::printf("  (each part's own shared robot error: per-view model in %d parts)\n", per_view_parts);
+      if (std::getenv("HANDEYE_CHECK_OWN_MODEL") && shared) {
+        std::printf("  (each part's own shared robot error: per-view model in %d parts)\n", found.per_view_parts);
+      }
       std::printf("[check, real %s, %s, %d samples, %d per check, covariance x%.2f] %d splits: false alarms %.1f%% (%d); "
                   "camera moved 2 mm: detected %.1f%% (%d of %d splits whose 5 sigma <= 2 mm: %.1f%%); detectable change "
                   "(5 sigma along the move, median) %.2f mm\n",
-                  c.name, path.c_str(), n, k, inflation, splits, 100.0 * alarm_rate, alarms, splits ? 100.0 * detected / splits : 0.0,
-                  detected_allowed, allowed, allowed ? 100.0 * detected_allowed / allowed : 0.0, median * 1e3);
+                  c.name, path.c_str(), n, k, inflation, splits, 100.0 * alarm_rate, alarms,
+                  splits ? 100.0 * found.detected / splits : 0.0, found.detected_allowed, found.allowed,
+                  found.allowed ? 100.0 * found.detected_allowed / found.allowed : 0.0, median * 1e3);
       EXPECT_GE(splits, std::min(150, planned)) << c.name << ", " << path;
-      // Not reached on the images of the two 8-view Franka sessions (1 and 4 of their 28
-      // splits): a calibration of 6 views and checks of 2, where one alarm is 3.6%; the
-      // eye-in-hand session's 4 all hold its 8th image, the closest (0.21 m, the others
-      // 0.28-0.41 m), off by 1 degree where the views without it predict 0.3 per axis.
-      // Their poses without a covariance: none. The KUKA sessions, whose calibration uses
-      // the shared robot error, predicted under it: at most 3%.
-      const bool short_images = n < 10 && path == "images";
-      EXPECT_LE(alarm_rate, short_images ? 0.2 : 0.03) << c.name << ", " << path;
-      if (allowed >= 20) {
-        EXPECT_GE(static_cast<double>(detected_allowed) / allowed, 0.9) << c.name << ", " << path;
+      if (distinct.empty()) {
+        // The KUKA sessions, whose calibration uses the shared robot error, predicted under it.
+        EXPECT_LE(alarm_rate, 0.03) << c.name << ", " << path;
+      } else if (alarms > 0) {  // (no alarm is within any reference)
+        // A short session's few splits share their views: one odd view is in a quarter of
+        // them, so the count of alarms over its splits is judged against a reference at the
+        // session's own size and noise: the same splits of sessions simulated at its robot
+        // poses with its fitted noise (split_check.h's simulate_like), checked alike.
+        const std::vector<Matrix6d> S = residual_covariances(*samples, whole_calibration);
+        std::mt19937_64 replicate_rng(29);
+        constexpr int kReplicates = 100;
+        std::vector<int> counts;
+        for (int b = 0; b < kReplicates; ++b) {
+          const SampleSet replicate = simulate_like(*samples, whole_calibration, S, replicate_rng);
+          counts.push_back(check_splits(replicate, c.name, k, distinct, planned, inflation, shared, false, rng).alarms);
+        }
+        const int as_many = static_cast<int>(std::count_if(counts.begin(), counts.end(), [&](int a) { return a >= alarms; }));
+        const double mean = std::accumulate(counts.begin(), counts.end(), 0.0) / kReplicates;
+        std::sort(counts.begin(), counts.end());
+        std::printf("  reference (%d sessions at its poses and noise, the same %d splits): mean %.2f alarms (%.1f%%), "
+                    "95th percentile %d, max %d; %d or more in %d%% of them\n",
+                    kReplicates, planned, mean, 100.0 * mean / planned, counts[95 * kReplicates / 100 - 1], counts.back(),
+                    alarms, 100 * as_many / kReplicates);
+        // The reference itself keeps alpha: its mean within 3% ...
+        EXPECT_LE(mean / planned, 0.03) << c.name << ", " << path;
+        // ... and the session's own count is within its 99% range. Not reached on the
+        // eye-in-hand session's images (issue 41, open): its 4 alarms all hold its 8th
+        // image, the closest (0.21 m, the others 0.28-0.41 m), off by 1 degree where the
+        // views without it predict 0.3 per axis; no simulated session at its poses and
+        // noise raised 4. There the count is held where it is, below 20%.
+        const bool eye_in_hand_images = std::string(c.name).find("eye-in-hand") != std::string::npos && path == "images";
+        if (eye_in_hand_images) {
+          EXPECT_LE(alarm_rate, 0.2) << c.name << ", " << path;
+        } else {
+          EXPECT_GE(as_many, kReplicates / 100) << c.name << ", " << path;
+        }
+      }
+      if (found.allowed >= 20) {
+        EXPECT_GE(static_cast<double>(found.detected_allowed) / found.allowed, 0.9) << c.name << ", " << path;
       }
     }
   }
