@@ -262,7 +262,15 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   const std::size_t l_at = file.find("\n  length_scale: ");
   ASSERT_NE(l_at, std::string::npos);
   const std::string l_line = file.substr(l_at, file.find('\n', l_at + 1) - l_at);
-  EXPECT_NE(refusal(l_line, "\n  length_scale: 0").find("length_scale and view_noise_scale must be > 0"), std::string::npos);
+  EXPECT_NE(refusal(l_line, "\n  length_scale: 0").find("needs a length_scale and a view_noise_scale above 0"), std::string::npos);
+  Calibration no_length = read;  // the same record in memory, refused by the check itself
+  no_length.shared_robot_error->length_scale = 0.0;
+  try {
+    check_calibration(no_length, later.samples);
+    ADD_FAILURE() << "a model in use without a length scale was checked";
+  } catch (const HandEyeError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs a length_scale and a view_noise_scale above 0"), std::string::npos) << e.what();
+  }
   const std::size_t v_at = file.find("\n  views:\n");
   ASSERT_NE(v_at, std::string::npos);
   std::size_t end = v_at + std::string("\n  views:").size();  // its entries: lines deeper than the key's

@@ -19,7 +19,6 @@ namespace handeye {
 
 namespace {
 
-using Matrix12d = Eigen::Matrix<double, 12, 12>;
 
 double chi2_upper(double statistic, int dof) {
   if (dof <= 0) return 1.0;
@@ -185,10 +184,7 @@ Eigen::MatrixXd shared_error_prediction(const Calibration::SharedError& shared, 
   const double l = shared.length_scale;
   const auto kernel = [l](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return shared_error_kernel(p, q, l); };
   const Matrix6d E = shared_error_covariance(model_of(shared));
-  Matrix12d P;
-  P << shared.per_view_estimate_covariance, shared.per_view_estimate_cross_covariance,
-      shared.per_view_estimate_cross_covariance.transpose(), shared.per_view_estimate_pattern_covariance;
-  Eigen::MatrixXd C = J * P * J.transpose();
+  Eigen::MatrixXd C = J * per_view_estimate_joint_covariance(shared) * J.transpose();
   Eigen::MatrixXd M(12, 6 * k);
   for (int i = 0; i < k; ++i) {
     const Eigen::Vector3d p = new_views.samples[static_cast<std::size_t>(i)].T_base_effector.translation();
@@ -516,15 +512,7 @@ CalibrationCheck check_calibration(const Calibration& used, const SampleSet& vie
       used.shared_robot_error && used.shared_robot_error->used && !used.shared_robot_error->views.empty()
           ? &*used.shared_robot_error
           : nullptr;
-  if (shared && !(shared->length_scale > 0.0 && shared->view_noise_scale > 0.0 && shared->translation_sigma >= 0.0 &&
-                  shared->rotation_sigma >= 0.0)) {
-    throw HandEyeError(ErrorCode::MalformedFile,
-                       "the shared robot error in use has no positive length scale and view noise scale (or a negative "
-                       "sigma): the new views cannot be predicted under it",
-                       "the calibration's shared_robot_error",
-                       "save the calibration again with this version, or check its length_scale, view_noise_scale, "
-                       "translation_sigma and rotation_sigma");
-  }
+  if (shared) require_predictable(*shared, "the calibration's shared_robot_error");
   const double shared_inflation = used.honesty ? used.honesty->inflation : 1.0;
   CalibrationCheck check = check_all(calibration, views, options, shared, shared_inflation);
   // One wrong detection is not a moved camera: a view beyond the outlier gate alone

@@ -18,7 +18,6 @@ namespace handeye {
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
-using Matrix12d = Eigen::Matrix<double, 12, 12>;
 using Vector12d = Eigen::Matrix<double, 12, 1>;
 using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
 

@@ -88,7 +88,6 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
 
 namespace {
 
-using Matrix12d = Eigen::Matrix<double, 12, 12>;
 
 /// The detection noise a candidate view is predicted with: the samples' own
 /// covariances averaged as information (a typical view; the arithmetic mean is

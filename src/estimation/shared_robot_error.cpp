@@ -435,6 +435,26 @@ SharedRobotError model_of(const Calibration::SharedError& record) {
   return model;
 }
 
+void require_predictable(const Calibration::SharedError& record, const std::string& where) {
+  if (record.length_scale > 0.0 && record.view_noise_scale > 0.0 && record.translation_sigma >= 0.0 &&
+      record.rotation_sigma >= 0.0) {
+    return;
+  }
+  throw HandEyeError(ErrorCode::MalformedFile,
+                     "the shared robot error in use needs a length_scale and a view_noise_scale above 0 and no negative "
+                     "sigma to predict new views; it has " + number_text(record.length_scale) + " m, " +
+                         number_text(record.view_noise_scale) + ", " + number_text(record.translation_sigma) + " m and " +
+                         number_text(record.rotation_sigma) + " rad",
+                     where, "write the numbers its fit gave (metres, radians), or save the calibration again with this version");
+}
+
+Matrix12d per_view_estimate_joint_covariance(const Calibration::SharedError& record) {
+  Matrix12d P;
+  P << record.per_view_estimate_covariance, record.per_view_estimate_cross_covariance,
+      record.per_view_estimate_cross_covariance.transpose(), record.per_view_estimate_pattern_covariance;
+  return P;
+}
+
 void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   if (!fit.chosen || !c.shared_robot_error || !c.pattern) {
     throw HandEyeError(ErrorCode::InvalidNoise,

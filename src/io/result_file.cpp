@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "handeye_covariance/core/validation.h"
+#include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/files.h"
 #include "yaml_primitives.h"
 
@@ -603,11 +604,7 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       e.translation_sigma = number("translation_sigma");
       e.rotation_sigma = number("rotation_sigma");
       e.view_noise_scale = number("view_noise_scale");
-      if (!(e.length_scale > 0.0 && e.view_noise_scale > 0.0 && e.translation_sigma >= 0.0 && e.rotation_sigma >= 0.0)) {
-        throw HandEyeError(ErrorCode::MalformedFile,
-                           "the shared robot error's length_scale and view_noise_scale must be > 0 and its sigmas >= 0",
-                           at.str(), "write the numbers the fit gave (metres, radians), or save the calibration again");
-      }
+      require_predictable(e, at.str());
       e.step_nees = number("step_nees");
       e.covariance_inflation = number("covariance_inflation");
       pose_block("X", e.T_parent_camera, e.pose_covariance);
@@ -632,10 +629,7 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
         e.per_view_estimate_cross_covariance =
             from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance_under_it", at, shared_hint),
                                               at / "per_view_cross_covariance_under_it", "6x6 Cov(X, Y) under the model"));
-        Eigen::Matrix<double, 12, 12> joint;
-        joint << e.per_view_estimate_covariance, e.per_view_estimate_cross_covariance,
-            e.per_view_estimate_cross_covariance.transpose(), e.per_view_estimate_pattern_covariance;
-        check_covariance(joint, (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
+        check_covariance(per_view_estimate_joint_covariance(e), (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
         const YAML::Node list = shared["views"];
         if (!list.IsSequence() || list.size() == 0) {
           throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",

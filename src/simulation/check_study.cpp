@@ -120,8 +120,8 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
   for (int trial = 0; trial < options.checks; ++trial) {
     SimulatedSession session = simulate_session(rng, options.setup, X, options.calibration_samples,
                                                 options.observe ? MeasurementNoise{} : noise, options.viewpoints);
-    const Rig& rig = session.samples.rig;
-    const Eigen::Isometry3d& Y = session.T_world_pattern;
+    const Rig rig = session.samples.rig;  // a copy: the observed path replaces session.samples
+    const Eigen::Isometry3d Y = session.T_world_pattern;
     if (options.observe) {  // the session's robot poses are the truth: observe them
       std::vector<Eigen::Isometry3d> effectors;
       for (const PoseSample& s : session.samples.samples) effectors.push_back(s.T_base_effector);

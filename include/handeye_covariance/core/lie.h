@@ -18,6 +18,7 @@
 namespace handeye {
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Matrix12d = Eigen::Matrix<double, 12, 12>;  // the joint (X, Y) blocks, X first
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 namespace so3 {

@@ -136,6 +136,12 @@ Calibration per_view_calibration(const Calibration& calibration);
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit);
 /// The model a record holds (its length, s and sigmas).
 SharedRobotError model_of(const Calibration::SharedError& record);
+/// Throws MalformedFile, naming `where`, unless the record's model can predict new
+/// views: a length scale and a view noise scale above 0, no negative sigma.
+void require_predictable(const Calibration::SharedError& record, const std::string& where);
+/// The per-view estimate's joint covariance of (X, Y) under the model, X first
+/// (P = H0 C H0^T, from the record's three blocks).
+Matrix12d per_view_estimate_joint_covariance(const Calibration::SharedError& record);
 
 /// k(p, q) = exp(-|p - q|^2 / (2 l^2)): how much of their robot error two poses whose
 /// effectors are at p and q (base frame) share, l > 0.
