@@ -37,18 +37,19 @@ void row(const char* what, const CheckStudyResult& r, double multiple) {
 
 /// The study through rendered images of `target_file`'s target: no change, and X's
 /// and Y's translation moved by 5 sigma, at the session's usual views.
-int rendered_study(const std::string& target_file, int checks, unsigned seed) {
+int rendered_study(const std::string& target_file, int checks, unsigned seed, int calibration_views) {
   const Target target = io::read_target(target_file);
   const PatternRenderer renderer(target, simulated_camera());
   const PoseNoise robot = check_study_noise().robot;
   CheckStudyOptions o;
   o.checks = checks;
   o.seed = seed;
+  o.calibration_samples = calibration_views;
   o.observe = [&](Rng& rng, const Rig& rig, const std::vector<Eigen::Isometry3d>& effectors, const Eigen::Isometry3d& X,
                   const Eigen::Isometry3d& Y) { return rendered_views(rng, rig, effectors, X, Y, renderer, target, robot); };
-  std::printf("Rendered views of %s (each calibration's 20 and each check's 5 detected, the pixel sigma pooled over "
+  std::printf("Rendered views of %s (each calibration's %d and each check's 5 detected, the pixel sigma pooled over "
               "them), the session's usual views:\n\n",
-              target_file.c_str());
+              target_file.c_str(), calibration_views);
   std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | chi2 / dof |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
   const auto rendered_row = [](const char* what, const CheckStudyResult& r, double multiple) {
@@ -72,19 +73,21 @@ int rendered_study(const std::string& target_file, int checks, unsigned seed) {
 int main(int argc, char** argv) {
   int checks = 300;
   unsigned seed = 1;
+  int calibration_views = 20;
   std::string rendered;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--checks")) checks = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--seed")) seed = static_cast<unsigned>(std::atoi(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--rendered")) rendered = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--calibration-views")) calibration_views = std::atoi(argv[i + 1]);
     else {
-      std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE]\n");
+      std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE [--calibration-views 20]]\n");
       return 2;
     }
   }
   if (!rendered.empty()) {
     try {
-      return rendered_study(rendered, checks, seed);
+      return rendered_study(rendered, checks, seed, calibration_views);
     } catch (const HandEyeError& e) {
       std::fprintf(stderr, "handeye_check_study: %s\n", e.what());
       return 2;
