@@ -9,6 +9,12 @@
 //   handeye_check_study [--checks 300] [--seed 1]
 // Prints Markdown tables (scripts/bench puts them in BENCHMARKS.md).
 //   handeye_check_study --rendered config/tag_board_2x2.yaml [--checks 300] [--seed 1]
+//   handeye_check_study --views-between [--checks 2000]
+// The same at views between the usual and the turned ones, where the frontier lets a
+// test both detect and name a 5 sigma change (issue 41's figures).
+//   handeye_check_study --frontier
+// The frontier between detecting a change and naming it, at views of equal principal
+// cosines between X's and Y's subspaces, and where the study's views sit on it.
 // The same through the images (simulation/rendered_views.h): each calibration's 20 views
 // and each check's 5 rendered, detected with the pixel sigma pooled over the set, the
 // noise estimated beside the detections' covariance, at the session's usual views.
@@ -16,6 +22,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/target_file.h"
@@ -26,12 +34,24 @@ namespace {
 
 using namespace handeye;
 
-void row(const char* what, const CheckStudyResult& r, double multiple) {
-  char two[16] = "-", named[16] = "-";
+/// One table row; `rendered` adds the counts and the new views' chi2 / dof.
+void row(const char* what, const CheckStudyResult& r, double multiple, bool rendered = false) {
+  char two[16] = "-", named[16] = "-", best[16] = "-", counts[32] = "", chi2[24] = "";
   if (multiple > 0.0) std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
+  if (multiple > 0.0) std::snprintf(best, sizeof best, "%.1f%%", 100.0 * r.best_named_right);
   if (multiple > 0.0 && r.changed > 0) std::snprintf(named, sizeof named, "%.1f%%", 100.0 * r.named_right());
-  std::printf("| %s | %.0f | %.1f%% | %.1f%% | %s | %s |\n", what, multiple, 100.0 * r.rate(), 100.0 * r.bound, two, named);
+  if (rendered) {
+    std::snprintf(counts, sizeof counts, " (%d of %d)", r.changed, r.checks);
+    std::snprintf(chi2, sizeof chi2, " %.3f |", r.mean_chi2_over_dof);
+  }
+  std::printf("| %s | %.0f | %.1f%%%s | %.1f%% | %s | %s | %s |%s\n", what, multiple, 100.0 * r.rate(), counts,
+              100.0 * r.bound, two, named, best, chi2);
+  std::fflush(stdout);
 }
+
+const char* const kHeader =
+    "| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | names it right at "
+    "best |\n|---|---:|---:|---:|---:|---:|---:|\n";
 
 }  // namespace
 
@@ -50,22 +70,70 @@ int rendered_study(const std::string& target_file, int checks, unsigned seed, in
   std::printf("Rendered views of %s (each calibration's %d and each check's 5 detected, the pixel sigma pooled over "
               "them), the session's usual views:\n\n",
               target_file.c_str(), calibration_views);
-  std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | chi2 / dof |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
-  const auto rendered_row = [](const char* what, const CheckStudyResult& r, double multiple) {
-    char two[16] = "-", named[16] = "-";
-    if (multiple > 0.0) std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
-    if (multiple > 0.0 && r.changed > 0) std::snprintf(named, sizeof named, "%.1f%%", 100.0 * r.named_right());
-    std::printf("| %s | %.0f | %.1f%% (%d of %d) | %.1f%% | %s | %s | %.3f |\n", what, multiple, 100.0 * r.rate(), r.changed,
-                r.checks, 100.0 * r.bound, two, named, r.mean_chi2_over_dof);
-    std::fflush(stdout);
-  };
-  rendered_row("nothing", run_check_study(o), 0.0);
+  std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | names it "
+              "right at best | chi2 / dof |\n|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  row("nothing", run_check_study(o), 0.0, true);
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     o.change = change;
     o.multiple = 5.0;
     o.seed = seed + 50;
-    rendered_row(change == PlantedChange::XTranslation ? "X (camera on its mount)" : "Y (the target)", run_check_study(o), 5.0);
+    row(change == PlantedChange::XTranslation ? "X (camera on its mount)" : "Y (the target)", run_check_study(o), 5.0, true);
+  }
+  return 0;
+}
+
+/// Where detecting a change and naming it meet: at views whose X and Y subspaces have
+/// equal principal cosines c, the bound for a test that must catch X or Y, the check's
+/// statistic's power, and the most any rule names right (two_hypothesis_frontier); then
+/// where the study's views sit (their mean cosine).
+int frontier(unsigned seed) {
+  std::printf("At views whose X and Y subspaces have six equal principal cosines c (two_hypothesis_frontier, 200 000 "
+              "draws a cell, alpha 1%%):\n\n");
+  std::printf("| c | bound for X or Y, 5 sigma | the check's statistic, 5 sigma | named right at best, 5 sigma | "
+              "bound for X or Y, 6 sigma | named right at best, 6 sigma |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|\n");
+  for (double c : {0.0, 0.3, 0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9}) {
+    const TwoHypothesisFrontier five = two_hypothesis_frontier(Vector6d::Constant(c), 25.0, 0.01, seed, 200000);
+    const TwoHypothesisFrontier six = two_hypothesis_frontier(Vector6d::Constant(c), 36.0, 0.01, seed, 200000);
+    std::printf("| %.2f | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% |\n", c, 100.0 * five.bound, 100.0 * five.larger_power,
+                100.0 * five.named_right, 100.0 * six.bound, 100.0 * six.named_right);
+    std::fflush(stdout);
+  }
+  std::printf("\nWhere views sit (their mean cosine over 200 checks, noise stated):\n\n| tilt to | roll to | mean cosine |\n"
+              "|---:|---:|---:|\n");
+  for (const auto& [tilt, roll] : std::vector<std::pair<double, double>>{{35, 60}, {40, 90}, {45, 90}, {45, 120}, {50, 150},
+                                                                          {60, 180}}) {
+    CheckStudyOptions o;
+    o.noise_given = true;
+    o.checks = 200;
+    o.seed = seed;
+    o.bound_draws = 0;
+    o.viewpoints.max_tilt = tilt * M_PI / 180.0, o.viewpoints.max_roll = roll * M_PI / 180.0;
+    std::printf("| %.0f deg | %.0f deg | %.2f |\n", tilt, roll, run_check_study(o).mean_x_y_cosine);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+/// The study at views between the usual and the turned ones (tilt to 45 deg, roll to 90:
+/// mean cosine 0.73), where the frontier lets a test both detect a 5 sigma change in 90%
+/// and name it right in 95%: no change, and X's and Y's translation moved by 5 and 6 sigma.
+int between_study(int checks, unsigned seed) {
+  std::printf("Views between the two (tilt to 45 deg, roll to 90 deg about the optical axis), %d checks a row:\n\n", checks);
+  std::printf("%s", kHeader);
+  CheckStudyOptions o;
+  o.noise_given = true;
+  o.checks = checks;
+  o.seed = seed + 200;
+  o.viewpoints.max_tilt = 45.0 * M_PI / 180.0, o.viewpoints.max_roll = 90.0 * M_PI / 180.0;
+  row("nothing", run_check_study(o), 0.0);
+  for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
+    for (double multiple : {5.0, 6.0}) {
+      o.change = change;
+      o.multiple = multiple;
+      o.seed = seed + 200 + static_cast<unsigned>(10 * multiple);
+      row(change == PlantedChange::XTranslation ? "X (camera on its mount)" : "Y (the target)", run_check_study(o), multiple);
+    }
   }
   return 0;
 }
@@ -75,16 +143,31 @@ int main(int argc, char** argv) {
   unsigned seed = 1;
   int calibration_views = 20;
   std::string rendered;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--checks")) checks = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--seed")) seed = static_cast<unsigned>(std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--rendered")) rendered = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--calibration-views")) calibration_views = std::atoi(argv[i + 1]);
-    else {
-      std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE [--calibration-views 20]]\n");
-      return 2;
+  bool between = false, frontier_only = false;
+  const auto usage = [] {
+    std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE "
+                         "[--calibration-views 20] | --views-between | --frontier]\n");
+    return 2;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--views-between") {
+      between = true;
+      continue;
     }
+    if (flag == "--frontier") {
+      frontier_only = true;
+      continue;
+    }
+    if (i + 1 >= argc) return usage();
+    const char* value = argv[++i];
+    if (flag == "--checks") checks = std::atoi(value);
+    else if (flag == "--seed") seed = static_cast<unsigned>(std::atoi(value));
+    else if (flag == "--rendered") rendered = value;
+    else if (flag == "--calibration-views") calibration_views = std::atoi(value);
+    else return usage();
   }
+  if (frontier_only) return frontier(seed);
   if (!rendered.empty()) {
     try {
       return rendered_study(rendered, checks, seed, calibration_views);
@@ -93,11 +176,11 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (between) return between_study(checks, seed);
   for (bool diverse : {false, true}) {
     std::printf("%s\n\n", diverse ? "Views turned about different axes (tilt to 60 deg, any roll about the optical axis):"
                                   : "The session's usual views (0.4-0.8 m, tilt to 35 deg, roll to 60 deg):");
-    std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right |\n");
-    std::printf("|---|---:|---:|---:|---:|---:|\n");
+    std::printf("%s", kHeader);
     CheckStudyOptions o;
     o.noise_given = true;
     o.checks = checks;
@@ -116,8 +199,7 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   std::printf("The noise estimated from the calibration's 20 views (no noise block), the session's usual views:\n\n");
-  std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|\n");
+  std::printf("%s", kHeader);
   CheckStudyOptions o;
   o.noise_given = false;
   o.checks = checks;

@@ -65,11 +65,13 @@ double chi2_test_power(int dof, double noncentrality, double alpha) {
       boost::math::complement(boost::math::non_central_chi_squared(dof, noncentrality), threshold));
 }
 
-double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed, int draws) {
+TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed,
+                                               int draws) {
   const double root_lambda = std::sqrt(noncentrality);
   const auto log_ratio = [&](const Vector6d& u, const Vector6d& v) {
     return log_change_likelihood_ratio(u.squaredNorm(), v.squaredNorm(), noncentrality);
   };
+  const auto larger = [](const Vector6d& u, const Vector6d& v) { return std::max(u.squaredNorm(), v.squaredNorm()); };
   const Vector6d c = cosines.cwiseMin(1.0).cwiseMax(0.0);
   const Vector6d s = (Vector6d::Ones() - c.cwiseProduct(c)).cwiseSqrt();
   Rng rng(seed);
@@ -79,23 +81,39 @@ double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality,
     for (int a = 0; a < 6; ++a) x(a) = normal(rng);
     return x;
   };
+  const auto quantile = [&](std::vector<double>& values) {
+    std::sort(values.begin(), values.end());
+    return values[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
+  };
   // In the principal bases the two projections are u and v = c u + s w (u, w white).
-  std::vector<double> null_ratios(static_cast<std::size_t>(draws));
-  for (double& r : null_ratios) {
+  std::vector<double> null_ratios(static_cast<std::size_t>(draws)), null_larger(null_ratios.size());
+  for (std::size_t d = 0; d < null_ratios.size(); ++d) {
     const Vector6d u = gaussian();
-    r = log_ratio(u, c.cwiseProduct(u) + s.cwiseProduct(gaussian()));
+    const Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(gaussian());
+    null_ratios[d] = log_ratio(u, v), null_larger[d] = larger(u, v);
   }
-  std::sort(null_ratios.begin(), null_ratios.end());
-  const double threshold = null_ratios[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
-  int detected = 0;
+  const double threshold = quantile(null_ratios), larger_threshold = quantile(null_larger);
+  int detected = 0, detected_by_larger = 0;
+  double named_right = 0.0;
   for (int d = 0; d < draws; ++d) {
     const Vector6d theta = gaussian().normalized() * root_lambda;
     Vector6d u = gaussian() + theta;  // X changed: the signal is in u's subspace
     Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(gaussian());
+    // Before the swap u is the changed one's; a tie (identical subspaces) is a coin's toss.
+    const double right = u.squaredNorm() > v.squaredNorm() ? 1.0 : u.squaredNorm() == v.squaredNorm() ? 0.5 : 0.0;
     if (d % 2 == 1) std::swap(u, v);  // Y changed: the same with the roles swapped
-    if (log_ratio(u, v) > threshold) ++detected;
+    if (log_ratio(u, v) > threshold) ++detected, named_right += right;
+    detected_by_larger += larger(u, v) > larger_threshold;
   }
-  return static_cast<double>(detected) / draws;
+  TwoHypothesisFrontier frontier;
+  frontier.bound = static_cast<double>(detected) / draws;
+  frontier.larger_power = static_cast<double>(detected_by_larger) / draws;
+  frontier.named_right = detected ? named_right / detected : 0.0;
+  return frontier;
+}
+
+double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed, int draws) {
+  return two_hypothesis_frontier(cosines, noncentrality, alpha, seed, draws).bound;
 }
 
 CheckStudyResult run_check_study(const CheckStudyOptions& options) {
@@ -163,11 +181,14 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     const CalibrationCheck check = check_calibration(calibration, views, options.check);
     ++result.checks;
     if (options.change != PlantedChange::None && options.bound_draws > 0) {
-      result.two_hypothesis_bound += two_hypothesis_power_bound(check.x_y_cosines, options.multiple * options.multiple,
-                                                                options.check.alpha, options.seed + trial,
-                                                                options.bound_draws) / options.checks;
+      const TwoHypothesisFrontier frontier =
+          two_hypothesis_frontier(check.x_y_cosines, options.multiple * options.multiple, options.check.alpha,
+                                  options.seed + trial, options.bound_draws);
+      result.two_hypothesis_bound += frontier.bound / options.checks;
+      result.best_named_right += frontier.named_right / options.checks;
     }
     result.mean_chi2_over_dof += check.chi2 / check.dof / options.checks;
+    result.mean_x_y_cosine += check.x_y_cosines.mean() / options.checks;
     if (check.changed) {
       ++result.changed;
       if (check.change.what == "X") ++result.named_X;

@@ -54,6 +54,7 @@ struct CheckStudyResult {
   int changed = 0;             // the check said changed
   int named_X = 0, named_Y = 0, named_both = 0;  // of those, what it named
   double mean_chi2_over_dof = 0.0;  // the omnibus chi2 / dof (1 when the noise model holds)
+  double mean_x_y_cosine = 0.0;     // the mean of each check's six principal cosines between X's and Y's subspaces
   /// The bound: P(noncentral chi2(6, multiple^2) > chi2(6) quantile 1 - alpha); alpha without a change.
   double bound = 0.0;
   /// The bound for a test that must catch a change of X or of Y (either, in any direction,
@@ -61,6 +62,8 @@ struct CheckStudyResult {
   /// check's views (two_hypothesis_power_bound), averaged. No test's power against both
   /// X and Y changes exceeds it.
   double two_hypothesis_bound = 0.0;
+  /// The most any rule names right at each check's views (two_hypothesis_frontier), averaged.
+  double best_named_right = 0.0;
   double rate() const { return checks ? static_cast<double>(changed) / checks : 0.0; }
   /// The share of detected checks that named the planted change (X or Y).
   double named_right() const;
@@ -83,5 +86,20 @@ double chi2_test_power(int dof, double noncentrality, double alpha);
 /// smaller power of the two (X, Y) is at most this average's optimum.
 double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed = 1,
                                   int draws = 40000);
+
+/// The same Monte-Carlo (its bound identical, draw for draw) with what it says about
+/// the check beside the bound: how close the check's own statistic comes to it, and how
+/// well any test can then tell X from Y. At views of equal principal cosines c it traces
+/// the frontier between detecting a change and naming it (BENCHMARKS.md).
+struct TwoHypothesisFrontier {
+  double bound = 0.0;         // two_hypothesis_power_bound
+  double larger_power = 0.0;  // the power of max(|u|^2, |v|^2), the check's statistic, at its own alpha
+  /// Of the Neyman-Pearson test's detections, the share that the larger of |u|^2 and
+  /// |v|^2 names right: at even odds and equal lambda the likelihood's own choice
+  /// between X and Y (g increasing), so no rule names more right on average.
+  double named_right = 0.0;
+};
+TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double noncentrality, double alpha,
+                                               unsigned seed = 1, int draws = 40000);
 
 }  // namespace handeye
