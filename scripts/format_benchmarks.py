@@ -120,6 +120,9 @@ _, motion = medians(f"{run}/motion.json")
 auto_study = open(f"{run}/auto_study.md").read()
 check_study = open(f"{run}/check_study.md").read()
 check_study_rendered = open(f"{run}/check_study_rendered.md").read()
+check_study_rendered_60 = open(f"{run}/check_study_rendered_60.md").read()
+check_frontier = open(f"{run}/check_frontier.md").read()
+check_between = open(f"{run}/check_between.md").read()
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 
 
@@ -357,6 +360,22 @@ lines += [
     "robot's noise estimated beside the detections' covariance); chi2 / dof of the new views beside:",
     "",
     check_study_rendered.strip().split("\n", 2)[2],
+    "",
+    "The same from 60-view calibrations (`--calibration-views 60 --checks 150`): the noise known to three",
+    "times the dof, the check's null narrower:",
+    "",
+    check_study_rendered_60.strip().split("\n", 2)[2],
+    "",
+    "Where detecting and naming meet (`handeye_check_study --frontier`, two_hypothesis_frontier): how much",
+    "X's and Y's subspaces overlap at the views sets both the most any test detects and the most any rule",
+    "names right; the check's statistic beside the bound.",
+    "",
+    check_frontier.strip(),
+    "",
+    "At views between the usual and the turned ones (`handeye_check_study --views-between --checks 2000`),",
+    "where the frontier lets a test both detect 90% and name 95% by at most half a point:",
+    "",
+    check_between.strip().split("\n", 2)[2],
     "",
     "Real sessions (`test_real_data`, `ChecksOfACalibrationOnEverySession`): 200 random splits of each into a",
     "calibration and 5 check views (the 8-view Franka sessions: each of their 28 splits into 6 and 2 once), the",
