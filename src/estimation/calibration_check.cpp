@@ -19,7 +19,6 @@ namespace handeye {
 
 namespace {
 
-
 double chi2_upper(double statistic, int dof) {
   if (dof <= 0) return 1.0;
   return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), std::max(statistic, 0.0)));

@@ -88,7 +88,6 @@ std::vector<Isometry3d> sample_candidates(const SampleSet& samples, const Calibr
 
 namespace {
 
-
 /// The detection noise a candidate view is predicted with: the samples' own
 /// covariances averaged as information (a typical view; the arithmetic mean is
 /// dominated by the worst views), else the calibration's noise model.

@@ -629,7 +629,8 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
         e.per_view_estimate_cross_covariance =
             from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance_under_it", at, shared_hint),
                                               at / "per_view_cross_covariance_under_it", "6x6 Cov(X, Y) under the model"));
-        check_covariance(per_view_estimate_joint_covariance(e), (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
+        check_covariance(per_view_estimate_joint_covariance(e),
+                         (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
         const YAML::Node list = shared["views"];
         if (!list.IsSequence() || list.size() == 0) {
           throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",
