@@ -3,24 +3,24 @@
 // by 0 to 8 times its own 1 sigma of the change along the move, beside the bound for a
 // 6-dof test that knows which one moved (noncentral chi2) and the bound for any test
 // that must catch either (the Neyman-Pearson test against their mixture, at each check's
-// views); which one it names; at a session's usual views and at views turned about
-// different axes. simulation/check_study.h. Seeded; no ROS.
+// views); which one it names, and how often it detects and names right beside the most
+// any test can (two_hypothesis_frontier); at a session's usual views and at views turned
+// about different axes. simulation/check_study.h. Seeded; no ROS. Prints Markdown tables
+// (scripts/bench puts them in BENCHMARKS.md). One of:
 //
 //   handeye_check_study [--checks 300] [--seed 1]
-// Prints Markdown tables (scripts/bench puts them in BENCHMARKS.md).
-//   handeye_check_study --rendered config/tag_board_2x2.yaml [--checks 300] [--seed 1]
-//   handeye_check_study --views-between [--checks 2000]
-// The same at views between the usual and the turned ones, where the frontier lets a
-// test both detect and name a 5 sigma change (issue 41's figures).
-//   handeye_check_study --frontier
-// The frontier between detecting a change and naming it, at views of equal principal
-// cosines between X's and Y's subspaces, and where the study's views sit on it.
-// The same through the images (simulation/rendered_views.h): each calibration's 20 views
+//   handeye_check_study --rendered config/tag_board_2x2.yaml [--calibration-views 20] [--checks 300] [--seed 1]
+// The same through the images (simulation/rendered_views.h): each calibration's views
 // and each check's 5 rendered, detected with the pixel sigma pooled over the set, the
 // noise estimated beside the detections' covariance, at the session's usual views.
+//   handeye_check_study --views-between [--checks 300] [--seed 1]
+// The same at views between the usual and the turned ones (tilt to 45 deg, roll to 90).
+//   handeye_check_study --frontier [--seed 1]
+// Where detecting a change and naming it meet, at views of equal principal cosines
+// between X's and Y's subspaces, and where views of several spreads sit.
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,22 +36,35 @@ using namespace handeye;
 
 /// One table row; `rendered` adds the counts and the new views' chi2 / dof.
 void row(const char* what, const CheckStudyResult& r, double multiple, bool rendered = false) {
-  char two[16] = "-", named[16] = "-", best[16] = "-", counts[32] = "", chi2[24] = "";
-  if (multiple > 0.0) std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
-  if (multiple > 0.0) std::snprintf(best, sizeof best, "%.1f%%", 100.0 * r.best_named_right);
+  char two[16] = "-", named[16] = "-", both[32] = "-", counts[32] = "", chi2[24] = "";
+  if (multiple > 0.0) {
+    std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
+    std::snprintf(both, sizeof both, "%.1f%% / %.1f%%", 100.0 * r.rate() * r.named_right(), 100.0 * r.best_detected_and_named);
+  }
   if (multiple > 0.0 && r.changed > 0) std::snprintf(named, sizeof named, "%.1f%%", 100.0 * r.named_right());
   if (rendered) {
     std::snprintf(counts, sizeof counts, " (%d of %d)", r.changed, r.checks);
     std::snprintf(chi2, sizeof chi2, " %.3f |", r.mean_chi2_over_dof);
   }
   std::printf("| %s | %.0f | %.1f%%%s | %.1f%% | %s | %s | %s |%s\n", what, multiple, 100.0 * r.rate(), counts,
-              100.0 * r.bound, two, named, best, chi2);
+              100.0 * r.bound, two, named, both, chi2);
   std::fflush(stdout);
 }
 
-const char* const kHeader =
-    "| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | names it right at "
-    "best |\n|---|---:|---:|---:|---:|---:|---:|\n";
+/// The tables' header; `extra` adds columns (" chi2 / dof |").
+void header(const char* extra = "") {
+  std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | detected and "
+              "named right: the check / at best |%s\n|---|---:|---:|---:|---:|---:|---:|%s\n",
+              extra, *extra ? "---:|" : "");
+}
+
+/// A positive whole number from `text`, or nothing (then the usage).
+std::optional<int> positive(const char* text) {
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || value <= 0 || value > 100000000) return std::nullopt;
+  return static_cast<int>(value);
+}
 
 }  // namespace
 
@@ -70,8 +83,7 @@ int rendered_study(const std::string& target_file, int checks, unsigned seed, in
   std::printf("Rendered views of %s (each calibration's %d and each check's 5 detected, the pixel sigma pooled over "
               "them), the session's usual views:\n\n",
               target_file.c_str(), calibration_views);
-  std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | names it "
-              "right at best | chi2 / dof |\n|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  header(" chi2 / dof |");
   row("nothing", run_check_study(o), 0.0, true);
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     o.change = change;
@@ -83,20 +95,21 @@ int rendered_study(const std::string& target_file, int checks, unsigned seed, in
 }
 
 /// Where detecting a change and naming it meet: at views whose X and Y subspaces have
-/// equal principal cosines c, the bound for a test that must catch X or Y, the check's
-/// statistic's power, and the most any rule names right (two_hypothesis_frontier); then
-/// where the study's views sit (their mean cosine).
+/// equal principal cosines c, the most any test that must catch X or Y detects, the
+/// check's statistic's power and naming, and the most any test detects and names right
+/// (two_hypothesis_frontier); then where views of several spreads sit (their mean cosine).
 int frontier(unsigned seed) {
   std::printf("At views whose X and Y subspaces have six equal principal cosines c (two_hypothesis_frontier, 200 000 "
-              "draws a cell, alpha 1%%):\n\n");
-  std::printf("| c | bound for X or Y, 5 sigma | the check's statistic, 5 sigma | named right at best, 5 sigma | "
-              "bound for X or Y, 6 sigma | named right at best, 6 sigma |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|\n");
+              "draws a cell, alpha 1%%; a direction uniform in 6 dof):\n\n");
+  std::printf("| c | bound for X or Y, 5 sigma | the check detects | and names right | detected and named right at best | "
+              "bound, 6 sigma | the check names right, 6 sigma | detected and named right at best, 6 sigma |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (double c : {0.0, 0.3, 0.5, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9}) {
     const TwoHypothesisFrontier five = two_hypothesis_frontier(Vector6d::Constant(c), 25.0, 0.01, seed, 200000);
     const TwoHypothesisFrontier six = two_hypothesis_frontier(Vector6d::Constant(c), 36.0, 0.01, seed, 200000);
-    std::printf("| %.2f | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% |\n", c, 100.0 * five.bound, 100.0 * five.larger_power,
-                100.0 * five.named_right, 100.0 * six.bound, 100.0 * six.named_right);
+    std::printf("| %.2f | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% |\n", c, 100.0 * five.bound,
+                100.0 * five.larger_power, 100.0 * five.larger_named_right, 100.0 * five.detected_and_named,
+                100.0 * six.bound, 100.0 * six.larger_named_right, 100.0 * six.detected_and_named);
     std::fflush(stdout);
   }
   std::printf("\nWhere views sit (their mean cosine over 200 checks, noise stated):\n\n| tilt to | roll to | mean cosine |\n"
@@ -116,11 +129,10 @@ int frontier(unsigned seed) {
 }
 
 /// The study at views between the usual and the turned ones (tilt to 45 deg, roll to 90:
-/// mean cosine 0.73), where the frontier lets a test both detect a 5 sigma change in 90%
-/// and name it right in 95%: no change, and X's and Y's translation moved by 5 and 6 sigma.
+/// mean cosine 0.73): no change, and X's and Y's translation moved by 5 and 6 sigma.
 int between_study(int checks, unsigned seed) {
   std::printf("Views between the two (tilt to 45 deg, roll to 90 deg about the optical axis), %d checks a row:\n\n", checks);
-  std::printf("%s", kHeader);
+  header();
   CheckStudyOptions o;
   o.noise_given = true;
   o.checks = checks;
@@ -139,11 +151,10 @@ int between_study(int checks, unsigned seed) {
 }
 
 int main(int argc, char** argv) {
-  int checks = 300;
+  int checks = 300, calibration_views = 20;
   unsigned seed = 1;
-  int calibration_views = 20;
   std::string rendered;
-  bool between = false, frontier_only = false;
+  bool between = false, frontier_only = false, views_given = false, checks_given = false;
   const auto usage = [] {
     std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE "
                          "[--calibration-views 20] | --views-between | --frontier]\n");
@@ -151,21 +162,27 @@ int main(int argc, char** argv) {
   };
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if (flag == "--views-between") {
-      between = true;
+    if (flag == "--views-between" || flag == "--frontier") {
+      (flag == "--frontier" ? frontier_only : between) = true;
       continue;
     }
-    if (flag == "--frontier") {
-      frontier_only = true;
-      continue;
-    }
-    if (i + 1 >= argc) return usage();
+    if (i + 1 >= argc || std::string(argv[i + 1]).rfind("--", 0) == 0) return usage();  // a flag without its value
     const char* value = argv[++i];
-    if (flag == "--checks") checks = std::atoi(value);
-    else if (flag == "--seed") seed = static_cast<unsigned>(std::atoi(value));
-    else if (flag == "--rendered") rendered = value;
-    else if (flag == "--calibration-views") calibration_views = std::atoi(value);
+    if (flag == "--rendered") {
+      rendered = value;
+      continue;
+    }
+    const std::optional<int> number = positive(value);
+    if (!number) return usage();
+    if (flag == "--checks") checks = *number, checks_given = true;
+    else if (flag == "--seed") seed = static_cast<unsigned>(*number);
+    else if (flag == "--calibration-views") calibration_views = *number, views_given = true;
     else return usage();
+  }
+  // One study at a time, and no setting it would not use.
+  if (int(!rendered.empty()) + int(between) + int(frontier_only) > 1 || (views_given && rendered.empty()) ||
+      (checks_given && frontier_only)) {
+    return usage();
   }
   if (frontier_only) return frontier(seed);
   if (!rendered.empty()) {
@@ -180,7 +197,7 @@ int main(int argc, char** argv) {
   for (bool diverse : {false, true}) {
     std::printf("%s\n\n", diverse ? "Views turned about different axes (tilt to 60 deg, any roll about the optical axis):"
                                   : "The session's usual views (0.4-0.8 m, tilt to 35 deg, roll to 60 deg):");
-    std::printf("%s", kHeader);
+    header();
     CheckStudyOptions o;
     o.noise_given = true;
     o.checks = checks;
@@ -199,7 +216,7 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   std::printf("The noise estimated from the calibration's 20 views (no noise block), the session's usual views:\n\n");
-  std::printf("%s", kHeader);
+  header();
   CheckStudyOptions o;
   o.noise_given = false;
   o.checks = checks;

@@ -145,25 +145,30 @@ TEST(CalibrationCheck, TwoHypothesisBound) {
   EXPECT_GT(orthogonal, 0.85);
 }
 
-// The frontier between detecting and naming (two_hypothesis_frontier): its bound is
-// two_hypothesis_power_bound's draw for draw; the check's statistic, the larger of the
-// two chi2 drops, comes within Monte-Carlo error of it at any overlap; and naming right
-// falls from all but certain at orthogonal subspaces to a coin's toss at identical ones,
-// past 95% only below the overlap where the bound reaches 90% (c = 0.65).
+// The frontier between detecting and naming (two_hypothesis_frontier), a direction
+// uniform in 6 dof. The check's statistic, the larger of the two chi2 drops, comes within
+// Monte-Carlo error of the Neyman-Pearson bound at any overlap (and never beyond it), and
+// its naming falls from all but certain at orthogonal subspaces toward a coin's toss at
+// identical ones. Issue 41's 90% detected and 95% of them named right need the bound
+// >= 90% and detected-and-named-right >= 85.5%: not at c <= 0.5 (bound below 90%) nor at
+// c >= 0.9 (too few named right), but at c = 0.7 (table in BENCHMARKS.md).
 TEST(CalibrationCheck, TheFrontierBetweenDetectingAndNaming) {
   constexpr int kDraws = 100000;  // a power's 1 sigma 0.1 points
   double last_named = 1.0;
-  for (double c : {0.0, 0.5, 0.7, 0.9, 1.0}) {
-    const Vector6d cosines = Vector6d::Constant(c);
-    const TwoHypothesisFrontier f = two_hypothesis_frontier(cosines, 25.0, 0.01, 3, kDraws);
-    EXPECT_EQ(f.bound, two_hypothesis_power_bound(cosines, 25.0, 0.01, 3, kDraws)) << c;
+  for (double c : {0.0, 0.5, 0.7, 0.9, 0.99}) {
+    const TwoHypothesisFrontier f = two_hypothesis_frontier(Vector6d::Constant(c), 25.0, 0.01, 3, kDraws);
     EXPECT_NEAR(f.larger_power, f.bound, 0.005) << c;
-    EXPECT_LE(f.named_right, last_named + 0.003) << c;
-    last_named = f.named_right;
-    if (c == 0.0) EXPECT_GT(f.named_right, 0.99);
-    if (c == 1.0) EXPECT_NEAR(f.named_right, 0.5, 0.01);
-    if (c <= 0.5) EXPECT_LT(f.bound, 0.90) << c;  // where naming is surest, no test detects 90%
-    if (c >= 0.9) EXPECT_LT(f.named_right, 0.95) << c;  // where detection is likeliest, none names 95%
+    EXPECT_LE(f.larger_power, f.bound + 0.005) << c;
+    EXPECT_LE(f.larger_named_right, last_named + 0.003) << c;
+    last_named = f.larger_named_right;
+    if (c == 0.0) EXPECT_GT(f.larger_named_right, 0.99);
+    if (c == 0.99) EXPECT_LT(f.larger_named_right, 0.7);
+    if (c <= 0.5) EXPECT_LT(f.bound, 0.90) << c;
+    if (c == 0.7) {
+      EXPECT_GE(f.bound, 0.90);
+      EXPECT_GE(f.detected_and_named, 0.855);
+    }
+    if (c >= 0.9) EXPECT_LT(f.detected_and_named, 0.855) << c;
   }
 }
 

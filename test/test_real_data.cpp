@@ -531,35 +531,22 @@ std::vector<std::vector<int>> every_split(int n, int k, int most) {
   return orders;
 }
 
-// The check of a saved calibration (calibration_check.h) on every real session and both
-// paths: 200 random splits (each distinct split once where there are fewer) into a
-// calibration part and a check part of 5 views (a third of a short session), the calibration as a user gets it (the session's noise model and
-// its leave-one-out prediction scale, its covariance inflated by the honesty check's
-// factor of the whole session: the splits' own would cost 200 honesty checks; where the
-// whole session uses the shared robot error, the part uses its model too, and the check
-// predicts the new views under it). A view
-// beyond the outlier gate alone is left out as a wrong detection, as the check does. Without a change the check says
-// "changed" in at most 3% of the splits at alpha 1% (a short session's few splits: their
-// count of alarms against a parametric-bootstrap reference at its size and noise); with the camera moved 2 mm on its
-// mount (the check part's detected poses shifted by 2 mm in the camera frame, a random
-// direction per split) it detects it in at least 90% of the splits whose calibration's
-// sigma allows it: where 2 mm is at least the check's own 5 sigma along the move, the
-// change the bound lets any such test detect about 90% of the time. The detectable
-// change (5 sigma, median over the splits) is printed per session.
 /// What the checks of one session's splits found.
 struct SplitChecks {
   int splits = 0, alarms = 0, allowed = 0, detected_allowed = 0, detected = 0, per_view_parts = 0;
   std::vector<double> detectable;  // 5 sigma along each move, m
 };
 
-/// The checks of `samples`' splits (`distinct`, else `planned` random ones drawn from
-/// `rng`), each calibrated as a user's would be (see above); with `moves`, each split's
-/// check views are checked again with the camera moved 2 mm on its mount.
+/// The checks of `samples`' splits into a calibration and `k` check views (each of
+/// `distinct` once, else 200 random ones drawn from `rng`), each calibrated as a user's
+/// would be (ChecksOfACalibrationOnEverySession); with `moves`, each split's check views
+/// are checked again with the camera moved 2 mm on its mount (drawn from `rng`).
+/// `own_model`: a part fits its own shared robot error instead of taking `shared`.
 SplitChecks check_splits(const SampleSet& samples, const char* name, int k, const std::vector<std::vector<int>>& distinct,
-                         int planned, double inflation, const std::optional<SharedRobotError>& shared, bool moves,
+                         double inflation, const std::optional<SharedRobotError>& shared, bool own_model, bool moves,
                          std::mt19937_64& rng) {
   const int n = static_cast<int>(samples.samples.size());
-  const bool own_model = std::getenv("HANDEYE_CHECK_OWN_MODEL") != nullptr;
+  const int planned = distinct.empty() ? 200 : static_cast<int>(distinct.size());
   std::normal_distribution<double> normal(0.0, 1.0);
   SplitChecks found;
   for (int split = 0; split < planned; ++split) {
@@ -631,6 +618,21 @@ SplitChecks check_splits(const SampleSet& samples, const char* name, int k, cons
   return found;
 }
 
+// The check of a saved calibration (calibration_check.h) on every real session and both paths: 200
+// random splits (each distinct split once where there are fewer) into a calibration part and a
+// check part of 5 views (a third of a short session), the calibration as a user gets it (the
+// session's noise model and its leave-one-out prediction scale, its covariance inflated by the
+// honesty check's factor of the whole session: the splits' own would cost 200 honesty checks;
+// where the whole session uses the shared robot error, the part uses its model too, and the check
+// predicts the new views under it). A view beyond the outlier gate alone is left out as a wrong
+// detection, as the check does. Without a change the check says "changed" in at most 3% of the
+// splits at alpha 1% (a short session's few splits: their count of alarms against a parametric-
+// bootstrap reference at its size and noise); with the camera moved 2 mm on its mount (the check
+// part's detected poses shifted by 2 mm in the camera frame, a random direction per split) it
+// detects it in at least 90% of the splits whose calibration's sigma allows it: where 2 mm is at
+// least the check's own 5 sigma along the move, the change the bound lets any such test detect
+// about 90% of the time. The detectable change (5 sigma, median over the splits) is printed per
+// session.
 TEST(RealData, ChecksOfACalibrationOnEverySession) {
   for (const RealCase& c : real_cases()) {
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
@@ -655,13 +657,14 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       // of 2: 28), each of them once: repeating a split would only weight it again.
       const std::vector<std::vector<int>> distinct = every_split(n, k, 200);
       const int planned = distinct.empty() ? 200 : static_cast<int>(distinct.size());
-      SplitChecks found = check_splits(*samples, c.name, k, distinct, planned, inflation, shared, true, rng);
+      const bool own_model = std::getenv("HANDEYE_CHECK_OWN_MODEL") != nullptr;
+      SplitChecks found = check_splits(*samples, c.name, k, distinct, inflation, shared, own_model, true, rng);
       std::vector<double>& detectable = found.detectable;
       std::sort(detectable.begin(), detectable.end());
       const double median = detectable.empty() ? 0.0 : detectable[detectable.size() / 2];
       const int splits = found.splits, alarms = found.alarms;
       const double alarm_rate = splits ? static_cast<double>(alarms) / splits : 1.0;
-      if (std::getenv("HANDEYE_CHECK_OWN_MODEL") && shared) {
+      if (own_model && shared) {
         std::printf("  (each part's own shared robot error: per-view model in %d parts)\n", found.per_view_parts);
       }
       std::printf("[check, real %s, %s, %d samples, %d per check, covariance x%.2f] %d splits: false alarms %.1f%% (%d); "
@@ -679,33 +682,37 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         // them, so the count of alarms over its splits is judged against a reference at the
         // session's own size and noise: the same splits of sessions simulated at its robot
         // poses with its fitted noise (split_check.h's simulate_like), checked alike.
+        // The replicates take the session's inflation and model as the splits do: right
+        // where there is neither (a short session: no shared robot error below 16 views).
+        EXPECT_TRUE(inflation == 1.0 && !shared) << c.name << ", " << path << ": the reference assumes its model as fitted";
         const std::vector<Matrix6d> S = residual_covariances(*samples, whole_calibration);
         std::mt19937_64 replicate_rng(29);
         constexpr int kReplicates = 100;
         std::vector<int> counts;
         for (int b = 0; b < kReplicates; ++b) {
           const SampleSet replicate = simulate_like(*samples, whole_calibration, S, replicate_rng);
-          counts.push_back(check_splits(replicate, c.name, k, distinct, planned, inflation, shared, false, rng).alarms);
+          counts.push_back(check_splits(replicate, c.name, k, distinct, inflation, shared, false, false, replicate_rng).alarms);
         }
         const int as_many = static_cast<int>(std::count_if(counts.begin(), counts.end(), [&](int a) { return a >= alarms; }));
         const double mean = std::accumulate(counts.begin(), counts.end(), 0.0) / kReplicates;
+        // The session's count as a Monte-Carlo p-value against its reference (Besag and Clifford).
+        const double p_value = (as_many + 1.0) / (kReplicates + 1.0);
         std::sort(counts.begin(), counts.end());
         std::printf("  reference (%d sessions at its poses and noise, the same %d splits): mean %.2f alarms (%.1f%%), "
-                    "95th percentile %d, max %d; %d or more in %d%% of them\n",
+                    "95th percentile %d, max %d; %d or more in %d%% of them (p = %.3f)\n",
                     kReplicates, planned, mean, 100.0 * mean / planned, counts[95 * kReplicates / 100 - 1], counts.back(),
-                    alarms, 100 * as_many / kReplicates);
+                    alarms, 100 * as_many / kReplicates, p_value);
         // The reference itself keeps alpha: its mean within 3% ...
         EXPECT_LE(mean / planned, 0.03) << c.name << ", " << path;
-        // ... and the session's own count is within its 99% range. Not reached on the
-        // eye-in-hand session's images (issue 41, open): its 4 alarms all hold its 8th
-        // image, the closest (0.21 m, the others 0.28-0.41 m), off by 1 degree where the
-        // views without it predict 0.3 per axis; no simulated session at its poses and
-        // noise raised 4. There the count is held where it is, below 20%.
-        const bool eye_in_hand_images = std::string(c.name).find("eye-in-hand") != std::string::npos && path == "images";
-        if (eye_in_hand_images) {
+        // ... and the session's own count is within it (p above 1%). Not reached on the
+        // eye-in-hand Franka session's images (issue 41, open): its 4 alarms all hold its
+        // 8th image, the closest (0.21 m, the others 0.28-0.41 m), off by 1 degree where the
+        // views without it predict 0.3 per axis; no simulated session at its poses and noise
+        // raised 4. There the count is held where it is, below 20%.
+        if (std::string(c.name) == "franka eye-in-hand chessboard 9 x 6" && path == "images") {
           EXPECT_LE(alarm_rate, 0.2) << c.name << ", " << path;
         } else {
-          EXPECT_GE(as_many, kReplicates / 100) << c.name << ", " << path;
+          EXPECT_GT(p_value, 0.01) << c.name << ", " << path;
         }
       }
       if (found.allowed >= 20) {

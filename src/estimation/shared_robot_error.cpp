@@ -441,7 +441,7 @@ void require_predictable(const Calibration::SharedError& record, const std::stri
     return;
   }
   throw HandEyeError(ErrorCode::MalformedFile,
-                     "the shared robot error in use needs a length_scale and a view_noise_scale above 0 and no negative "
+                     "the shared robot error needs a length_scale and a view_noise_scale above 0 and no negative "
                      "sigma to predict new views; it has " + number_text(record.length_scale) + " m, " +
                          number_text(record.view_noise_scale) + ", " + number_text(record.translation_sigma) + " m and " +
                          number_text(record.rotation_sigma) + " rad",

@@ -102,13 +102,14 @@ TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double no
     // Before the swap u is the changed one's; a tie (identical subspaces) is a coin's toss.
     const double right = u.squaredNorm() > v.squaredNorm() ? 1.0 : u.squaredNorm() == v.squaredNorm() ? 0.5 : 0.0;
     if (d % 2 == 1) std::swap(u, v);  // Y changed: the same with the roles swapped
-    if (log_ratio(u, v) > threshold) ++detected, named_right += right;
-    detected_by_larger += larger(u, v) > larger_threshold;
+    if (log_ratio(u, v) > threshold) ++detected;
+    if (larger(u, v) > larger_threshold) ++detected_by_larger, named_right += right;
   }
   TwoHypothesisFrontier frontier;
   frontier.bound = static_cast<double>(detected) / draws;
   frontier.larger_power = static_cast<double>(detected_by_larger) / draws;
-  frontier.named_right = detected ? named_right / detected : 0.0;
+  frontier.larger_named_right = detected_by_larger ? named_right / detected_by_larger : 0.0;
+  frontier.detected_and_named = named_right / draws;
   return frontier;
 }
 
@@ -185,7 +186,7 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
           two_hypothesis_frontier(check.x_y_cosines, options.multiple * options.multiple, options.check.alpha,
                                   options.seed + trial, options.bound_draws);
       result.two_hypothesis_bound += frontier.bound / options.checks;
-      result.best_named_right += frontier.named_right / options.checks;
+      result.best_detected_and_named += frontier.detected_and_named / options.checks;
     }
     result.mean_chi2_over_dof += check.chi2 / check.dof / options.checks;
     result.mean_x_y_cosine += check.x_y_cosines.mean() / options.checks;

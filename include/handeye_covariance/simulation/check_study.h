@@ -62,8 +62,9 @@ struct CheckStudyResult {
   /// check's views (two_hypothesis_power_bound), averaged. No test's power against both
   /// X and Y changes exceeds it.
   double two_hypothesis_bound = 0.0;
-  /// The most any rule names right at each check's views (two_hypothesis_frontier), averaged.
-  double best_named_right = 0.0;
+  /// The most any level-alpha test with any naming detects and names right at each
+  /// check's views, for a direction uniform in 6 dof (two_hypothesis_frontier), averaged.
+  double best_detected_and_named = 0.0;
   double rate() const { return checks ? static_cast<double>(changed) / checks : 0.0; }
   /// The share of detected checks that named the planted change (X or Y).
   double named_right() const;
@@ -87,17 +88,19 @@ double chi2_test_power(int dof, double noncentrality, double alpha);
 double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed = 1,
                                   int draws = 40000);
 
-/// The same Monte-Carlo (its bound identical, draw for draw) with what it says about
-/// the check beside the bound: how close the check's own statistic comes to it, and how
-/// well any test can then tell X from Y. At views of equal principal cosines c it traces
-/// the frontier between detecting a change and naming it (BENCHMARKS.md).
+/// The same Monte-Carlo (its bound identical, draw for draw) with the check's own test
+/// beside the bound: the larger of |u|^2 and |v|^2 (the larger chi2 drop), named by the
+/// larger. For "X or Y changed, even odds, lambda, a direction uniform in each's 6 dof" the
+/// densities over "no change" are g(|u|^2) and g(|v|^2), g increasing, so for any test R
+/// and any naming, P(detected and named right) <= 1/2 of the integral over R of
+/// max(f_X, f_Y), which by Neyman-Pearson's lemma is largest on {max(|u|^2, |v|^2) > t}
+/// named by the larger: the check's own. So "detects a share p and names a share q of its
+/// detections right" needs bound >= p and detected_and_named >= p q.
 struct TwoHypothesisFrontier {
-  double bound = 0.0;         // two_hypothesis_power_bound
-  double larger_power = 0.0;  // the power of max(|u|^2, |v|^2), the check's statistic, at its own alpha
-  /// Of the Neyman-Pearson test's detections, the share that the larger of |u|^2 and
-  /// |v|^2 names right: at even odds and equal lambda the likelihood's own choice
-  /// between X and Y (g increasing), so no rule names more right on average.
-  double named_right = 0.0;
+  double bound = 0.0;               // two_hypothesis_power_bound: the most any test detects
+  double larger_power = 0.0;        // the check's statistic's power at its own alpha
+  double larger_named_right = 0.0;  // the share of its detections it names right
+  double detected_and_named = 0.0;  // P(detected and named right): the most any test with any naming reaches
 };
 TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double noncentrality, double alpha,
                                                unsigned seed = 1, int draws = 40000);
