@@ -67,7 +67,7 @@ void check_covariance(const Matrix6d& covariance, const std::string& where) {
   check_square_covariance<6>(covariance, where);
 }
 
-void check_covariance(const Eigen::Matrix<double, 12, 12>& covariance, const std::string& where) {
+void check_covariance(const Matrix12d& covariance, const std::string& where) {
   check_square_covariance<12>(covariance, where);
 }
 

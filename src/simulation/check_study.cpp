@@ -157,7 +157,7 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     SampleSet views;
     if (options.observe) {
       for (int i = 0; i < options.views; ++i) effectors.push_back(rig.effector_for_view(X, Y, random_view(rng, options.viewpoints)));
-      views = options.observe(rng, rig, effectors, X, Y);
+      views = observed(rng, rig, effectors, X, Y);
     } else {  // each view drawn and observed in turn (the seeded figures of BENCHMARKS.md)
       views.rig = rig;
       if (options.noise_given) views.noise = noise;

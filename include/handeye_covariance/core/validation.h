@@ -26,7 +26,7 @@ void check_covariance(const DecoupledCovariance& covariance, const std::string& 
 /// Each block, then the cross block against them (a correlation beyond 1 is refused).
 void check_covariance(const PoseNoise& covariance, const std::string& where);
 void check_covariance(const Matrix6d& covariance, const std::string& where);  // ROS order, may have cross blocks
-void check_covariance(const Eigen::Matrix<double, 12, 12>& covariance, const std::string& where);  // X and Y jointly
+void check_covariance(const Matrix12d& covariance, const std::string& where);  // X and Y jointly
 
 /// |q| within 1e-3 of 1 and finite; returns the normalised quaternion.
 Eigen::Quaterniond checked_unit_quaternion(const Eigen::Quaterniond& q, const std::string& where);
