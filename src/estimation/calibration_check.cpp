@@ -145,8 +145,11 @@ class NullDistribution {
     const int r = static_cast<int>(U_.cols());
     const int per_scale = parts_.empty() ? options.null_draws : 10;  // z draws per drawn noise
     const int enough = options.null_exceedances;
+    // The draws in blocks of columns, z in the order one at a time would draw them: one
+    // matrix product a block instead of a vector product and its temporaries a draw.
+    constexpr int kBlock = 256;
+    Eigen::MatrixXd W(r, kBlock), S, Sx, Sy;
     int beyond = 0, draws = 0;
-    Eigen::VectorXd w(r);
     while (draws < options.null_draws && beyond < enough) {
       Eigen::MatrixXd K = known_;
       for (const auto& [m, dof] : parts_) {
@@ -154,10 +157,18 @@ class NullDistribution {
         K += (dof / std::max(chi2(rng), 1e-12)) * m;
       }
       const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (K + K.transpose()));
-      for (int j = 0; j < per_scale && draws < options.null_draws && beyond < enough; ++j, ++draws) {
-        for (int a = 0; a < r; ++a) w(a) = normal(rng);
-        const Eigen::VectorXd s = llt.matrixL() * w;
-        if (std::max((ax_ * s).squaredNorm(), (ay_ * s).squaredNorm()) >= t) ++beyond;
+      int left = std::min(per_scale, options.null_draws - draws);  // draws under this K
+      while (left > 0 && beyond < enough) {
+        const int block = std::min(left, kBlock);
+        for (int j = 0; j < block; ++j) {
+          for (int a = 0; a < r; ++a) W(a, j) = normal(rng);
+        }
+        S.noalias() = llt.matrixL() * W.leftCols(block);
+        Sx.noalias() = ax_ * S;
+        Sy.noalias() = ay_ * S;
+        for (int j = 0; j < block && beyond < enough; ++j, ++draws, --left) {
+          if (std::max(Sx.col(j).squaredNorm(), Sy.col(j).squaredNorm()) >= t) ++beyond;
+        }
       }
     }
     if (beyond >= enough) return static_cast<double>(beyond) / draws;
