@@ -124,7 +124,9 @@ void check(const Scenario& scenario, Setup setup, bool noise_given, int robots, 
   if (noise_given) {
     const MonteCarloSummary plain = j.plain.summary();
     std::printf("; plain (stated noise as true): %.2f", plain.pose.nees_mean);
-    if (scenario.plain_overconfident) EXPECT_GT(plain.pose.nees_mean, 7.0) << scenario.name;
+    if (scenario.plain_overconfident) {
+      EXPECT_GT(plain.pose.nees_mean, 7.0) << scenario.name;
+    }
   }
   std::printf("\n");
 }

@@ -16,16 +16,25 @@ SerialArm SerialArm::ur10() {
                     DhJoint{0.0, 0.0922, 0.0, 0.0}});
 }
 
+SerialArm::SerialArm(const std::array<DhJoint, 6>& joints) : joints_(joints) {
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    fixed_[i] = Isometry3d::Identity();
+    fixed_[i].translate(Vector3d(joints_[i].a, 0.0, joints_[i].d));
+    fixed_[i].rotate(Eigen::AngleAxisd(joints_[i].alpha, Vector3d::UnitX()));
+  }
+}
+
 Isometry3d SerialArm::forward(const Vector6d& q) const {
+  // Each link is Rz(theta + offset) then its fixed part: one sine and cosine a joint
+  // (the inverse kinematics of the simulated sessions call this millions of times).
   Isometry3d T = Isometry3d::Identity();
-  for (int i = 0; i < 6; ++i) {
-    const DhJoint& j = joints_[static_cast<std::size_t>(i)];
-    Isometry3d link = Isometry3d::Identity();
-    link.rotate(Eigen::AngleAxisd(q[i] + j.offset, Vector3d::UnitZ()));
-    link.translate(Vector3d(0.0, 0.0, j.d));
-    link.translate(Vector3d(j.a, 0.0, 0.0));
-    link.rotate(Eigen::AngleAxisd(j.alpha, Vector3d::UnitX()));
-    T = T * link;
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const double theta = q[static_cast<Eigen::Index>(i)] + joints_[i].offset;
+    const double c = std::cos(theta), s = std::sin(theta);
+    const Vector3d x = T.linear().col(0), y = T.linear().col(1);
+    T.linear().col(0) = c * x + s * y;  // T Rz(theta)
+    T.linear().col(1) = c * y - s * x;
+    T = T * fixed_[i];
   }
   return T;
 }

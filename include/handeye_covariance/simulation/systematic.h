@@ -25,7 +25,7 @@ struct DhJoint {
 
 class SerialArm {
  public:
-  explicit SerialArm(const std::array<DhJoint, 6>& joints) : joints_(joints) {}
+  explicit SerialArm(const std::array<DhJoint, 6>& joints);
 
   /// A UR10 (Universal Robots' published DH parameters): 1.3 m reach.
   static SerialArm ur10();
@@ -42,6 +42,8 @@ class SerialArm {
 
  private:
   std::array<DhJoint, 6> joints_;
+  /// Each link's part that does not move with its joint, Tz(d) Tx(a) Rx(alpha).
+  std::array<Eigen::Isometry3d, 6> fixed_;
 };
 
 struct SystematicErrors {
