@@ -131,8 +131,21 @@ Reml evaluate(const Parts& P, const Theta& theta, const MatrixXd& J, const Vecto
   std::array<MatrixXd, kComponents> PC;
   for (int a = 0; a < P.components; ++a) {
     const MatrixXd& Ca = P.part[static_cast<std::size_t>(a)];
-    PC[static_cast<std::size_t>(a)] = Pm * Ca;
-    out.score(a) = 0.5 * (Pr.dot(Ca * Pr) - PC[static_cast<std::size_t>(a)].trace());
+    MatrixXd& PCa = PC[static_cast<std::size_t>(a)];
+    if (a == 0) {  // the view part is block diagonal: P C_0 and C_0 Pr a block at a time, not m^3
+      const Eigen::Index m = Ca.rows();
+      PCa.resize(m, m);
+      VectorXd CPr(m);
+      for (Eigen::Index i = 0; i < m; i += 6) {
+        const Matrix6d block = Ca.block<6, 6>(i, i);
+        PCa.middleCols<6>(i).noalias() = Pm.middleCols<6>(i) * block;
+        CPr.segment<6>(i).noalias() = block * Pr.segment<6>(i);
+      }
+      out.score(a) = 0.5 * (Pr.dot(CPr) - PCa.trace());
+    } else {
+      PCa = Pm * Ca;
+      out.score(a) = 0.5 * (Pr.dot(Ca * Pr) - PCa.trace());
+    }
   }
   for (int a = 0; a < P.components; ++a) {
     for (int b = 0; b < P.components; ++b) {
