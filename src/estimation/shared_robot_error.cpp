@@ -75,6 +75,10 @@ struct Parts {
   std::array<MatrixXd, kComponents> part;
   int components = 1;  // C's: the view part alone (1), or with the kernel's two (3)
   const MatrixXd& view() const { return part[0]; }
+  /// The kernel's parts in factors, part a = B_a (K x I3) B_a^T, B_a block diagonal with
+  /// D_i's translation (a = 1) or rotation (a = 2) columns: what evaluate multiplies by.
+  std::vector<Matrix6d> D;
+  MatrixXd K;  // k(p_i, p_j), n x n
 };
 
 Parts make_parts(const Linearised& L, double length_scale) {
@@ -85,10 +89,13 @@ Parts make_parts(const Linearised& L, double length_scale) {
   if (length_scale <= 0.0) return P;
   P.part[1] = MatrixXd::Zero(m, m);
   P.part[2] = MatrixXd::Zero(m, m);
+  P.D = L.D;
+  P.K.resize(L.n, L.n);
   for (int i = 0; i < L.n; ++i) {
     for (int j = 0; j < L.n; ++j) {
       const double k = shared_error_kernel(L.position[static_cast<std::size_t>(i)], L.position[static_cast<std::size_t>(j)],
                                            length_scale);
+      P.K(i, j) = k;
       const Matrix6d& Di = L.D[static_cast<std::size_t>(i)];
       const Matrix6d& Dj = L.D[static_cast<std::size_t>(j)];
       P.part[1].block<6, 6>(6 * i, 6 * j) = k * Di.leftCols<3>() * Dj.leftCols<3>().transpose();
@@ -142,8 +149,24 @@ Reml evaluate(const Parts& P, const Theta& theta, const MatrixXd& J, const Vecto
         CPr.segment<6>(i).noalias() = block * Pr.segment<6>(i);
       }
       out.score(a) = 0.5 * (Pr.dot(CPr) - PCa.trace());
-    } else {
-      PCa = Pm * Ca;
+    } else {  // a kernel part: P C_a = ((P B_a)(K x I3)) B_a^T, m^3 / 12 instead of m^3
+      const Eigen::Index m = Ca.rows(), n = P.K.rows();
+      const Eigen::Index first = a == 1 ? 0 : 3;  // D_i's translation or rotation columns
+      MatrixXd PB(m, 3 * n), PBK(m, 3 * n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        PB.middleCols<3>(3 * i).noalias() = Pm.middleCols<6>(6 * i) * P.D[static_cast<std::size_t>(i)].middleCols<3>(first);
+      }
+      using Columns = Eigen::OuterStride<>;  // every third column: one axis of every view
+      for (Eigen::Index axis = 0; axis < 3; ++axis) {
+        const Eigen::Map<const MatrixXd, 0, Columns> in(PB.data() + axis * m, m, n, Columns(3 * m));
+        Eigen::Map<MatrixXd, 0, Columns> product(PBK.data() + axis * m, m, n, Columns(3 * m));
+        product.noalias() = in * P.K;
+      }
+      PCa.resize(m, m);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        PCa.middleCols<6>(6 * j).noalias() =
+            PBK.middleCols<3>(3 * j) * P.D[static_cast<std::size_t>(j)].middleCols<3>(first).transpose();
+      }
       out.score(a) = 0.5 * (Pr.dot(Ca * Pr) - PCa.trace());
     }
   }
