@@ -75,6 +75,38 @@ TEST(NextBestPose, RankingPredictsWhatAddingThePoseGives) {
   EXPECT_THROW(rank_candidates(session.samples, c, {}, options), HandEyeError);
 }
 
+// A target is reached on an estimated noise only from kTargetMinimumSamplesEstimatedNoise
+// samples (its Monte-Carlo, the arm stopping where it reaches one: test_motion); a stated
+// noise reaches it at any count; a plan plans at least the samples still needed.
+TEST(NextBestPose, AnEstimatedNoiseReachesATargetOnlyFromEnoughSamples) {
+  Rng rng(7);
+  const SimulatedSession session = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 4, test::sim_noise());
+  ASSERT_TRUE(session.samples.noise);
+  SampleSet unstated = session.samples;
+  unstated.noise.reset();
+  const Calibration stated = solve(session.samples), estimated = solve(unstated);
+  ASSERT_EQ(stated.noise_origin, NoiseOrigin::Given);
+  ASSERT_EQ(estimated.noise_origin, NoiseOrigin::EstimatedFromResiduals);
+  const double far = 1.0;  // m: any sigma is within it
+  EXPECT_TRUE(target_progress(stated, far, 0.7).reached);
+  EXPECT_EQ(samples_short_of_target(stated, 4), 0);
+  const TargetProgress short_of = target_progress(estimated, far, 0.7);
+  EXPECT_FALSE(short_of.reached);
+  EXPECT_NE(short_of.why_not.find("residuals of 4 samples"), std::string::npos) << short_of.why_not;
+  EXPECT_EQ(samples_short_of_target(estimated, 4), kTargetMinimumSamplesEstimatedNoise - 4);
+  EXPECT_EQ(samples_short_of_target(estimated, kTargetMinimumSamplesEstimatedNoise), 0);
+  const TargetProgress beyond = target_progress(estimated, 1e-9, 0.7);  // not within: no reason but the sigma
+  EXPECT_FALSE(beyond.reached);
+  EXPECT_TRUE(beyond.why_not.empty());
+  EXPECT_GT(beyond.object_sigma, 1e-9);
+  SuggestOptions options;
+  options.candidates = 30;
+  EXPECT_EQ(plan_poses(session.samples, stated, far, 10, options).poses.size(), 0u);
+  const Plan plan = plan_poses(unstated, estimated, far, 10, options);
+  EXPECT_TRUE(plan.reached);
+  EXPECT_EQ(static_cast<int>(plan.poses.size()), kTargetMinimumSamplesEstimatedNoise - 4);
+}
+
 TEST(NextBestPose, APlansPredictedCovarianceIsHonestUnderMonteCarlo) {
   // Plan 6 poses from 3, then measure M noisy sessions at the 9 poses: the
   // covariance predicted before any of them was measured must match the errors.

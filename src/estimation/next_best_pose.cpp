@@ -28,6 +28,32 @@ double object_sigma(const PoseWithCovariance& X, double working_distance) {
   return max_sigma(point_covariance(X, Eigen::Vector3d(0, 0, working_distance)));
 }
 
+namespace {
+int samples_used(const Calibration& c) { return c.samples_used > 0 ? c.samples_used : c.motions_used + 1; }
+}  // namespace
+
+int samples_short_of_target(const Calibration& calibration, int samples) {
+  bool estimated = calibration.noise_origin == NoiseOrigin::EstimatedFromResiduals;
+  for (const Calibration::NoiseComponent& c : calibration.noise_components) estimated |= !c.at_bound;
+  return estimated ? std::max(0, kTargetMinimumSamplesEstimatedNoise - samples) : 0;
+}
+
+TargetProgress target_progress(const Calibration& calibration, double target, double working_distance) {
+  TargetProgress p;
+  p.object_sigma = object_sigma({calibration.T_parent_camera, calibration.pose_covariance}, working_distance);
+  if (p.object_sigma > target) return p;
+  const int samples = samples_used(calibration);
+  if (samples_short_of_target(calibration, samples) > 0) {
+    p.why_not = "the object sigma is within the target, but the noise is estimated from the residuals of " +
+                std::to_string(samples) + " samples: a target is reached from " +
+                std::to_string(kTargetMinimumSamplesEstimatedNoise) +
+                " (fewer reach it when their noise comes out small by chance; or state the noise)";
+    return p;
+  }
+  p.reached = true;
+  return p;
+}
+
 double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, double working_distance) {
   if (criterion == SuggestCriterion::ObjectSigma) return object_sigma(X, working_distance);
   // log det through Cholesky: stable at the 1e-40 scale a 6x6 of mm and mrad has.
@@ -173,7 +199,11 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
                 const SuggestOptions& options, const std::vector<Isometry3d>& fixed_candidates) {
   Plan plan;
   plan.start_object_sigma = object_sigma({calibration.T_parent_camera, calibration.pose_covariance}, options.working_distance);
-  plan.reached = plan.start_object_sigma <= target_object_sigma;
+  const auto reached = [&](double sigma, std::size_t added) {
+    return sigma <= target_object_sigma &&
+           samples_short_of_target(calibration, samples_used(calibration) + static_cast<int>(added)) == 0;
+  };
+  plan.reached = reached(plan.start_object_sigma, 0);
   SampleSet planned = samples;
   if (!planned.noise) planned.noise = calibration.noise;
   Calibration current = calibration;  // joint: its covariance follows the plan's predictions
@@ -198,7 +228,7 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
       current.cross_covariance = C.topRightCorner<6, 6>();
       current.pattern->covariance = C.bottomRightCorner<6, 6>();
     }
-    plan.reached = best.object_sigma <= target_object_sigma;
+    plan.reached = reached(best.object_sigma, plan.poses.size());
     if (!fixed_candidates.empty()) {
       remaining.erase(std::find_if(remaining.begin(), remaining.end(), [&](const Isometry3d& E) {
         return E.isApprox(best.T_base_effector);

@@ -123,7 +123,8 @@ void ArmMover::status(const std::string& state, const std::string& text) {
   if (goal && action_ && action_->isActive()) {
     AutoCalibrateFeedback feedback;
     feedback.samples = static_cast<int>(access_.samples());
-    feedback.object_error_mm = access_.object_sigma().second.value_or(0.0) * 1e3;
+    const auto progress = access_.progress(target_object_sigma_).second;
+    feedback.object_error_mm = progress ? progress->object_sigma * 1e3 : 0.0;
     feedback.state = state;
     feedback.text = msg.data;
     action_->publishFeedback(feedback);
@@ -419,14 +420,14 @@ void ArmMover::run() {
           if (request_id_ != id) break;
         }
         // A fresh estimate of every sample so far (the node's worker follows each sample).
-        auto [fresh, sigma] = access_.object_sigma();
+        auto [fresh, progress] = access_.progress(target);
         for (int wait = 0; wait < 200 && !fresh; ++wait) {
           ros::Duration(0.05).sleep();
-          std::tie(fresh, sigma) = access_.object_sigma();
+          std::tie(fresh, progress) = access_.progress(target);
         }
-        if (sigma && *sigma <= target) {
+        if (progress && progress->reached) {
           reached = true;
-          status("done", "object sigma " + mm(*sigma) + " <= " + mm(target) + " after " +
+          status("done", "object sigma " + mm(progress->object_sigma) + " <= " + mm(target) + " after " +
                              std::to_string(access_.samples()) + " samples");
           break;
         }
@@ -448,7 +449,8 @@ void ArmMover::run() {
         AutoCalibrateResult result;
         result.reached = reached;
         result.samples = static_cast<int>(access_.samples());
-        result.object_error_mm = access_.object_sigma().second.value_or(0.0) * 1e3;
+        const auto last_progress = access_.progress(target).second;
+        result.object_error_mm = last_progress ? last_progress->object_sigma * 1e3 : 0.0;
         result.message = last;
         if (reached)
           action_->setSucceeded(result, "reached");

@@ -128,12 +128,11 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
       record(event, true);
       return event;
     };
-    access.object_sigma = [this]() -> std::pair<bool, std::optional<double>> {
+    access.progress = [this](double target) -> std::pair<bool, std::optional<TargetProgress>> {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!analysis_ || analysis_->generation != session_.generation()) return {false, std::nullopt};
       if (!analysis_->estimate) return {true, std::nullopt};
-      return {true, object_sigma({analysis_->estimate->T_parent_camera, analysis_->estimate->pose_covariance},
-                                 config_.working_distance)};
+      return {true, target_progress(*analysis_->estimate, target, config_.working_distance)};
     };
     mover_ = std::make_unique<ArmMover>(node_, private_node_, std::move(access));
   }
@@ -298,8 +297,10 @@ void CalibrationNode::publish_status() {  // lock held
       status.sigma_rotation_deg[i] = std::sqrt(std::max(0.0, X.covariance(i + 3, i + 3))) / kDeg;
     }
     // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
-    status.object_error_mm = object_sigma(X, config_.working_distance) * 1e3;
-    status.target_reached = status.object_error_mm <= config_.target_tolerance_mm;
+    const TargetProgress progress = target_progress(c, config_.target_tolerance_mm * 1e-3, config_.working_distance);
+    status.object_error_mm = progress.object_sigma * 1e3;
+    status.target_reached = progress.reached;
+    if (!progress.why_not.empty()) status.last_event += "; " + progress.why_not;
     for (const auto& r : c.rejected) {
       status.rejected_samples.push_back(r.index);
       status.rejected_reasons.push_back(r.reason);

@@ -171,6 +171,8 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
                      number_text(r.object_sigma * 1e3, 2) + " mm (1 sigma, worst axis), the target is " +
                      number_text(r.target_object_sigma * 1e3, 2) +
                      " mm: take more samples at the suggested poses (the panel's Suggest pose, or handeye suggest)");
+  } else if (!r.target_not_reached.empty()) {
+    advice.push_back(r.target_not_reached);
   }
   for (const std::string& w : r.calibration.warnings) {
     if (w.find("rejected as outliers") == std::string::npos) advice.push_back("the estimator warns: " + w);  // said above
@@ -253,8 +255,10 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
   leave_one_out(session, kept, r);
   rotation_axes(kept.samples, options, r);
   r.working_distance = session.settings().suggest.working_distance;
-  r.object_sigma = object_sigma({r.calibration.T_parent_camera, r.calibration.pose_covariance}, r.working_distance);
   r.target_object_sigma = session.settings().target_object_sigma;
+  const TargetProgress progress = target_progress(r.calibration, r.target_object_sigma, r.working_distance);
+  r.object_sigma = progress.object_sigma;
+  r.target_not_reached = progress.why_not;
   advise(options, r);
   return r;
 }

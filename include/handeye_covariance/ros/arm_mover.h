@@ -46,9 +46,9 @@ struct SessionAccess {
   std::function<SessionSnapshot()> snapshot;
   std::function<std::size_t()> samples;                    // accepted samples so far
   std::function<SessionEvent(double now)> take_sample;     // manual sampling at now
-  /// Whether the latest analysis is of the current samples, and its object sigma
-  /// (m) when it has an estimate.
-  std::function<std::pair<bool, std::optional<double>>()> object_sigma;
+  /// Whether the latest analysis is of the current samples, and, when it has an
+  /// estimate, its progress against a target object sigma (m; target_progress).
+  std::function<std::pair<bool, std::optional<TargetProgress>>(double target)> progress;
 };
 
 class ArmMover {
