@@ -7,8 +7,12 @@
 // planner checks. A sample is taken where the board is whole in the image.
 // Seeded; no ROS.
 //
-//   handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40]
+//   handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated]
 // Prints a Markdown table (scripts/bench puts it in BENCHMARKS.md).
+// --noise estimated is the node's own configuration in simulated_arm.launch (the rig's
+// detections without a covariance, the robot exact from TF, so the noise is estimated
+// from the residuals): auto alone, and how honest X's covariance is where it stops
+// (target_progress, next_best_pose.h), by the sample count it stopped at.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,10 +36,13 @@ struct Run {
   double nees = 0.0;         // final X against the truth
 };
 
+bool estimated_noise = false;  // --noise estimated
+
 MeasurementNoise rig_noise() {  // the simulated rig's detections (rig_simulator's defaults), a small robot noise
   MeasurementNoise noise;
   noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
   noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  if (estimated_noise) return noise;  // the node's robot pose comes from TF, exact
   noise.robot.translation = std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity();
   noise.robot.rotation = std::pow(0.005 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
   return noise;
@@ -57,7 +64,7 @@ struct Sim {
   SessionSettings settings() const {
     SessionSettings s;
     s.rig = rig.rig;
-    s.noise = rig_noise();
+    if (!estimated_noise) s.noise = rig_noise();
     s.suggest.views = rig.views;
     s.honesty.splits = 0;
     return s;
@@ -75,17 +82,19 @@ struct Sim {
     session.replace(samples, "sample");
     ++run.samples;
     double sigma = 0.0;
+    bool reached = false;
     if (samples.size() >= 3) {
       try {
         const Calibration c = session.calibrate(session.snapshot());
-        sigma = object_sigma({c.T_parent_camera, c.pose_covariance}, 0.7);
+        const TargetProgress progress = target_progress(c, target, 0.7);
+        sigma = progress.object_sigma, reached = progress.reached;
         const Vector6d e = pose_error(c.T_parent_camera, rig.X);
         run.nees = e.dot(c.pose_covariance.ldlt().solve(e));
       } catch (const HandEyeError&) {
       }
     }
     run.sigma.push_back(sigma);
-    if (run.to_target < 0 && sigma > 0.0 && sigma <= target) run.to_target = run.samples;
+    if (run.to_target < 0 && reached) run.to_target = run.samples;
   }
 };
 
@@ -147,6 +156,49 @@ Run run_star(const ArmRig& rig, const motion::CollisionModel& collision, const E
   return sim.run;
 }
 
+double quantile(std::vector<double> v, double q) {  // the order statistic at q (no interpolation)
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+// --noise estimated: auto alone, X's NEES where it stopped, by the count it stopped at.
+int estimated_noise_study(const ArmRig& rig, const motion::CollisionModel& collision, int seeds, double target,
+                          int max_views) {
+  std::vector<double> nees;
+  std::vector<std::vector<double>> by_count(64);
+  int runs = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    Rng rng(seed);
+    const auto start = rig.random_start(rng, collision, motion::PlannerOptions{});
+    if (!start) continue;
+    ++runs;
+    const Run a = run_auto(rig, collision, *start, 1000 + seed, target, max_views);
+    if (a.to_target < 0) continue;
+    nees.push_back(a.nees);
+    by_count[std::min<std::size_t>(a.to_target, by_count.size() - 1)].push_back(a.nees);
+  }
+  double mean = 0.0, square = 0.0;
+  for (double n : nees) mean += n / nees.size();
+  for (double n : nees) square += (n - mean) * (n - mean) / std::max<std::size_t>(nees.size() - 1, 1);
+  const auto beyond = [&](double bound) {
+    return 100.0 * std::count_if(nees.begin(), nees.end(), [&](double n) { return n > bound; }) / std::max<std::size_t>(nees.size(), 1);
+  };
+  std::printf("| samples at the stop | runs | mean NEES of X |\n|---:|---:|---:|\n");
+  for (std::size_t k = 0; k < by_count.size(); ++k) {
+    if (by_count[k].empty()) continue;
+    double m = 0.0;
+    for (double n : by_count[k]) m += n / by_count[k].size();
+    std::printf("| %zu | %zu | %.2f |\n", k, by_count[k].size(), m);
+  }
+  std::printf("\nnoise estimated from the residuals, robot exact: auto reached %.2g mm in %zu of %d runs; NEES of X where "
+              "it stopped: mean %.2f +- %.2f (6 for an honest covariance), beyond chi2(6)'s 99%% point 16.81 in %.1f%%, "
+              "beyond its 99.9%% point 22.46 in %.1f%%; quantiles 90%% %.2f, 99%% %.2f, 99.9%% %.2f.\n",
+              target * 1e3, nees.size(), runs, mean, std::sqrt(square / std::max<std::size_t>(nees.size(), 1)), beyond(16.81),
+              beyond(22.46), quantile(nees, 0.9), quantile(nees, 0.99), quantile(nees, 0.999));
+  return 0;
+}
+
 double median_of_counts(std::vector<double> v) {  // of an even count, the mean of the middle two
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -158,18 +210,26 @@ double median_of_counts(std::vector<double> v) {  // of an even count, the mean 
 int main(int argc, char** argv) {
   int seeds = 20, max_views = 40;
   double target_mm = 1.0;
+  const char* usage = "usage: handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated]\n";
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seeds")) seeds = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--target-mm")) target_mm = std::atof(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--max-views")) max_views = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--noise") && (!std::strcmp(argv[i + 1], "stated") || !std::strcmp(argv[i + 1], "estimated")))
+      estimated_noise = !std::strcmp(argv[i + 1], "estimated");
     else {
-      std::fprintf(stderr, "usage: handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40]\n");
+      std::fprintf(stderr, "%s", usage);
       return 2;
     }
+  }
+  if (argc % 2 == 0) {
+    std::fprintf(stderr, "%s", usage);
+    return 2;
   }
   const ArmRig rig = ArmRig::load(HANDEYE_SOURCE_DIR "/urdf/sim_arm.urdf");
   const motion::CollisionModel collision(rig.arm, motion::table_plane());
   const double target = target_mm * 1e-3;
+  if (estimated_noise) return estimated_noise_study(rig, collision, seeds, target, max_views);
   std::printf("| seed | auto: samples to %.2g mm | star: samples to %.2g mm | star: samples taken: sigma [mm] | "
               "auto: samples to the star's sigma | auto: NEES of X | moves without a detection (auto / star) |\n",
               target_mm, target_mm);
