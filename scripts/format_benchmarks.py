@@ -348,7 +348,7 @@ lines += [
     "The node's own configuration in simulated_arm.launch: the rig's detections carry no covariance and the",
     "robot pose comes from TF, exact, so the session estimates the noise from the residuals. X's NEES against",
     "the truth where auto stopped, by the sample count it stopped at. An estimated noise reaches a target only",
-    "from 7 samples (`target_progress`, estimation/next_best_pose.h): before that rule, the sessions that",
+    "from 7 samples (`target_progress`, estimation/next_best_pose.h): before that rule (one run of 1000 seeds with it set to 3), the sessions that",
     "stopped at 5 samples (110 of 1000) had a mean NEES of 11.0 and those at 6 of 7.0, the ones whose noise came",
     "out small by chance. The NEES of an estimated noise has an F-like tail, heavier than chi2(6)'s; the",
     "rostest's single draw is held to this reference's 99.9% point.",

@@ -238,7 +238,7 @@ def page(report, calibration, noise, path):
     rpy = rpy_deg(calibration["rotation"])
     sigma = checks["predicted_sigma"]
     obj = report["object"]
-    reached = obj["sigma_mm"] <= obj["target_mm"]
+    reached = obj["reached"]  # target_progress's decision (next_best_pose.h), not sigma <= target alone
     samples = report["samples"]
     rejected = [s for s in samples if s["rejected"]]
     parts = [f"""<!DOCTYPE html><html><head><meta charset="utf-8"><title>Hand-eye calibration report</title>

@@ -3,6 +3,8 @@
 // honest under Monte-Carlo over noisy sessions at the planned poses.
 #include "handeye_covariance/estimation/next_best_pose.h"
 
+#include "handeye_covariance/estimation/joint_estimator.h"
+
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
@@ -105,6 +107,17 @@ TEST(NextBestPose, AnEstimatedNoiseReachesATargetOnlyFromEnoughSamples) {
   const Plan plan = plan_poses(unstated, estimated, far, 10, options);
   EXPECT_TRUE(plan.reached);
   EXPECT_EQ(static_cast<int>(plan.poses.size()), kTargetMinimumSamplesEstimatedNoise - 4);
+  EXPECT_EQ(plan.poses_for_the_noise, kTargetMinimumSamplesEstimatedNoise - 4);
+  // A stated noise far too small: the joint estimator estimates its missing part, and the rule
+  // holds, said as such (`solve` above is the paper's pairs: a samples count from its motions).
+  SampleSet understated = session.samples;
+  understated.noise->camera.translation *= 1e-4;
+  understated.noise->camera.rotation *= 1e-4;
+  const Calibration mended = solve_joint(understated);
+  ASSERT_EQ(mended.noise_origin, NoiseOrigin::Given);
+  const TargetProgress mended_progress = target_progress(mended, far, 0.7);
+  EXPECT_FALSE(mended_progress.reached);
+  EXPECT_NE(mended_progress.why_not.find("the stated noise is too small"), std::string::npos) << mended_progress.why_not;
 }
 
 TEST(NextBestPose, APlansPredictedCovarianceIsHonestUnderMonteCarlo) {

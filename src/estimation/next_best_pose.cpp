@@ -44,10 +44,14 @@ TargetProgress target_progress(const Calibration& calibration, double target, do
   if (p.object_sigma > target) return p;
   const int samples = samples_used(calibration);
   if (samples_short_of_target(calibration, samples) > 0) {
-    p.why_not = "the object sigma is within the target, but the noise is estimated from the residuals of " +
-                std::to_string(samples) + " samples: a target is reached from " +
+    const bool stated = calibration.noise_origin == NoiseOrigin::Given;
+    p.why_not = "the object sigma is within the target, but " +
+                std::string(stated ? "the stated noise is too small for the residuals and its missing part is"
+                                   : "the noise is") +
+                " estimated from the residuals of " + std::to_string(samples) + " samples: a target is reached from " +
                 std::to_string(kTargetMinimumSamplesEstimatedNoise) +
-                " (fewer reach it when their noise comes out small by chance; or state the noise)";
+                " (fewer reach it when their noise comes out small by chance" +
+                (stated ? ")" : "; or state the noise)");
     return p;
   }
   p.reached = true;
@@ -204,6 +208,7 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
            samples_short_of_target(calibration, samples_used(calibration) + static_cast<int>(added)) == 0;
   };
   plan.reached = reached(plan.start_object_sigma, 0);
+  plan.poses_for_the_noise = samples_short_of_target(calibration, samples_used(calibration));
   SampleSet planned = samples;
   if (!planned.noise) planned.noise = calibration.noise;
   Calibration current = calibration;  // joint: its covariance follows the plan's predictions

@@ -94,7 +94,8 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   out << YAML::Key << "advice_sigma" << YAML::Value << report.advice_sigma;
   out << YAML::Key << "object" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "working_distance_m"
       << YAML::Value << report.working_distance << YAML::Key << "sigma_mm" << YAML::Value << report.object_sigma * 1e3
-      << YAML::Key << "target_mm" << YAML::Value << report.target_object_sigma * 1e3 << YAML::EndMap;
+      << YAML::Key << "target_mm" << YAML::Value << report.target_object_sigma * 1e3 << YAML::Key << "reached"
+      << YAML::Value << report.target_reached << YAML::EndMap;
 
   out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
   for (std::size_t i = 0; i < report.fits.size(); ++i) {

@@ -116,14 +116,15 @@ void ArmMover::status(const std::string& state, const std::string& text) {
   msg.data = state + ": " + text;
   status_pub_.publish(msg);
   bool goal;
+  double goal_target;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    goal = action_goal_;
+    goal = action_goal_, goal_target = goal_target_;
   }
   if (goal && action_ && action_->isActive()) {
     AutoCalibrateFeedback feedback;
     feedback.samples = static_cast<int>(access_.samples());
-    const auto progress = access_.progress(target_object_sigma_).second;
+    const auto progress = access_.progress(goal_target).second;
     feedback.object_error_mm = progress ? progress->object_sigma * 1e3 : 0.0;
     feedback.state = state;
     feedback.text = msg.data;

@@ -258,6 +258,7 @@ CalibrationReport make_report(const CalibrationSession& session, const SessionSn
   r.target_object_sigma = session.settings().target_object_sigma;
   const TargetProgress progress = target_progress(r.calibration, r.target_object_sigma, r.working_distance);
   r.object_sigma = progress.object_sigma;
+  r.target_reached = progress.reached;
   r.target_not_reached = progress.why_not;
   advise(options, r);
   return r;

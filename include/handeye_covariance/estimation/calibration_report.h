@@ -44,7 +44,8 @@ struct CalibrationReport {
 
   /// The object's worst-axis 1 sigma at the working distance, and the target.
   double working_distance = 0.0, object_sigma = 0.0, target_object_sigma = 0.0;
-  std::string target_not_reached;  // within the target but not reached: why (target_progress)
+  bool target_reached = false;      // target_progress: within the target, with enough samples for its noise model
+  std::string target_not_reached;  // within the target but not reached: why
 
   /// Plain-language advice, the most urgent first; never empty.
   std::vector<std::string> advice;

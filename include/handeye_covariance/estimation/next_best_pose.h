@@ -81,7 +81,9 @@ struct TargetProgress {
 /// sigma meets the target picks the sessions whose noise came out small by chance:
 /// on the simulated arm with the node's estimated noise (handeye_auto_study --noise
 /// estimated), sessions stopped at 5 samples had a NEES of X of 11.0, at 6 of 7.0;
-/// from 7 the NEES is the fixed-count one (6.4). A stated noise reaches it from any count.
+/// from 7 the NEES is the fixed-count one (6.4). Calibrated on the joint estimator's noise
+/// models (n - 2 samples' worth of residuals). A stated noise the residuals accept reaches
+/// it from any count.
 constexpr int kTargetMinimumSamplesEstimatedNoise = 7;
 /// Reached when X's object sigma at `working_distance` is within `target` (m) and, if
 /// its covariance rests on an estimated noise (noise_origin, or a noise component the
@@ -110,6 +112,8 @@ struct Plan {
   std::vector<ScoredPose> poses;  // in order; poses[i].object_sigma is after adding poses[0..i]
   bool reached = false;
   double start_object_sigma = 0.0;
+  /// Poses planned at least because the noise is estimated (samples_short_of_target at the start).
+  int poses_for_the_noise = 0;
 };
 Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double target_object_sigma, int max_poses,
                 const SuggestOptions& options, const std::vector<Eigen::Isometry3d>& fixed_candidates = {});
