@@ -48,7 +48,7 @@ Run run_session(Strategy strategy, Setup setup, unsigned seed, double target, in
   for (;;) {
     const Calibration c = solve(samples);
     const int n = static_cast<int>(samples.samples.size());
-    if (object_sigma({c.T_parent_camera, c.pose_covariance}, options.working_distance) <= target || n > max_samples) {
+    if (target_progress(c, target, options.working_distance).reached || n > max_samples) {
       run.samples = n;
       const Vector6d e = pose_error(c.T_parent_camera, X);
       run.nees = e.dot(c.pose_covariance.ldlt().solve(e));
