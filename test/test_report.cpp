@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cli_helpers.h"
+#include "handeye_covariance/io/result_file.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/report.h"
 #include "test_helpers.h"
@@ -230,6 +231,35 @@ TEST(Report, ALargeSessionKeepsTheFigureSmall) {
   EXPECT_EQ(r.split_problem, "left out (splits: 0)");
   EXPECT_FALSE(mentions(r.advice, "no split-half check")) << r.advice.front();
   EXPECT_GT(r.turning(0), 0.1 * r.turning(2));
+}
+
+// A target met on a noise estimated from too few samples is not reached (target_progress):
+// the report says why, and its file carries the decision that report.py shows.
+TEST(Report, AnEstimatedNoiseSaysWhyTheTargetIsNotReachedYet) {
+  ReportOptions options = quick();
+  options.splits = 0;
+  const auto report_at = [&](int n) {
+    SampleSet samples = simulated(n, 12);
+    samples.noise.reset();  // estimated from the residuals
+    SessionSettings settings = session_settings(samples);
+    settings.target_object_sigma = 1.0;  // m: met by any sigma, so only the sample count decides
+    CalibrationSession session(settings);
+    session.replace(samples.samples, "test");
+    return make_report(session, session.snapshot(), options);
+  };
+  const CalibrationReport few = report_at(kTargetMinimumSamplesEstimatedNoise - 2);
+  EXPECT_EQ(few.calibration.noise_origin, NoiseOrigin::EstimatedFromResiduals);
+  EXPECT_LE(few.object_sigma, few.target_object_sigma);
+  EXPECT_FALSE(few.target_reached);
+  EXPECT_TRUE(mentions(few.advice, "a target is reached from " + std::to_string(kTargetMinimumSamplesEstimatedNoise)))
+      << few.advice.front();
+  const YAML::Node file = YAML::Load(io::format_report(few, {}, "test"));
+  EXPECT_FALSE(file["object"]["reached"].as<bool>());
+  const CalibrationReport enough = report_at(kTargetMinimumSamplesEstimatedNoise);
+  EXPECT_TRUE(enough.target_reached);
+  EXPECT_TRUE(enough.target_not_reached.empty()) << enough.target_not_reached;
+  EXPECT_FALSE(mentions(enough.advice, "a target is reached from"));
+  EXPECT_TRUE(YAML::Load(io::format_report(enough, {}, "test"))["object"]["reached"].as<bool>());
 }
 
 TEST(Report, CameraAxisNames) {
