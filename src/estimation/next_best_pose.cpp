@@ -203,12 +203,11 @@ Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double
                 const SuggestOptions& options, const std::vector<Isometry3d>& fixed_candidates) {
   Plan plan;
   plan.start_object_sigma = object_sigma({calibration.T_parent_camera, calibration.pose_covariance}, options.working_distance);
+  plan.poses_for_the_noise = samples_short_of_target(calibration, samples_used(calibration));
   const auto reached = [&](double sigma, std::size_t added) {
-    return sigma <= target_object_sigma &&
-           samples_short_of_target(calibration, samples_used(calibration) + static_cast<int>(added)) == 0;
+    return sigma <= target_object_sigma && static_cast<int>(added) >= plan.poses_for_the_noise;
   };
   plan.reached = reached(plan.start_object_sigma, 0);
-  plan.poses_for_the_noise = samples_short_of_target(calibration, samples_used(calibration));
   SampleSet planned = samples;
   if (!planned.noise) planned.noise = calibration.noise;
   Calibration current = calibration;  // joint: its covariance follows the plan's predictions
