@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 
@@ -156,12 +157,6 @@ Run run_star(const ArmRig& rig, const motion::CollisionModel& collision, const E
   return sim.run;
 }
 
-double quantile(std::vector<double> v, double q) {  // the order statistic at q (no interpolation)
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-}
-
 // --noise estimated: auto alone, X's NEES where it stopped, by the count it stopped at.
 int estimated_noise_study(const ArmRig& rig, const motion::CollisionModel& collision, int seeds, double target,
                           int max_views) {
@@ -195,7 +190,7 @@ int estimated_noise_study(const ArmRig& rig, const motion::CollisionModel& colli
               "it stopped: mean %.2f +- %.2f (6 for an honest covariance), beyond chi2(6)'s 99%% point 16.81 in %.1f%%, "
               "beyond its 99.9%% point 22.46 in %.1f%%; quantiles 90%% %.2f, 99%% %.2f, 99.9%% %.2f.\n",
               target * 1e3, nees.size(), runs, mean, std::sqrt(square / std::max<std::size_t>(nees.size(), 1)), beyond(16.81),
-              beyond(22.46), quantile(nees, 0.9), quantile(nees, 0.99), quantile(nees, 0.999));
+              beyond(22.46), linear_quantile(nees, 0.9), linear_quantile(nees, 0.99), linear_quantile(nees, 0.999));
   return 0;
 }
 
