@@ -465,7 +465,7 @@ TEST(CornerCalibration, SessionRefinesTheSamplesCorners) {
   settings.rig = s.rig;
   settings.method = Method::Corners;
   settings.refine_corners = corner_refiner();
-  settings.noise = MeasurementNoise{PoseNoise{}, detection};  // the robot exact: the hook keeps it so
+  settings.noise = MeasurementNoise{PoseNoise{}, detection};  // the robot exact
   std::vector<PoseSample> samples;
   for (std::size_t i = 0; i < s.view.size(); ++i) {
     PoseSample sample;
@@ -484,6 +484,10 @@ TEST(CornerCalibration, SessionRefinesTheSamplesCorners) {
   EXPECT_EQ(c.corner_fit->images[3].name, "view 3");
   EXPECT_EQ(c.corner_fit->corners, 12 * 40);
   EXPECT_NEAR(c.corner_fit->pixel_sigma, 0.3, 0.03);
+  // No robot noise stated (a zero block is none): from 12 images the hook estimates it,
+  // and says so for target_progress (the robot exact here: it comes out at its floor).
+  EXPECT_TRUE(c.corner_fit->robot_noise_estimated);
+  EXPECT_NE(c.corner_fit->robot.find("noise estimated from the corners"), std::string::npos) << c.corner_fit->robot;
   const double e = nees(test::pose_perturbation(c.T_parent_camera, s.X), c.pose_covariance);
   std::printf("session method corners: X within NEES %.2f, sigma %.3f px\n", e, c.corner_fit->pixel_sigma);
   EXPECT_LT(e, 22.5);  // chi^2(6) at 0.999

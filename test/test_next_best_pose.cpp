@@ -118,6 +118,18 @@ TEST(NextBestPose, AnEstimatedNoiseReachesATargetOnlyFromEnoughSamples) {
   const TargetProgress mended_progress = target_progress(mended, far, 0.7);
   EXPECT_FALSE(mended_progress.reached);
   EXPECT_NE(mended_progress.why_not.find("the stated noise is too small"), std::string::npos) << mended_progress.why_not;
+  // The corners method clears the pose-level components: a stated pixel sigma with the
+  // robot's noise estimated from the corners is held to the rule by its corner fit.
+  Calibration corners = stated;
+  corners.corner_fit = Calibration::CornerFit{};
+  corners.corner_fit->pixel_sigma_estimated = false;
+  EXPECT_TRUE(target_progress(corners, far, 0.7).reached);
+  corners.corner_fit->robot_noise_estimated = true;
+  const TargetProgress corners_progress = target_progress(corners, far, 0.7);
+  EXPECT_FALSE(corners_progress.reached);
+  EXPECT_NE(corners_progress.why_not.find("the robot's noise is estimated from the residuals of 4 samples"),
+            std::string::npos) << corners_progress.why_not;
+  EXPECT_EQ(samples_short_of_target(corners, 4), kTargetMinimumSamplesEstimatedNoise - 4);
 }
 
 TEST(NextBestPose, APlansPredictedCovarianceIsHonestUnderMonteCarlo) {

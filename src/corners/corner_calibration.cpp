@@ -971,6 +971,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   fit.pixel_sigma_estimated = f.pixel_sigma_estimated;
   fit.rms_px = f.rms_px;
   fit.robot = robot;
+  fit.robot_noise_estimated = f.robot_noise_estimated;
   fit.target_points = target_points_text(f);
   fit.target_point_sigma = f.target_point_sigma;
   for (const ImageReprojection& image : f.images) {

@@ -30,12 +30,20 @@ double object_sigma(const PoseWithCovariance& X, double working_distance) {
 
 namespace {
 int samples_used(const Calibration& c) { return c.samples_used > 0 ? c.samples_used : c.motions_used + 1; }
+
+/// Whether X's covariance rests on a noise the residuals estimated: no noise stated, a
+/// missing part the joint estimator fitted (a component the residuals supported), or
+/// the corners method's robot noise (it clears the pose-level components; its pixel
+/// sigma, when estimated, sets noise_origin).
+bool rests_on_estimated_noise(const Calibration& calibration) {
+  bool estimated = calibration.noise_origin == NoiseOrigin::EstimatedFromResiduals;
+  for (const Calibration::NoiseComponent& c : calibration.noise_components) estimated |= !c.at_bound;
+  return estimated || (calibration.corner_fit && calibration.corner_fit->robot_noise_estimated);
+}
 }  // namespace
 
 int samples_short_of_target(const Calibration& calibration, int samples) {
-  bool estimated = calibration.noise_origin == NoiseOrigin::EstimatedFromResiduals;
-  for (const Calibration::NoiseComponent& c : calibration.noise_components) estimated |= !c.at_bound;
-  return estimated ? std::max(0, kTargetMinimumSamplesEstimatedNoise - samples) : 0;
+  return rests_on_estimated_noise(calibration) ? std::max(0, kTargetMinimumSamplesEstimatedNoise - samples) : 0;
 }
 
 TargetProgress target_progress(const Calibration& calibration, double target, double working_distance) {
@@ -45,9 +53,11 @@ TargetProgress target_progress(const Calibration& calibration, double target, do
   const int samples = samples_used(calibration);
   if (samples_short_of_target(calibration, samples) > 0) {
     const bool stated = calibration.noise_origin == NoiseOrigin::Given;
+    const bool corners_robot = stated && calibration.corner_fit && calibration.corner_fit->robot_noise_estimated;
     p.why_not = "the object sigma is within the target, but " +
-                std::string(stated ? "the stated noise is too small for the residuals and its missing part is"
-                                   : "the noise is") +
+                std::string(corners_robot ? "the robot's noise is"
+                            : stated      ? "the stated noise is too small for the residuals and its missing part is"
+                                          : "the noise is") +
                 " estimated from the residuals of " + std::to_string(samples) + " samples: a target is reached from " +
                 std::to_string(kTargetMinimumSamplesEstimatedNoise) +
                 " (fewer reach it when their noise comes out small by chance" +

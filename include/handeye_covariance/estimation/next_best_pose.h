@@ -86,8 +86,9 @@ struct TargetProgress {
 /// it from any count.
 constexpr int kTargetMinimumSamplesEstimatedNoise = 7;
 /// Reached when X's object sigma at `working_distance` is within `target` (m) and, if
-/// its covariance rests on an estimated noise (noise_origin, or a noise component the
-/// residuals supported), it has kTargetMinimumSamplesEstimatedNoise samples.
+/// its covariance rests on an estimated noise (noise_origin, a noise component the
+/// residuals supported, or the corners method's robot noise estimated from the corners),
+/// it has kTargetMinimumSamplesEstimatedNoise samples.
 TargetProgress target_progress(const Calibration& calibration, double target, double working_distance);
 /// How many samples `calibration`'s noise model needs beyond `samples` to reach a target
 /// (0 with a stated noise the residuals accepted); plan_poses plans that many at least.
