@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "handeye_covariance/corners/corner_calibration.h"
+#include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -22,14 +23,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr std::size_t kAgeWindow = 300;  // detections: 10 s at 30 Hz
-
-/// The q-quantile (0..1) of `values`, by the nearest rank.
-double quantile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::min<double>(values.size() - 1, std::floor(q * values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
 
 /// A saved calibration of another setup or other frames than this node's (what the
 /// file does not say is taken to agree): the start-up publication and a check refuse it.
@@ -279,8 +272,8 @@ void CalibrationNode::publish_status() {  // lock held
   status.target_tolerance_mm = config_.target_tolerance_mm;
   status.detections_received = detections_received_;
   const std::vector<double> ages(detection_ages_.begin(), detection_ages_.end());
-  status.detection_age_median_ms = quantile(ages, 0.5) * 1e3;
-  status.detection_age_p99_ms = quantile(ages, 0.99) * 1e3;
+  status.detection_age_median_ms = linear_quantile(ages, 0.5) * 1e3;
+  status.detection_age_p99_ms = linear_quantile(ages, 0.99) * 1e3;
   status.detection_age_max_ms = ages.empty() ? 0.0 : *std::max_element(ages.begin(), ages.end()) * 1e3;
   // The latest analysis: of the current samples, or of fewer while the worker
   // catches up with a new one (estimate_samples says which).

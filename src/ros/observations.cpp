@@ -44,11 +44,11 @@ std::optional<Detection> select_detection(const TagDetectionArray& msg, const st
 }
 
 Detection detection_of(const geometry_msgs::PoseWithCovarianceStamped& msg) {
-  return {msg.header.stamp, msg.header.frame_id, msg.pose.pose, conversions::covariance_if_nonzero(msg.pose.covariance)};
+  return {msg.header.stamp, msg.header.frame_id, msg.pose.pose, conversions::covariance_if_nonzero(msg.pose.covariance), {}, {}};
 }
 
 Detection detection_of(const geometry_msgs::PoseStamped& msg) {
-  return {msg.header.stamp, msg.header.frame_id, msg.pose, std::nullopt};
+  return {msg.header.stamp, msg.header.frame_id, msg.pose, std::nullopt, {}, {}};
 }
 
 Detection detection_of(const geometry_msgs::TransformStamped& camera_to_pattern) {
