@@ -44,18 +44,20 @@ void row(const char* what, const CheckStudyResult& r, double multiple, bool rend
   if (multiple > 0.0 && r.changed > 0) std::snprintf(named, sizeof named, "%.1f%%", 100.0 * r.named_right());
   if (rendered) {
     std::snprintf(counts, sizeof counts, " (%d of %d)", r.changed, r.checks);
-    std::snprintf(chi2, sizeof chi2, " %.3f |", r.mean_chi2_over_dof);
+    std::snprintf(chi2, sizeof chi2, " %.1f%% | %.3f |", 100.0 * r.noise_dof_bound, r.mean_chi2_over_dof);
   }
   std::printf("| %s | %.0f | %.1f%%%s | %.1f%% | %s | %s | %s |%s\n", what, multiple, 100.0 * r.rate(), counts,
               100.0 * r.bound, two, named, both, chi2);
   std::fflush(stdout);
 }
 
-/// The tables' header; `extra` adds columns (" chi2 / dof |").
-void header(const char* extra = "") {
+/// The tables' header; `extra` adds columns (" chi2 / dof |"), one per '|'.
+void header(const std::string& extra = "") {
+  std::string rule;
+  for (char c : extra) rule += c == '|' ? "---:|" : "";
   std::printf("| moved | sigma | says changed | 6-dof bound (knows which) | bound for X or Y | names it right | detected and "
               "named right: the check / at best |%s\n|---|---:|---:|---:|---:|---:|---:|%s\n",
-              extra, *extra ? "---:|" : "");
+              extra.c_str(), rule.c_str());
 }
 
 /// A positive whole number from `text`, or nothing (then the usage).
@@ -83,7 +85,7 @@ int rendered_study(const std::string& target_file, int checks, unsigned seed, in
   std::printf("Rendered views of %s (each calibration's %d and each check's 5 detected, the pixel sigma pooled over "
               "them), the session's usual views:\n\n",
               target_file.c_str(), calibration_views);
-  header(" chi2 / dof |");
+  header(" 6-dof bound, the noise known to its views' dof | chi2 / dof |");
   row("nothing", run_check_study(o), 0.0, true);
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     o.change = change;

@@ -1,6 +1,8 @@
 #include "handeye_covariance/simulation/check_study.h"
 
 #include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/distributions/non_central_f.hpp>
 #include <boost/math/distributions/non_central_chi_squared.hpp>
 #include <boost/math/special_functions/bessel.hpp>
 
@@ -63,6 +65,14 @@ double chi2_test_power(int dof, double noncentrality, double alpha) {
   if (noncentrality <= 0.0) return alpha;
   return boost::math::cdf(
       boost::math::complement(boost::math::non_central_chi_squared(dof, noncentrality), threshold));
+}
+
+double f_test_power(int dof, double scale_dof, double noncentrality, double alpha) {
+  if (scale_dof <= 0.0) return chi2_test_power(dof, noncentrality, alpha);
+  const double threshold = boost::math::quantile(boost::math::fisher_f(dof, scale_dof), 1.0 - alpha);
+  if (noncentrality <= 0.0) return alpha;
+  return boost::math::cdf(
+      boost::math::complement(boost::math::non_central_f(dof, scale_dof, noncentrality), threshold));
 }
 
 TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed,
@@ -181,6 +191,10 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     }
     const CalibrationCheck check = check_calibration(calibration, views, options.check);
     ++result.checks;
+    const double lambda = options.change == PlantedChange::None ? 0.0 : options.multiple * options.multiple;
+    result.noise_dof_bound +=
+        f_test_power(6, calibration.prediction ? calibration.prediction->dof : 0.0, lambda, options.check.alpha) /
+        options.checks;
     if (options.change != PlantedChange::None && options.bound_draws > 0) {
       const TwoHypothesisFrontier frontier =
           two_hypothesis_frontier(check.x_y_cosines, options.multiple * options.multiple, options.check.alpha,

@@ -65,6 +65,12 @@ struct CheckStudyResult {
   /// The most any level-alpha test with any naming detects and names right at each
   /// check's views, for a direction uniform in 6 dof (two_hypothesis_frontier), averaged.
   double best_detected_and_named = 0.0;
+  /// The 6-dof bound (knows which) when the views' noise is known only up to one scale,
+  /// estimated from as many dof as the calibration's own views give its prediction
+  /// (Calibration::prediction's dof; f_test_power), averaged; the chi2 bound for a
+  /// calibration without one. A calibration that estimated its noise cannot be checked
+  /// better than its views know that noise.
+  double noise_dof_bound = 0.0;
   double rate() const { return checks ? static_cast<double>(changed) / checks : 0.0; }
   /// The share of detected checks that named the planted change (X or Y).
   double named_right() const;
@@ -78,6 +84,13 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options);
 /// P(noncentral chi2(dof, noncentrality) > the chi2(dof) 1 - alpha quantile): the power
 /// of the best test of a known-dimension change.
 double chi2_test_power(int dof, double noncentrality, double alpha);
+
+/// The same test with the noise known only up to one scale, estimated from
+/// `scale_dof` dof independent of the views: P(noncentral F(dof, scale_dof,
+/// noncentrality) > the F(dof, scale_dof) 1 - alpha quantile), the power of the F test,
+/// the most powerful test invariant to that scale (Lehmann and Romano, Testing Statistical
+/// Hypotheses, 7.1). scale_dof <= 0: the scale known (chi2_test_power).
+double f_test_power(int dof, double scale_dof, double noncentrality, double alpha);
 
 /// The most powerful level-alpha test of "no change" against "X or Y changed by
 /// noncentrality lambda, each with probability 1/2, in a direction uniform in its 6 dof",
