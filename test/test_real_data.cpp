@@ -537,6 +537,50 @@ struct SplitChecks {
   std::vector<double> detectable;  // 5 sigma along each move, m
 };
 
+/// A part of a session calibrated as a user's would be (ChecksOfACalibrationOnEverySession):
+/// its noise model and leave-one-out prediction, the whole session's honesty `inflation`
+/// and shared robot error model (`own_model`: the part fits its own; `per_view` says when
+/// the part's own fit kept the per-view model). nullopt for a part the estimator refuses.
+std::optional<Calibration> part_calibration(const SampleSet& part, const char* name, double inflation,
+                                            const std::optional<SharedRobotError>& shared, bool own_model, bool* per_view) {
+  SessionSettings settings = session_settings(part);
+  settings.honesty.splits = 0;  // the whole session's inflation stands in for it
+  // Where the whole session uses the shared robot error, a part takes its model
+  // (length, s, a, b) as it takes its inflation, fitted with the check's views among
+  // the session's: fitting each part's own would cost 200 x 0.1 s per session and
+  // path. HANDEYE_CHECK_OWN_MODEL=1 fits each part's own, as a user's would be (the
+  // figures of both in docs/how_it_works.md).
+  settings.shared_robot_error = SharedErrorUse::Off;
+  CalibrationSession session(settings);
+  session.replace(part.samples, name);
+  Calibration cal;
+  try {
+    // With its leave-one-out prediction; under the shared robot error the session
+    // makes none (the check predicts under the model), as here.
+    cal = shared ? session.calibrate(session.snapshot()) : session.calibrate_checked(session.snapshot());
+  } catch (const HandEyeError&) {
+    return std::nullopt;
+  }
+  if (shared) {
+    SharedRobotErrorOptions options;
+    if (!own_model) options.model = shared;
+    const SharedRobotErrorFit fit = fit_shared_robot_error(session.decided(part, cal), cal, options);
+    if (fit.chosen) {
+      cal.shared_robot_error = shared_error_record(fit);
+      use_shared_robot_error(cal, fit);
+    } else {  // the part's own fit keeps the per-view model: its leave-one-out too
+      cal = session.calibrate_checked(session.snapshot());
+      *per_view = true;
+    }
+  }
+  if (inflation > 1.0) {
+    scale_covariances(cal, inflation);
+    cal.honesty = Calibration::Honesty{};
+    cal.honesty->inflation = inflation;
+  }
+  return cal;
+}
+
 /// The checks of `samples`' splits into a calibration and `k` check views (each of
 /// `distinct` once, else 200 random ones drawn from `rng`), each calibrated as a user's
 /// would be (ChecksOfACalibrationOnEverySession); with `moves`, each split's check views
@@ -562,41 +606,11 @@ SplitChecks check_splits(const SampleSet& samples, const char* name, int k, cons
     for (int i = 0; i < n; ++i) {
       (i < k ? views : part).samples.push_back(samples.samples[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])]);
     }
-    SessionSettings settings = session_settings(part);
-    settings.honesty.splits = 0;  // the whole session's inflation stands in for it
-    // Where the whole session uses the shared robot error, a part takes its model
-    // (length, s, a, b) as it takes its inflation, fitted with the check's views among
-    // the session's: fitting each part's own would cost 200 x 0.1 s per session and
-    // path. HANDEYE_CHECK_OWN_MODEL=1 fits each part's own, as a user's would be (the
-    // figures of both in docs/how_it_works.md).
-    settings.shared_robot_error = SharedErrorUse::Off;
-    CalibrationSession session(settings);
-    session.replace(part.samples, name);
-    Calibration cal;
-    try {
-      // With its leave-one-out prediction; under the shared robot error the session
-      // makes none (the check predicts under the model), as here.
-      cal = shared ? session.calibrate(session.snapshot()) : session.calibrate_checked(session.snapshot());
-    } catch (const HandEyeError&) {
-      continue;  // a part the estimator refuses (too few turns) is no calibration to check
-    }
-    if (shared) {
-      SharedRobotErrorOptions options;
-      if (!own_model) options.model = shared;
-      const SharedRobotErrorFit fit = fit_shared_robot_error(session.decided(part, cal), cal, options);
-      if (fit.chosen) {
-        cal.shared_robot_error = shared_error_record(fit);
-        use_shared_robot_error(cal, fit);
-      } else {  // the part's own fit keeps the per-view model: its leave-one-out too
-        cal = session.calibrate_checked(session.snapshot());
-        ++found.per_view_parts;
-      }
-    }
-    if (inflation > 1.0) {
-      scale_covariances(cal, inflation);
-      cal.honesty = Calibration::Honesty{};
-      cal.honesty->inflation = inflation;
-    }
+    bool per_view = false;
+    const std::optional<Calibration> calibrated = part_calibration(part, name, inflation, shared, own_model, &per_view);
+    if (!calibrated) continue;  // a part the estimator refuses (too few turns) is no calibration to check
+    const Calibration& cal = *calibrated;
+    found.per_view_parts += per_view;
     ++found.splits;
     const CalibrationCheck unchanged = check_calibration(cal, views);
     found.alarms += unchanged.changed;
@@ -616,6 +630,95 @@ SplitChecks check_splits(const SampleSet& samples, const char* name, int k, cons
     if (5.0 * sigma <= 2e-3) ++found.allowed, found.detected_allowed += check.changed;
   }
   return found;
+}
+
+/// The eye-in-hand Franka session's images are not of one calibration: views 7 and 8 (the
+/// last two) checked against a calibration of views 1-6 are changed beyond doubt, both by
+/// one change (what it leaves is within the noise), while views 1-6 fit each other (each
+/// left out of the others: consistent); with 7 or 8 in the calibration, the other fits it.
+/// With HANDEYE_MOVED_REFERENCE=1, its `alarms` over the `distinct` splits are also judged
+/// against sessions simulated at its robot poses with the model of views 1-6 (X, Y, their
+/// noise), views 7 and 8 seeing X or Y moved by that change (100 sessions, 14 s).
+void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
+                         const std::vector<std::vector<int>>& distinct, int alarms) {
+  const std::size_t first = 6;
+  SampleSet before = samples, after = samples;
+  before.samples.resize(first);
+  after.samples.erase(after.samples.begin(), after.samples.begin() + static_cast<std::ptrdiff_t>(first));
+  bool per_view = false;
+  const std::optional<Calibration> calibrated = part_calibration(before, name, 1.0, std::nullopt, false, &per_view);
+  if (!calibrated) {
+    ADD_FAILURE() << "views 1-6 of " << name << " do not calibrate";
+    return;
+  }
+  const Calibration& cal = *calibrated;
+  const CalibrationCheck moved = check_calibration(cal, after);
+  const EstimatedChange::Delta& d = moved.change.reported();
+  std::printf("  views 7 and 8 against a calibration of views 1-6: %s (p = %.2g), %s moved by %.2f mm and %.3f deg "
+              "(1 sigma %.2f mm, %.3f deg); left after it chi2 %.1f on %d dof (p = %.2f)\n",
+              moved.changed ? "changed" : "consistent", moved.p_value, moved.change.what.c_str(),
+              d.value.head<3>().norm() * 1e3, d.value.tail<3>().norm() * 180.0 / M_PI,
+              std::sqrt(d.covariance.topLeftCorner<3, 3>().trace()) * 1e3,
+              std::sqrt(d.covariance.bottomRightCorner<3, 3>().trace()) * 180.0 / M_PI, moved.change.residual_chi2,
+              moved.dof - moved.change.dof, moved.change.residual_p_value);
+  EXPECT_TRUE(moved.changed) << name;
+  EXPECT_LT(moved.p_value, 1e-4) << name;
+  EXPECT_GT(moved.change.residual_p_value, 0.01) << name << ": one change explains views 7 and 8";
+  for (std::size_t left = 0; left < first; ++left) {  // views 1-6 are one calibration
+    SampleSet others = before, one = before;
+    others.samples.erase(others.samples.begin() + static_cast<std::ptrdiff_t>(left));
+    one.samples = {before.samples[left]};
+    const std::optional<Calibration> rest = part_calibration(others, name, 1.0, std::nullopt, false, &per_view);
+    if (!rest) {
+      ADD_FAILURE() << name << ", views 1-6 without " << left + 1 << " do not calibrate";
+      continue;
+    }
+    EXPECT_FALSE(check_calibration(*rest, one).changed) << name << ": view " << left + 1 << " against the other five";
+  }
+  for (std::size_t in : {first, first + 1}) {  // one of 7 and 8 in the calibration: the other fits it
+    SampleSet with = before, other = samples;
+    with.samples.push_back(samples.samples[in]);
+    other.samples = {samples.samples[in == first ? first + 1 : first]};
+    const std::optional<Calibration> seven = part_calibration(with, name, 1.0, std::nullopt, false, &per_view);
+    if (!seven) {
+      ADD_FAILURE() << name << ", views 1-6 and " << in + 1 << " do not calibrate";
+      continue;
+    }
+    EXPECT_FALSE(check_calibration(*seven, other).changed) << name << ": view " << (in == first ? 8 : 7)
+                                                           << " against views 1-6 and " << in + 1;
+  }
+  if (!std::getenv("HANDEYE_MOVED_REFERENCE")) return;
+  // The reference: every view simulated with views 1-6's model, views 7 and 8 at the moved X or Y.
+  const std::vector<Matrix6d> S = residual_covariances(samples, cal);
+  const Eigen::Isometry3d X = cal.T_parent_camera, Y = cal.pattern->pose;
+  const auto apply = [](const Eigen::Isometry3d& pose, const std::optional<EstimatedChange::Delta>& change) {
+    if (!change) return pose;  // the new pose is exp(change) pose: R = exp(r) R, t = t + dt
+    return se3::make_pose(so3::exp(change->value.tail<3>()) * pose.linear(), pose.translation() + change->value.head<3>());
+  };
+  const Eigen::Isometry3d X_moved = apply(X, moved.change.X_change), Y_moved = apply(Y, moved.change.Y_change);
+  std::mt19937_64 rng(31);
+  constexpr int kReplicates = 100;
+  std::vector<int> counts;
+  for (int b = 0; b < kReplicates; ++b) {
+    SampleSet replicate = simulate_like(samples, cal, S, rng);
+    for (std::size_t i = first; i < replicate.samples.size(); ++i) {  // the same noise about the moved prediction
+      PoseSample& view = replicate.samples[i];
+      const Eigen::Isometry3d was = samples.rig.predicted_view(view.T_base_effector, X, Y);
+      const Eigen::Isometry3d now = samples.rig.predicted_view(view.T_base_effector, X_moved, Y_moved);
+      view.T_camera_pattern = se3::make_pose(view.T_camera_pattern.linear() * was.linear().transpose() * now.linear(),
+                                             now.translation() + view.T_camera_pattern.translation() - was.translation());
+    }
+    std::mt19937_64 unused(0);
+    counts.push_back(check_splits(replicate, name, k, distinct, 1.0, std::nullopt, false, false, unused).alarms);
+  }
+  const int as_many = static_cast<int>(std::count_if(counts.begin(), counts.end(), [&](int a) { return a >= alarms; }));
+  const double mean = std::accumulate(counts.begin(), counts.end(), 0.0) / kReplicates;
+  const double p_value = (as_many + 1.0) / (kReplicates + 1.0);
+  std::sort(counts.begin(), counts.end());
+  std::printf("  reference with views 7 and 8 moved so (%d sessions at its poses and views 1-6's noise, the same %zu "
+              "splits): mean %.2f alarms, 5-95%% %d to %d; %d or more in %d%% of them (p = %.3f)\n",
+              kReplicates, distinct.size(), mean, counts[5 * kReplicates / 100], counts[95 * kReplicates / 100 - 1], alarms,
+              100 * as_many / kReplicates, p_value);
 }
 
 // The check of a saved calibration (calibration_check.h) on every real session and both paths: 200
@@ -705,11 +808,13 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         // The reference itself keeps alpha: its mean within 3% ...
         EXPECT_LE(mean / planned, 0.03) << c.name << ", " << path;
         // ... and the session's own count is within it (p above 1%). Not reached on the
-        // eye-in-hand Franka session's images (issue 41, open): its 4 alarms all hold its
-        // 8th image, the closest (0.21 m, the others 0.28-0.41 m), off by 1 degree where the
-        // views without it predict 0.3 per axis; no simulated session at its poses and noise
-        // raised 4. There the count is held where it is, below 20%.
+        // eye-in-hand Franka session's images (issue 41, open): no simulated session at its
+        // poses and noise raised its 4 alarms, which all hold its 8th image. Its views 7 and 8
+        // are not of one calibration with views 1-6 (views_7_and_8_moved); a reference that
+        // holds that change does not raise 4 either (HANDEYE_MOVED_REFERENCE=1: mean 0.99, 0
+        // of 100). There the count is held where it is, below 20%.
         if (std::string(c.name) == "franka eye-in-hand chessboard 9 x 6" && path == "images") {
+          views_7_and_8_moved(*samples, c.name, k, distinct, alarms);
           EXPECT_LE(alarm_rate, 0.2) << c.name << ", " << path;
         } else {
           EXPECT_GT(p_value, 0.01) << c.name << ", " << path;
