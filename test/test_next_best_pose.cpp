@@ -129,6 +129,7 @@ TEST(NextBestPose, AnEstimatedNoiseReachesATargetOnlyFromEnoughSamples) {
   EXPECT_FALSE(corners_progress.reached);
   EXPECT_NE(corners_progress.why_not.find("the robot's noise is estimated from the residuals of 4 samples"),
             std::string::npos) << corners_progress.why_not;
+  EXPECT_NE(corners_progress.why_not.find("or state the robot's noise"), std::string::npos) << corners_progress.why_not;
   EXPECT_EQ(samples_short_of_target(corners, 4), kTargetMinimumSamplesEstimatedNoise - 4);
 }
 

@@ -106,6 +106,9 @@ Calibration calibrate_by_corners(const RealSession& session) {
   }
   std::printf("  corners: %s; RMS %.3f px over %d corners\n", c.noise_model.c_str(), c.corner_fit->rms_px,
               c.corner_fit->corners);
+  // A real robot's noise, estimated from the corners of 6 images or more and off its
+  // floor: one target_progress holds to its rule however the pixel sigma came.
+  EXPECT_TRUE(c.corner_fit->robot_noise_estimated) << c.noise_model;
   return c;
 }
 
@@ -633,38 +636,49 @@ SplitChecks check_splits(const SampleSet& samples, const char* name, int k, cons
 }
 
 /// The eye-in-hand Franka session's images are not of one calibration: views 7 and 8 (the
-/// last two) checked against a calibration of views 1-6 are changed beyond doubt, both by
-/// one change (what it leaves is within the noise), while views 1-6 fit each other (each
-/// left out of the others: consistent); with 7 or 8 in the calibration, the other fits it.
-/// With HANDEYE_MOVED_REFERENCE=1, its `alarms` over the `distinct` splits are also judged
-/// against sessions simulated at its robot poses with the model of views 1-6 (X, Y, their
-/// noise), views 7 and 8 seeing X or Y moved by that change (100 sessions, 14 s).
+/// last two) checked against a calibration of views 1-6 are changed beyond doubt, named X
+/// with odds beyond 19 : 1, and one change explains both (what it leaves is within the
+/// noise); none of views 1-6 is out against the other five (a weak test: one view against
+/// a 5-view calibration). With HANDEYE_MOVED_REFERENCE=1, its `alarms` over the `distinct`
+/// splits are also judged against sessions simulated at its robot poses with the model of
+/// views 1-6 (X, Y, their noise), views 7 and 8 seeing X moved by that change (100
+/// sessions, 14 s).
 void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
                          const std::vector<std::vector<int>>& distinct, int alarms) {
   const std::size_t first = 6;
+  ASSERT_EQ(samples.samples.size(), 8u) << name << ": every image detected, in the folder's order";
+  for (std::size_t i = 0; i < samples.samples.size(); ++i) {
+    const std::shared_ptr<const TargetCorners>& corners = samples.samples[i].corners;
+    ASSERT_TRUE(corners) << name << ", sample " << i;
+    EXPECT_NE(corners->source.find("image-" + std::to_string(i + 1) + "."), std::string::npos) << corners->source;
+  }
   SampleSet before = samples, after = samples;
   before.samples.resize(first);
   after.samples.erase(after.samples.begin(), after.samples.begin() + static_cast<std::ptrdiff_t>(first));
   bool per_view = false;
   const std::optional<Calibration> calibrated = part_calibration(before, name, 1.0, std::nullopt, false, &per_view);
-  if (!calibrated) {
-    ADD_FAILURE() << "views 1-6 of " << name << " do not calibrate";
-    return;
-  }
+  ASSERT_TRUE(calibrated) << "views 1-6 of " << name << " do not calibrate";
   const Calibration& cal = *calibrated;
   const CalibrationCheck moved = check_calibration(cal, after);
-  const EstimatedChange::Delta& d = moved.change.reported();
-  std::printf("  views 7 and 8 against a calibration of views 1-6: %s (p = %.2g), %s moved by %.2f mm and %.3f deg "
-              "(1 sigma %.2f mm, %.3f deg); left after it chi2 %.1f on %d dof (p = %.2f)\n",
-              moved.changed ? "changed" : "consistent", moved.p_value, moved.change.what.c_str(),
-              d.value.head<3>().norm() * 1e3, d.value.tail<3>().norm() * 180.0 / M_PI,
-              std::sqrt(d.covariance.topLeftCorner<3, 3>().trace()) * 1e3,
-              std::sqrt(d.covariance.bottomRightCorner<3, 3>().trace()) * 180.0 / M_PI, moved.change.residual_chi2,
+  ASSERT_EQ(moved.change.what, "X") << name;
+  const EstimatedChange::Delta& d = *moved.change.X_change;
+  // Each part of the change against its own covariance: chi2 on 3 dof.
+  const auto part_chi2 = [&](int at) {
+    const Eigen::Vector3d v = d.value.segment<3>(at);
+    return v.dot(d.covariance.block<3, 3>(at, at).ldlt().solve(v));
+  };
+  std::printf("  views 7 and 8 against a calibration of views 1-6: %s (p = %.2g), X moved (odds over Y %.3g : 1) by "
+              "%.2f mm (chi2 %.1f on 3 dof) and %.3f deg (chi2 %.1f on 3 dof); left after it chi2 %.1f on %d dof "
+              "(p = %.2f)\n",
+              moved.changed ? "changed" : "consistent", moved.p_value, moved.naming_odds, d.value.head<3>().norm() * 1e3,
+              part_chi2(0), d.value.tail<3>().norm() * 180.0 / M_PI, part_chi2(3), moved.change.residual_chi2,
               moved.dof - moved.change.dof, moved.change.residual_p_value);
   EXPECT_TRUE(moved.changed) << name;
   EXPECT_LT(moved.p_value, 1e-4) << name;
+  EXPECT_GE(moved.naming_odds, 19.0) << name;
   EXPECT_GT(moved.change.residual_p_value, 0.01) << name << ": one change explains views 7 and 8";
-  for (std::size_t left = 0; left < first; ++left) {  // views 1-6 are one calibration
+  std::printf("  each of views 1-6 against the other five: p =");
+  for (std::size_t left = 0; left < first; ++left) {
     SampleSet others = before, one = before;
     others.samples.erase(others.samples.begin() + static_cast<std::ptrdiff_t>(left));
     one.samples = {before.samples[left]};
@@ -673,29 +687,20 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
       ADD_FAILURE() << name << ", views 1-6 without " << left + 1 << " do not calibrate";
       continue;
     }
-    EXPECT_FALSE(check_calibration(*rest, one).changed) << name << ": view " << left + 1 << " against the other five";
+    const CalibrationCheck one_check = check_calibration(*rest, one);
+    std::printf(" %.2g", one_check.p_value);
+    EXPECT_FALSE(one_check.changed) << name << ": view " << left + 1 << " against the other five";
   }
-  for (std::size_t in : {first, first + 1}) {  // one of 7 and 8 in the calibration: the other fits it
-    SampleSet with = before, other = samples;
-    with.samples.push_back(samples.samples[in]);
-    other.samples = {samples.samples[in == first ? first + 1 : first]};
-    const std::optional<Calibration> seven = part_calibration(with, name, 1.0, std::nullopt, false, &per_view);
-    if (!seven) {
-      ADD_FAILURE() << name << ", views 1-6 and " << in + 1 << " do not calibrate";
-      continue;
-    }
-    EXPECT_FALSE(check_calibration(*seven, other).changed) << name << ": view " << (in == first ? 8 : 7)
-                                                           << " against views 1-6 and " << in + 1;
-  }
+  std::printf("\n");
   if (!std::getenv("HANDEYE_MOVED_REFERENCE")) return;
   // The reference: every view simulated with views 1-6's model, views 7 and 8 at the moved X or Y.
   const std::vector<Matrix6d> S = residual_covariances(samples, cal);
   const Eigen::Isometry3d X = cal.T_parent_camera, Y = cal.pattern->pose;
   const auto apply = [](const Eigen::Isometry3d& pose, const std::optional<EstimatedChange::Delta>& change) {
-    if (!change) return pose;  // the new pose is exp(change) pose: R = exp(r) R, t = t + dt
+    // the new pose is exp(change) pose: R = exp(r) R, t = t + dt
     return se3::make_pose(so3::exp(change->value.tail<3>()) * pose.linear(), pose.translation() + change->value.head<3>());
   };
-  const Eigen::Isometry3d X_moved = apply(X, moved.change.X_change), Y_moved = apply(Y, moved.change.Y_change);
+  const Eigen::Isometry3d X_moved = apply(X, moved.change.X_change), Y_moved = Y;
   std::mt19937_64 rng(31);
   constexpr int kReplicates = 100;
   std::vector<int> counts;
@@ -714,10 +719,10 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const int as_many = static_cast<int>(std::count_if(counts.begin(), counts.end(), [&](int a) { return a >= alarms; }));
   const double mean = std::accumulate(counts.begin(), counts.end(), 0.0) / kReplicates;
   const double p_value = (as_many + 1.0) / (kReplicates + 1.0);
-  std::sort(counts.begin(), counts.end());
+  const std::vector<double> spread(counts.begin(), counts.end());
   std::printf("  reference with views 7 and 8 moved so (%d sessions at its poses and views 1-6's noise, the same %zu "
-              "splits): mean %.2f alarms, 5-95%% %d to %d; %d or more in %d%% of them (p = %.3f)\n",
-              kReplicates, distinct.size(), mean, counts[5 * kReplicates / 100], counts[95 * kReplicates / 100 - 1], alarms,
+              "splits): mean %.2f alarms, 5-95%% %.1f to %.1f; %d or more in %d%% of them (p = %.3f)\n",
+              kReplicates, distinct.size(), mean, linear_quantile(spread, 0.05), linear_quantile(spread, 0.95), alarms,
               100 * as_many / kReplicates, p_value);
 }
 

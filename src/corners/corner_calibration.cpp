@@ -971,7 +971,9 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   fit.pixel_sigma_estimated = f.pixel_sigma_estimated;
   fit.rms_px = f.rms_px;
   fit.robot = robot;
-  fit.robot_noise_estimated = f.robot_noise_estimated;
+  // As the pose-level components count only off their bound: a robot noise the corners
+  // held at its floor (both parts) is one they did not support.
+  fit.robot_noise_estimated = f.robot_noise_estimated && !(f.robot_at_bound[0] && f.robot_at_bound[1]);
   fit.target_points = target_points_text(f);
   fit.target_point_sigma = f.target_point_sigma;
   for (const ImageReprojection& image : f.images) {

@@ -61,7 +61,7 @@ TargetProgress target_progress(const Calibration& calibration, double target, do
                 " estimated from the residuals of " + std::to_string(samples) + " samples: a target is reached from " +
                 std::to_string(kTargetMinimumSamplesEstimatedNoise) +
                 " (fewer reach it when their noise comes out small by chance" +
-                (stated ? ")" : "; or state the noise)");
+                (corners_robot ? "; or state the robot's noise)" : stated ? ")" : "; or state the noise)");
     return p;
   }
   p.reached = true;

@@ -1,5 +1,7 @@
 #include "handeye_covariance/simulation/check_study.h"
 
+#include <algorithm>
+
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/non_central_f.hpp>
@@ -193,8 +195,8 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     ++result.checks;
     const double lambda = options.change == PlantedChange::None ? 0.0 : options.multiple * options.multiple;
     result.noise_dof_bound +=
-        f_test_power(6, calibration.prediction ? calibration.prediction->dof : 0.0, lambda, options.check.alpha) /
-        options.checks;
+        f_test_power(6, calibration.prediction ? std::max(calibration.prediction->dof, 5.0) : 0.0, lambda,
+                     options.check.alpha) / options.checks;
     if (options.change != PlantedChange::None && options.bound_draws > 0) {
       const TwoHypothesisFrontier frontier =
           two_hypothesis_frontier(check.x_y_cosines, options.multiple * options.multiple, options.check.alpha,

@@ -301,7 +301,7 @@ struct Calibration {
     std::string pixel_noise;
     bool per_image_sigma = false;
     std::string robot;  // how the robot poses entered: "exact" or their prior
-    bool robot_noise_estimated = false;  // the robot's noise estimated from the corners
+    bool robot_noise_estimated = false;  // the robot's noise estimated from the corners, off its floor
     /// The printed target's points' 1 sigma (m, per axis; estimated or given, 0:
     /// exact) and how it entered the covariance.
     double target_point_sigma = 0.0;

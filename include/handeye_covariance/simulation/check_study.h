@@ -66,10 +66,12 @@ struct CheckStudyResult {
   /// check's views, for a direction uniform in 6 dof (two_hypothesis_frontier), averaged.
   double best_detected_and_named = 0.0;
   /// The 6-dof bound (knows which) when the views' noise is known only up to one scale,
-  /// estimated from as many dof as the calibration's own views give its prediction
-  /// (Calibration::prediction's dof; f_test_power), averaged; the chi2 bound for a
-  /// calibration without one. A calibration that estimated its noise cannot be checked
-  /// better than its views know that noise.
+  /// estimated from as many dof as the calibration's own views give its leave-one-out
+  /// prediction (Calibration::prediction's dof, at most 6 a view, floored at 5 as the
+  /// check floors it; f_test_power) whether or not the check scaled by it, averaged; the
+  /// chi2 bound for a calibration without one. An idealisation (one scale for the whole
+  /// noise): a calibration that estimated its noise cannot be checked better than its
+  /// views know that noise.
   double noise_dof_bound = 0.0;
   double rate() const { return checks ? static_cast<double>(changed) / checks : 0.0; }
   /// The share of detected checks that named the planted change (X or Y).
@@ -88,8 +90,9 @@ double chi2_test_power(int dof, double noncentrality, double alpha);
 /// The same test with the noise known only up to one scale, estimated from
 /// `scale_dof` dof independent of the views: P(noncentral F(dof, scale_dof,
 /// noncentrality) > the F(dof, scale_dof) 1 - alpha quantile), the power of the F test,
-/// the most powerful test invariant to that scale (Lehmann and Romano, Testing Statistical
-/// Hypotheses, 7.1). scale_dof <= 0: the scale known (chi2_test_power).
+/// the most powerful test invariant to that scale and to the change's direction within
+/// its `dof` (Lehmann and Romano, Testing Statistical Hypotheses, 7.1). scale_dof <= 0:
+/// the scale known (chi2_test_power).
 double f_test_power(int dof, double scale_dof, double noncentrality, double alpha);
 
 /// The most powerful level-alpha test of "no change" against "X or Y changed by
