@@ -123,6 +123,7 @@ check_study = open(f"{run}/check_study.md").read()
 check_study_rendered = open(f"{run}/check_study_rendered.md").read()
 check_study_rendered_60 = open(f"{run}/check_study_rendered_60.md").read()
 check_frontier = open(f"{run}/check_frontier.md").read()
+check_estimated_scale = open(f"{run}/check_estimated_scale.md").read()
 check_between = open(f"{run}/check_between.md").read()
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 
@@ -391,6 +392,14 @@ lines += [
     "them named right needs the first >= 90% and the second >= 85.5%.",
     "",
     check_frontier.strip(),
+    "",
+    "What an estimated noise costs (`handeye_check_study --estimated-scale`): the bound for a test that must catch",
+    "X or Y when the views' noise is known only up to one scale, estimated from 360, 120 or 60 dof (the",
+    "leave-one-out prediction of 60, 20 or 10 views), the most powerful test invariant to that scale",
+    "(two_hypothesis_power_bound_estimated_scale; by Hunt and Stein no test's smallest power over the scale exceeds",
+    "it); the last row a test that knows which (the F test, f_test_power).",
+    "",
+    check_estimated_scale.strip(),
     "",
     "At views between the usual and the turned ones (`handeye_check_study --views-between --checks 2000`;",
     "mean cosine 0.73, unequal):",

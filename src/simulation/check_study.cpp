@@ -1,8 +1,12 @@
 #include "handeye_covariance/simulation/check_study.h"
 
 #include <algorithm>
+#include <limits>
+#include <random>
+#include <vector>
 
 #include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/gamma.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/non_central_f.hpp>
 #include <boost/math/distributions/non_central_chi_squared.hpp>
@@ -123,6 +127,56 @@ TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double no
   frontier.larger_named_right = detected_by_larger ? named_right / detected_by_larger : 0.0;
   frontier.detected_and_named = named_right / draws;
   return frontier;
+}
+
+double two_hypothesis_power_bound_estimated_scale(const Vector6d& cosines, double noncentrality, double scale_dof,
+                                                  double alpha, unsigned seed, int draws) {
+  const Vector6d c = cosines.cwiseMin(1.0).cwiseMax(0.0);
+  const Vector6d s = (Vector6d::Ones() - c.cwiseProduct(c)).cwiseSqrt();
+  const int r = 6 + static_cast<int>((s.array() > 1e-9).count());  // the span's dimension
+  // The standard Gamma((nu + r) / 2) at 32 mid-probabilities: x = those / rate.
+  constexpr int kNodes = 32;
+  const boost::math::gamma_distribution<double> standard(0.5 * (scale_dof + r), 1.0);
+  std::vector<double> nodes(kNodes);
+  for (int k = 0; k < kNodes; ++k) nodes[static_cast<std::size_t>(k)] = boost::math::quantile(standard, (k + 0.5) / kNodes);
+  Rng rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::chi_squared_distribution<double> chi2(scale_dof);
+  const auto gaussian = [&] {
+    Vector6d x;
+    for (int a = 0; a < 6; ++a) x(a) = normal(rng);
+    return x;
+  };
+  // One draw's log likelihood ratio: u, w the white coordinates (X's subspace, the rest of
+  // the span), divided by the scale's draw; v = c u + s w the Y projection.
+  const auto log_ratio = [&](const Vector6d& theta, bool y_changed) {
+    Vector6d u = gaussian() + theta, w = gaussian();
+    const double scale = std::sqrt(std::max(chi2(rng), 1e-300) / scale_dof);
+    u /= scale, w /= scale;
+    Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(w);
+    double norm2 = u.squaredNorm();
+    for (int a = 0; a < 6; ++a) norm2 += s(a) > 1e-9 ? w(a) * w(a) : 0.0;
+    if (y_changed) std::swap(u, v);  // the signal in Y's subspace: the roles swapped, as two_hypothesis_frontier
+    const double rate = 0.5 * (scale_dof + norm2);
+    double most = -std::numeric_limits<double>::infinity();
+    std::vector<double> terms(kNodes);
+    for (int k = 0; k < kNodes; ++k) {
+      const double x = nodes[static_cast<std::size_t>(k)] / rate;
+      terms[static_cast<std::size_t>(k)] = log_change_likelihood_ratio(x * u.squaredNorm(), x * v.squaredNorm(), noncentrality);
+      most = std::max(most, terms[static_cast<std::size_t>(k)]);
+    }
+    double sum = 0.0;
+    for (double term : terms) sum += std::exp(term - most);
+    return most + std::log(sum / kNodes);
+  };
+  std::vector<double> null(static_cast<std::size_t>(draws));
+  for (double& value : null) value = log_ratio(Vector6d::Zero(), false);
+  std::sort(null.begin(), null.end());
+  const double threshold = null[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
+  const double root_lambda = std::sqrt(noncentrality);
+  int detected = 0;
+  for (int d = 0; d < draws; ++d) detected += log_ratio(gaussian().normalized() * root_lambda, d % 2 == 1) > threshold;
+  return static_cast<double>(detected) / draws;
 }
 
 double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality, double alpha, unsigned seed, int draws) {
