@@ -156,7 +156,9 @@ double two_hypothesis_power_bound_estimated_scale(const Vector6d& cosines, doubl
     Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(w);
     double norm2 = u.squaredNorm();
     for (int a = 0; a < 6; ++a) norm2 += s(a) > 1e-9 ? w(a) * w(a) : 0.0;
-    if (y_changed) std::swap(u, v);  // the signal in Y's subspace: the roles swapped, as two_hypothesis_frontier
+    // "Y changed": a reflection of the span swaps the subspaces and keeps the noise, so its
+    // draws are X's with the roles swapped (the ratio is symmetric in them: the same power).
+    if (y_changed) std::swap(u, v);
     const double rate = 0.5 * (scale_dof + norm2);
     double most = -std::numeric_limits<double>::infinity();
     std::vector<double> terms(kNodes);

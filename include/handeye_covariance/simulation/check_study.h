@@ -110,9 +110,11 @@ double two_hypothesis_power_bound(const Vector6d& cosines, double noncentrality,
 /// test on t = y / sqrt(S) (y the whitened projection onto X's and Y's span, r dims), whose
 /// likelihood ratio over "no change" is E_x[(g(x |P_X t|^2) + g(x |P_Y t|^2)) / 2] with x
 /// ~ Gamma((nu + r) / 2, rate (nu + |t|^2) / 2) (g as above; x at 32 quantiles, which
-/// leaves the statistic a shade short of the optimum: a bound within Monte-Carlo error). The scale
+/// leaves the statistic a shade short of the optimum: the figure understates the bound
+/// slightly, beside its Monte-Carlo error). The scale
 /// group is amenable, so by Hunt and Stein no test's smallest power over the unknown
-/// scale exceeds it. Seeded Monte-Carlo; identical subspaces give f_test_power's F test.
+/// scale exceeds it (a test may do better at one particular scale). Seeded Monte-Carlo;
+/// identical subspaces give f_test_power's F test.
 double two_hypothesis_power_bound_estimated_scale(const Vector6d& cosines, double noncentrality, double scale_dof,
                                                   double alpha, unsigned seed = 1, int draws = 40000);
 
