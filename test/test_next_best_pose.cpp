@@ -108,6 +108,8 @@ TEST(NextBestPose, AnEstimatedNoiseReachesATargetOnlyFromEnoughSamples) {
   EXPECT_TRUE(plan.reached);
   EXPECT_EQ(static_cast<int>(plan.poses.size()), kTargetMinimumSamplesEstimatedNoise - 4);
   EXPECT_EQ(plan.poses_for_the_noise, kTargetMinimumSamplesEstimatedNoise - 4);
+  EXPECT_EQ(poses_for_the_noise_text(plan), "; at least 3, as the noise is estimated: a target counts from 7 samples");
+  EXPECT_EQ(poses_for_the_noise_text(plan_poses(session.samples, stated, far, 10, options)), "");
   // A stated noise far too small: the joint estimator estimates its missing part, and the rule
   // holds, said as such (`solve` above is the paper's pairs: a samples count from its motions).
   SampleSet understated = session.samples;

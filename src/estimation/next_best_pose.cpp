@@ -68,6 +68,12 @@ TargetProgress target_progress(const Calibration& calibration, double target, do
   return p;
 }
 
+std::string poses_for_the_noise_text(const Plan& plan) {
+  if (plan.poses_for_the_noise <= 0) return "";
+  return "; at least " + std::to_string(plan.poses_for_the_noise) + ", as the noise is estimated: a target counts from " +
+         std::to_string(kTargetMinimumSamplesEstimatedNoise) + " samples";
+}
+
 double criterion_value(const PoseWithCovariance& X, SuggestCriterion criterion, double working_distance) {
   if (criterion == SuggestCriterion::ObjectSigma) return object_sigma(X, working_distance);
   // log det through Cholesky: stable at the 1e-40 scale a 6x6 of mm and mrad has.

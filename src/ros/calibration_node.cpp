@@ -645,10 +645,7 @@ bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Respo
     res.message = r.plan.reached ? std::to_string(r.plan.poses.size()) + " more pose(s) reach " + target + " mm (predicted)"
                                  : "the target " + target + " mm is not reached within " +
                                        std::to_string(session_.settings().max_plan_poses) + " more poses";
-    if (r.plan.reached && r.plan.poses_for_the_noise > 0)
-      res.message += "; at least " + std::to_string(r.plan.poses_for_the_noise) +
-                     ", as the noise is estimated: a target counts from " +
-                     std::to_string(kTargetMinimumSamplesEstimatedNoise) + " samples";
+    if (r.plan.reached) res.message += poses_for_the_noise_text(r.plan);
   } catch (const HandEyeError& e) {
     res.message = e.what();
   }

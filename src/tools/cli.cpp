@@ -651,11 +651,7 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   if (plan.reached) {
     out << "To reach " << number_text(target_mm) << " mm: " << plan.poses.size() << " more pose(s)"
         << (plan.poses.empty() ? " (already there)" : ", predicted " + number_text(plan.poses.empty() ? 0.0 : plan.poses.back().object_sigma * 1e3) + " mm after them")
-        << (plan.poses_for_the_noise > 0 ? "; at least " + std::to_string(plan.poses_for_the_noise) +
-                                               ", as the noise is estimated: a target counts from " +
-                                               std::to_string(kTargetMinimumSamplesEstimatedNoise) + " samples"
-                                         : "")
-        << "\n";
+        << poses_for_the_noise_text(plan) << "\n";
   } else {
     out << "To reach " << number_text(target_mm) << " mm: not within " << plan.poses.size() << " more pose(s) (predicted "
         << number_text(plan.poses.empty() ? suggestion.current_object_sigma * 1e3 : plan.poses.back().object_sigma * 1e3)

@@ -118,5 +118,9 @@ struct Plan {
 };
 Plan plan_poses(const SampleSet& samples, const Calibration& calibration, double target_object_sigma, int max_poses,
                 const SuggestOptions& options, const std::vector<Eigen::Isometry3d>& fixed_candidates = {});
+/// What a reached plan says of the poses its noise model needs (handeye suggest and the
+/// node's ~suggest_pose): "; at least 3, as the noise is estimated: a target counts from 7
+/// samples", or "" when it needs none.
+std::string poses_for_the_noise_text(const Plan& plan);
 
 }  // namespace handeye
