@@ -122,8 +122,8 @@ CalibrationCheck check_calibration(const Calibration& calibration, const SampleS
 
 /// Calibration::Prediction of `fitted`, the calibration of `samples` (its kept views,
 /// decided), each view left out in turn and solved by `solve` (as the calibration was).
-/// A left-out set the estimator refuses is skipped; nullopt with fewer than 5 views or
-/// fewer than 5 predictions.
+/// A left-out set the estimator refuses is skipped; nullopt with fewer than 4 views or
+/// fewer than 4 predictions.
 std::optional<Calibration::Prediction> prediction_check(
     const SampleSet& samples, const std::function<Calibration(const SampleSet&)>& solve);
 
