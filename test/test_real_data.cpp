@@ -20,6 +20,7 @@
 #include <functional>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 #include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/estimation/calibration_check.h"
@@ -641,10 +642,11 @@ SplitChecks check_splits(const SampleSet& samples, const char* name, int k, cons
 /// Monte-Carlo p-value (Besag and Clifford).
 struct AlarmReference {
   double mean = 0.0, low = 0.0, high = 0.0, p_value = 1.0;
-  int percent_as_many = 0;
+  int percent_as_many = 0, percentile_95 = 0;
   std::vector<int> counts;  // sorted
 };
 AlarmReference alarm_reference(int alarms, int replicates, const std::function<int()>& draw) {
+  if (replicates < 20) throw std::invalid_argument("a reference of fewer than 20 sessions has no 95th percentile");
   AlarmReference r;
   for (int b = 0; b < replicates; ++b) r.counts.push_back(draw());
   std::sort(r.counts.begin(), r.counts.end());
@@ -654,6 +656,7 @@ AlarmReference alarm_reference(int alarms, int replicates, const std::function<i
   r.percent_as_many = 100 * as_many / replicates;
   const std::vector<double> spread(r.counts.begin(), r.counts.end());
   r.low = linear_quantile(spread, 0.05), r.high = linear_quantile(spread, 0.95);
+  r.percentile_95 = r.counts[static_cast<std::size_t>(95 * replicates / 100 - 1)];
   return r;
 }
 
@@ -683,6 +686,7 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const std::optional<Calibration> calibrated = part_calibration(before, name, 1.0, std::nullopt, false, &per_view);
   ASSERT_TRUE(calibrated) << "views 1-6 of " << name << " do not calibrate";
   const Calibration& cal = *calibrated;
+  std::printf("  views 1-6's noise: %s\n", cal.noise_model.c_str());
   const CalibrationCheck moved = check_calibration(cal, after);
   ASSERT_EQ(moved.change.what, "X") << name;
   const EstimatedChange::Delta& d = *moved.change.X_change;
@@ -718,7 +722,8 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   std::printf("\n");
   // The false alarms of the part of the session without a change: the splits of views 1-6
   // alone, 4 to calibrate and 2 to check as the session's own, against sessions simulated
-  // at their poses with views 1-6's model, the same splits checked alike.
+  // at their poses with views 1-6's model (printed above), the same splits checked alike
+  // (about 5 s). The splits draw nothing (each once, no move).
   {
     const std::vector<std::vector<int>> own = every_split(static_cast<int>(first), k, 200);
     std::mt19937_64 unused(0);
@@ -727,7 +732,8 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
     std::mt19937_64 rng(37);
     const AlarmReference reference = alarm_reference(found.alarms, 100, [&] {
       const SampleSet replicate = simulate_like(before, cal, S, rng);
-      return check_splits(replicate, name, k, own, 1.0, std::nullopt, false, false, unused).alarms;
+      std::mt19937_64 unused_here(0);
+      return check_splits(replicate, name, k, own, 1.0, std::nullopt, false, false, unused_here).alarms;
     });
     std::printf("[check, real %s, views 1-6 alone, 2 per check] %d of %zu splits calibrated: false alarms %d; reference "
                 "(100 sessions at their poses and views 1-6's noise): mean %.2f alarms, 5-95%% %.1f to %.1f; %d or more "
@@ -735,7 +741,7 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
                 name, found.splits, own.size(), found.alarms, reference.mean, reference.low, reference.high, found.alarms,
                 reference.percent_as_many, reference.p_value);
     EXPECT_EQ(found.splits, static_cast<int>(own.size())) << name << ": every 4-view part of views 1-6 calibrates";
-    EXPECT_LE(reference.mean / found.splits, 0.03) << name;
+    EXPECT_LE(reference.mean / static_cast<double>(own.size()), 0.03) << name;
     EXPECT_GT(reference.p_value, 0.01) << name << ": views 1-6 alone";
   }
   if (!std::getenv("HANDEYE_MOVED_REFERENCE")) return;
@@ -744,12 +750,13 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const std::vector<Matrix6d> S = residual_covariances(samples, cal);
   Calibration moved_cal = cal;
   moved_cal.T_parent_camera = test::apply(cal.T_parent_camera, d.value);
-  std::mt19937_64 rng(31), unused(0);
+  std::mt19937_64 rng(31);
   const AlarmReference reference = alarm_reference(alarms, 100, [&] {
     SampleSet replicate = simulate_like(samples, cal, S, rng);
     const SampleSet after_the_move = simulate_like(samples, moved_cal, S, rng);
     std::copy(after_the_move.samples.begin() + static_cast<std::ptrdiff_t>(first), after_the_move.samples.end(),
               replicate.samples.begin() + static_cast<std::ptrdiff_t>(first));
+    std::mt19937_64 unused(0);
     return check_splits(replicate, name, k, distinct, 1.0, std::nullopt, false, false, unused).alarms;
   });
   std::printf("  reference with views 7 and 8 moved so (100 sessions at its poses and views 1-6's noise, the same %zu "
@@ -804,6 +811,8 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       const double median = detectable.empty() ? 0.0 : detectable[detectable.size() / 2];
       const int splits = found.splits, alarms = found.alarms;
       const double alarm_rate = splits ? static_cast<double>(alarms) / splits : 1.0;
+      // The one session whose views are not of one calibration (views_7_and_8_moved).
+      const bool holds_a_change = std::string(c.name) == "franka eye-in-hand chessboard 9 x 6" && path == "images";
       if (own_model && shared) {
         std::printf("  (each part's own shared robot error: per-view model in %d parts)\n", found.per_view_parts);
       }
@@ -834,25 +843,26 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
         const double p_value = reference.p_value;
         std::printf("  reference (100 sessions at its poses and noise, the same %d splits): mean %.2f alarms (%.1f%%), "
                     "95th percentile %d, max %d; %d or more in %d%% of them (p = %.3f)\n",
-                    planned, reference.mean, 100.0 * reference.mean / planned, reference.counts[94],
+                    planned, reference.mean, 100.0 * reference.mean / planned, reference.percentile_95,
                     reference.counts.back(), alarms, reference.percent_as_many, p_value);
         // The reference itself keeps alpha: its mean within 3% ...
         EXPECT_LE(reference.mean / planned, 0.03) << c.name << ", " << path;
-        // ... and the session's own count is within it (p above 1%). Not so on the
-        // eye-in-hand Franka session's images, which hold a change: its views 7 and 8 are not
-        // of one calibration with views 1-6 (views_7_and_8_moved), and its 4 alarms each check
-        // view 8 against a calibration of mostly unchanged views. They are detections, not
-        // false alarms; those are judged on its unchanged part, views 1-6 alone (within their
+        // ... and the session's own count is within it (p above 1%). Not on the eye-in-hand
+        // Franka session's images, which hold a change: its views 7 and 8 are not of one
+        // calibration with views 1-6 (views_7_and_8_moved), and its 4 alarms each check view
+        // 8 against a calibration of mostly unchanged views, where "no change" does not hold.
+        // Its false alarms are judged on its unchanged part, views 1-6 alone (within their
         // reference). A reference that holds the change as a step of X does not raise 4
-        // (HANDEYE_MOVED_REFERENCE=1: mean 1.00, 0 of 100). There the count is held where it
-        // is, below 20%.
-        if (std::string(c.name) == "franka eye-in-hand chessboard 9 x 6" && path == "images") {
-          views_7_and_8_moved(*samples, c.name, k, distinct, alarms);
+        // (HANDEYE_MOVED_REFERENCE=1: mean 1.00, 0 of 100): the change is more than that
+        // step, or the check sharper there than that reference; the data cannot say which.
+        // There the count is held where it is, below 20%.
+        if (holds_a_change) {
           EXPECT_LE(alarm_rate, 0.2) << c.name << ", " << path;
         } else {
           EXPECT_GT(p_value, 0.01) << c.name << ", " << path;
         }
       }
+      if (holds_a_change) views_7_and_8_moved(*samples, c.name, k, distinct, alarms);
       if (found.allowed >= 20) {
         EXPECT_GE(static_cast<double>(found.detected_allowed) / found.allowed, 0.9) << c.name << ", " << path;
       }
