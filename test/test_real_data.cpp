@@ -11,6 +11,8 @@
 // pipeline for theirs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -705,6 +707,13 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   EXPECT_LT(moved.p_value, 1e-4) << name;
   EXPECT_GE(moved.naming_odds, 19.0) << name;
   EXPECT_GT(moved.change.residual_p_value, 0.01) << name << ": one change explains views 7 and 8";
+  // The same without the noise model: each view's rotation residual (camera frame) about a
+  // calibration without it, views 1-6 each about the other five, 7 and 8 about 1-6.
+  const auto rotation_residual = [&](const Calibration& c, const PoseSample& view) -> Eigen::Vector3d {
+    return joint_residual(samples.rig, view, c.T_parent_camera, c.pattern->pose).error.tail<3>();
+  };
+  const Eigen::Vector3d r7 = rotation_residual(cal, samples.samples[first]), r8 = rotation_residual(cal, samples.samples[first + 1]);
+  std::vector<double> before_degrees;
   std::printf("  each of views 1-6 against the other five: p =");
   for (std::size_t left = 0; left < first; ++left) {
     SampleSet others = before, one = before;
@@ -718,8 +727,20 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
     const CalibrationCheck one_check = check_calibration(*rest, one);
     std::printf(" %.2g", one_check.p_value);
     EXPECT_FALSE(one_check.changed) << name << ": view " << left + 1 << " against the other five";
+    before_degrees.push_back(rotation_residual(*rest, before.samples[left]).norm() * 180.0 / M_PI);
   }
   std::printf("\n");
+  const double apart = std::acos(std::clamp(r7.normalized().dot(r8.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+  std::printf("  rotation residuals, each of views 1-6 about the other five:");
+  for (double d : before_degrees) std::printf(" %.2f", d);
+  std::printf(" deg; views 7 and 8 about 1-6: %.2f and %.2f deg, %.0f deg apart\n", r7.norm() * 180.0 / M_PI,
+              r8.norm() * 180.0 / M_PI, apart);
+  // Views 7 and 8 are off more than any of the six and the same way: under no change the
+  // two largest of 8 exchangeable residuals are those two in 1 of 28, and two independent
+  // directions within 30 degrees in about 7% (1 - cos 30 over 2), or 17% in a plane.
+  const double largest_before = *std::max_element(before_degrees.begin(), before_degrees.end());
+  EXPECT_GT(std::min(r7.norm(), r8.norm()) * 180.0 / M_PI, largest_before) << name;
+  EXPECT_LT(apart, 30.0) << name;
   // The false alarms of the part of the session without a change: the splits of views 1-6
   // alone, 4 to calibrate and 2 to check as the session's own, against sessions simulated
   // at their poses with views 1-6's model (printed above), the same splits checked alike
