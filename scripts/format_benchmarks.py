@@ -417,7 +417,7 @@ lines += [
     "false alarms of views 1-6 alone (their 15 splits into 4 and 2, against their own reference):",
     "",
     "```",
-    *[line for line in systematic.splitlines() if line.startswith(("[check, real", "  reference (", "  reference with", "  views ", "  each of views"))],
+    *[line for line in systematic.splitlines() if line.startswith(("[check, real", "  reference (", "  reference with", "  views ", "  each of views", "  rotation residuals"))],
     "```",
     "",
     "## Honesty under systematic errors and on real data",
