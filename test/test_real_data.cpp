@@ -713,6 +713,13 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
     return joint_residual(samples.rig, view, c.T_parent_camera, c.pattern->pose).error.tail<3>();
   };
   const Eigen::Vector3d r7 = rotation_residual(cal, samples.samples[first]), r8 = rotation_residual(cal, samples.samples[first + 1]);
+  double predicted_degrees = 0.0;  // the largest predicted 1 sigma per axis of 7's and 8's, calibration's error included
+  for (const PoseSample& view : after.samples) {
+    const SampleSet one{samples.rig, samples.noise, {view}};
+    const JointResidual r = joint_residual(samples.rig, view, cal.T_parent_camera, cal.pattern->pose);
+    const Matrix6d C = residual_covariances(one, cal)[0] + r.jacobian * joint_covariance(cal) * r.jacobian.transpose();
+    predicted_degrees = std::max(predicted_degrees, C.diagonal().tail<3>().cwiseSqrt().maxCoeff() * 180.0 / M_PI);
+  }
   std::vector<double> before_degrees;
   std::printf("  each of views 1-6 against the other five: p =");
   for (std::size_t left = 0; left < first; ++left) {
@@ -733,8 +740,9 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const double apart = std::acos(std::clamp(r7.normalized().dot(r8.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
   std::printf("  rotation residuals, each of views 1-6 about the other five:");
   for (double d : before_degrees) std::printf(" %.2f", d);
-  std::printf(" deg; views 7 and 8 about 1-6: %.2f and %.2f deg, %.0f deg apart\n", r7.norm() * 180.0 / M_PI,
-              r8.norm() * 180.0 / M_PI, apart);
+  std::printf(" deg; views 7 and 8 about 1-6: %.2f and %.2f deg, %.0f deg apart (predicted 1 sigma per axis at most "
+              "%.2f deg)\n",
+              r7.norm() * 180.0 / M_PI, r8.norm() * 180.0 / M_PI, apart, predicted_degrees);
   // Views 7 and 8 are off more than any of the six and the same way: under no change the
   // two largest of 8 exchangeable residuals are those two in 1 of 28, and two independent
   // directions within 30 degrees in about 7% (1 - cos 30 over 2), or 17% in a plane.
