@@ -507,8 +507,8 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   // A noise model fitted from few views predicts too narrow (FalseAlarmsOfAFourViewCalibration:
   // about 6% at alpha 1% from 4 views); only the leave-one-out scale measures that.
   if (!shared && !calibration.prediction && !calibration.noise_components.empty()) {
-    check.advice.push_back("the calibration carries no leave-one-out prediction (it needs 4 views, each of which the "
-                           "others calibrate without): its noise model alone may predict too narrow, and a p near "
+    check.advice.push_back("the calibration carries no leave-one-out prediction (it takes 4 views or more, each left "
+                           "out in turn with the rest still calibrating): its noise model alone may predict too narrow, and a p near "
                            "alpha says less than it seems; solve it again from more views (handeye solve or the node "
                            "save one)");
   }
