@@ -21,6 +21,13 @@
 #include <std_msgs/Float64.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -340,7 +347,9 @@ TEST(RvizPanel, ChecksTheCalibrationAndShowsABumpedCamera) {
 }  // namespace
 }  // namespace handeye
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_tests(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_rviz_panel");
   QApplication app(argc, argv);
@@ -351,4 +360,39 @@ int main(int argc, char** argv) {
   handeye::samples_path = pn.param<std::string>("samples", "");
   handeye::test_case = pn.param<std::string>("case", "");
   return RUN_ALL_TESTS();
+}
+
+}  // namespace
+
+// Debian's rviz (1.14.19) sometimes dies at start-up on a loaded machine, before the panel
+// does anything: a segfault in its own Grid display's first status (rviz::Display::
+// setStatusInternal -> PropertyTreeModel::beginInsert -> QAbstractItemModel::
+// rowsAboutToBeInserted): 1 run of 13 here beside two busy cores (the core's backtrace,
+// 2026-11-28); it failed rviz_panel_motion in 2 of the last 3 clean runs of the suite.
+// So the tests run in a child process, and run once more if that child is killed by a
+// signal within its first 20 seconds. A later crash, a second one, or any failed
+// assertion stands.
+int main(int argc, char** argv) {
+  for (int attempt = 0;; ++attempt) {
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t child = ::fork();
+    if (child < 0) return run_tests(argc, argv);
+    if (child == 0) {
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // roslaunch stops the parent: the child goes with it
+      return run_tests(argc, argv);
+    }
+    int status = 0;
+    while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    if (attempt == 0 && seconds < 20.0) {
+      std::fprintf(stderr, "test_rviz_panel: killed by signal %d %.1f s after it started (rviz's start-up): once more\n",
+                   signal, seconds);
+      continue;
+    }
+    std::fprintf(stderr, "test_rviz_panel: killed by signal %d %.1f s after it started\n", signal, seconds);
+    return 128 + signal;
+  }
 }
