@@ -48,6 +48,19 @@ Eigen::Vector3d random_direction(Rng& rng) {
   return u.normalized();
 }
 
+/// Six standard normals, drawn in order (the bounds' Monte-Carlos).
+Vector6d standard_normal6(Rng& rng, std::normal_distribution<double>& normal) {
+  Vector6d x;
+  for (int a = 0; a < 6; ++a) x(a) = normal(rng);
+  return x;
+}
+
+/// The level-alpha threshold of a Monte-Carlo null: the sorted draws' 1 - alpha point.
+double upper_quantile(std::vector<double>& draws, double alpha) {
+  std::sort(draws.begin(), draws.end());
+  return draws[static_cast<std::size_t>((1.0 - alpha) * (static_cast<double>(draws.size()) - 1.0))];
+}
+
 }  // namespace
 
 MeasurementNoise check_study_noise() {
@@ -92,15 +105,7 @@ TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double no
   const Vector6d s = (Vector6d::Ones() - c.cwiseProduct(c)).cwiseSqrt();
   Rng rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  const auto gaussian = [&] {
-    Vector6d x;
-    for (int a = 0; a < 6; ++a) x(a) = normal(rng);
-    return x;
-  };
-  const auto quantile = [&](std::vector<double>& values) {
-    std::sort(values.begin(), values.end());
-    return values[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
-  };
+  const auto gaussian = [&] { return standard_normal6(rng, normal); };
   // In the principal bases the two projections are u and v = c u + s w (u, w white).
   std::vector<double> null_ratios(static_cast<std::size_t>(draws)), null_larger(null_ratios.size());
   for (std::size_t d = 0; d < null_ratios.size(); ++d) {
@@ -108,7 +113,7 @@ TwoHypothesisFrontier two_hypothesis_frontier(const Vector6d& cosines, double no
     const Vector6d v = c.cwiseProduct(u) + s.cwiseProduct(gaussian());
     null_ratios[d] = log_ratio(u, v), null_larger[d] = larger(u, v);
   }
-  const double threshold = quantile(null_ratios), larger_threshold = quantile(null_larger);
+  const double threshold = upper_quantile(null_ratios, alpha), larger_threshold = upper_quantile(null_larger, alpha);
   int detected = 0, detected_by_larger = 0;
   double named_right = 0.0;
   for (int d = 0; d < draws; ++d) {
@@ -142,11 +147,7 @@ double two_hypothesis_power_bound_estimated_scale(const Vector6d& cosines, doubl
   Rng rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::chi_squared_distribution<double> chi2(scale_dof);
-  const auto gaussian = [&] {
-    Vector6d x;
-    for (int a = 0; a < 6; ++a) x(a) = normal(rng);
-    return x;
-  };
+  const auto gaussian = [&] { return standard_normal6(rng, normal); };
   // One draw's log likelihood ratio: u, w the white coordinates (X's subspace, the rest of
   // the span), divided by the scale's draw; v = c u + s w the Y projection.
   const auto log_ratio = [&](const Vector6d& theta, bool y_changed) {
@@ -173,8 +174,7 @@ double two_hypothesis_power_bound_estimated_scale(const Vector6d& cosines, doubl
   };
   std::vector<double> null(static_cast<std::size_t>(draws));
   for (double& value : null) value = log_ratio(Vector6d::Zero(), false);
-  std::sort(null.begin(), null.end());
-  const double threshold = null[static_cast<std::size_t>((1.0 - alpha) * (draws - 1))];
+  const double threshold = upper_quantile(null, alpha);
   const double root_lambda = std::sqrt(noncentrality);
   int detected = 0;
   for (int d = 0; d < draws; ++d) detected += log_ratio(gaussian().normalized() * root_lambda, d % 2 == 1) > threshold;
