@@ -121,11 +121,10 @@ SampleSet observed_as_the_franka_views(Rng& rng, const Rig& rig, const std::vect
 }
 
 // A calibration from 4 views checked with 2 new ones (a third of a short session, as
-// the splits of a real one are), its noise as the eye-in-hand Franka session's views 1-6
-// fit theirs: the robot's translation noise dominating (2 mm) and the detector's stated
-// covariance 7 times too small in variance, both estimated from 12 dof. The model's own prediction
-// is too narrow there (it says changed in about 6%); the leave-one-out scale, each view
-// predicted from the other 3 (prediction_check, from 4 views), keeps alpha.
+// the splits of a real one are), observed_as_the_franka_views, its noise estimated from 12
+// dof. The model's own prediction is too narrow there (it says changed in about 6%); the
+// leave-one-out scale, each view predicted from the other 3 (prediction_check, from 4
+// views), keeps alpha.
 TEST(CalibrationCheck, FalseAlarmsOfAFourViewCalibration) {
   CheckStudyOptions o = study(PlantedChange::None, 0.0, 1000, 12);
   o.noise_given = false;

@@ -712,14 +712,17 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const auto rotation_residual = [&](const Calibration& c, const PoseSample& view) -> Eigen::Vector3d {
     return joint_residual(samples.rig, view, c.T_parent_camera, c.pattern->pose).error.tail<3>();
   };
-  const Eigen::Vector3d r7 = rotation_residual(cal, samples.samples[first]), r8 = rotation_residual(cal, samples.samples[first + 1]);
+  std::vector<Eigen::Vector3d> after_residuals;  // views 7's and 8's
   double predicted_degrees = 0.0;  // the largest predicted 1 sigma per axis of 7's and 8's, calibration's error included
   for (const PoseSample& view : after.samples) {
     const SampleSet one{samples.rig, samples.noise, {view}};
     const JointResidual r = joint_residual(samples.rig, view, cal.T_parent_camera, cal.pattern->pose);
+    after_residuals.push_back(r.error.tail<3>());
     const Matrix6d C = residual_covariances(one, cal)[0] + r.jacobian * joint_covariance(cal) * r.jacobian.transpose();
     predicted_degrees = std::max(predicted_degrees, C.diagonal().tail<3>().cwiseSqrt().maxCoeff() * 180.0 / M_PI);
   }
+  const Eigen::Vector3d& r7 = after_residuals[0];
+  const Eigen::Vector3d& r8 = after_residuals[1];
   std::vector<double> before_degrees;
   std::printf("  each of views 1-6 against the other five: p =");
   for (std::size_t left = 0; left < first; ++left) {
