@@ -15,6 +15,8 @@
 // noise estimated beside the detections' covariance, at the session's usual views.
 //   handeye_check_study --views-between [--checks 300] [--seed 1]
 // The same at views between the usual and the turned ones (tilt to 45 deg, roll to 90).
+//   handeye_check_study --any-direction [--checks 300] [--seed 1]
+// At the usual views, X or Y moved along a direction uniform in its 6 dof, beside its translation.
 //   handeye_check_study --frontier [--seed 1]
 // Where detecting a change and naming it meet, at views of equal principal cosines
 // between X's and Y's subspaces, and where views of several spreads sit.
@@ -158,6 +160,40 @@ int estimated_scale(unsigned seed) {
   return 0;
 }
 
+/// The study at the session's usual views with the move's direction uniform in X's or Y's 6
+/// dof as the check weighs them (the family the "bound for X or Y" is for), beside the
+/// translations issue 41's figure moves, at 5 and 6 sigma.
+int any_direction_study(int checks, unsigned seed) {
+  std::printf("The session's usual views, %d checks a row: the move along a direction uniform in 6 dof as the check "
+              "weighs them, and along a translation (issue 41's figure):\n\n", checks);
+  header();
+  CheckStudyOptions o;
+  o.noise_given = true;
+  o.checks = checks;
+  const std::vector<std::pair<PlantedChange, const char*>> moves = {
+      {PlantedChange::XAnyDirection, "X, any direction in 6 dof"}, {PlantedChange::XTranslation, "X, its translation"},
+      {PlantedChange::YAnyDirection, "Y, any direction in 6 dof"}, {PlantedChange::YTranslation, "Y, its translation"}};
+  for (const auto& [change, what] : moves) {
+    for (double multiple : {5.0, 6.0}) {
+      o.change = change;
+      o.multiple = multiple;
+      o.seed = seed + 300 + static_cast<unsigned>(10 * multiple) + (moves_X(change) ? 0u : 1000u);
+      row(what, run_check_study(o), multiple);
+    }
+  }
+  std::printf("\nThe translation moved by 5 times the 1 sigma the check prints beside a change (the translation's own "
+              "spread along the move, its rotation not held fixed):\n\n");
+  header();
+  o.sigma_as_printed = true;
+  o.multiple = 5.0;
+  for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
+    o.change = change;
+    o.seed = seed + 350 + (moves_X(change) ? 0u : 1000u);
+    row(moves_X(change) ? "X, its translation" : "Y, its translation", run_check_study(o), 5.0);
+  }
+  return 0;
+}
+
 /// The study at views between the usual and the turned ones (tilt to 45 deg, roll to 90:
 /// mean cosine 0.73): no change, and X's and Y's translation moved by 5 and 6 sigma.
 int between_study(int checks, unsigned seed) {
@@ -184,10 +220,11 @@ int main(int argc, char** argv) {
   int checks = 300, calibration_views = 20;
   unsigned seed = 1;
   std::string rendered;
-  bool between = false, frontier_only = false, scale_only = false, views_given = false, checks_given = false;
+  bool between = false, frontier_only = false, scale_only = false, any_direction = false, views_given = false,
+       checks_given = false;
   const auto usage = [] {
     std::fprintf(stderr, "usage: handeye_check_study [--checks 300] [--seed 1] [--rendered TARGET_FILE "
-                         "[--calibration-views 20] | --views-between | --frontier | --estimated-scale]\n");
+                         "[--calibration-views 20] | --views-between | --any-direction | --frontier | --estimated-scale]\n");
     return 2;
   };
   for (int i = 1; i < argc; ++i) {
@@ -196,8 +233,8 @@ int main(int argc, char** argv) {
       (flag == "--frontier" ? frontier_only : between) = true;
       continue;
     }
-    if (flag == "--estimated-scale") {
-      scale_only = true;
+    if (flag == "--estimated-scale" || flag == "--any-direction") {
+      (flag == "--any-direction" ? any_direction : scale_only) = true;
       continue;
     }
     if (i + 1 >= argc || std::string(argv[i + 1]).rfind("--", 0) == 0) return usage();  // a flag without its value
@@ -214,7 +251,7 @@ int main(int argc, char** argv) {
     else return usage();
   }
   // One study at a time, and no setting it would not use.
-  if (int(!rendered.empty()) + int(between) + int(frontier_only) + int(scale_only) > 1 ||
+  if (int(!rendered.empty()) + int(between) + int(frontier_only) + int(scale_only) + int(any_direction) > 1 ||
       (views_given && rendered.empty()) || (checks_given && (frontier_only || scale_only))) {
     return usage();
   }
@@ -229,6 +266,7 @@ int main(int argc, char** argv) {
     }
   }
   if (between) return between_study(checks, seed);
+  if (any_direction) return any_direction_study(checks, seed);
   for (bool diverse : {false, true}) {
     std::printf("%s\n\n", diverse ? "Views turned about different axes (tilt to 60 deg, any roll about the optical axis):"
                                   : "The session's usual views (0.4-0.8 m, tilt to 35 deg, roll to 60 deg):");

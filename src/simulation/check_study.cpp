@@ -12,6 +12,7 @@
 #include <boost/math/distributions/non_central_chi_squared.hpp>
 #include <boost/math/special_functions/bessel.hpp>
 
+#include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
@@ -73,9 +74,13 @@ MeasurementNoise check_study_noise() {
   return noise;
 }
 
+bool moves_X(PlantedChange change) {
+  return change == PlantedChange::XTranslation || change == PlantedChange::XAnyDirection;
+}
+
 double CheckStudyResult::named_right() const {
   if (changed == 0) return 0.0;
-  const int right = planted == PlantedChange::XTranslation ? named_X : planted == PlantedChange::YTranslation ? named_Y : 0;
+  const int right = planted == PlantedChange::None ? 0 : moves_X(planted) ? named_X : named_Y;
   return static_cast<double>(right) / changed;
 }
 
@@ -238,13 +243,23 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     if (options.change != PlantedChange::None) {
       // The move along u, in units of the check's own 1 sigma of the change along u.
       const CalibrationCheck unchanged = check_calibration(calibration, views, options.check);
-      const bool x = options.change == PlantedChange::XTranslation;
+      const bool x = moves_X(options.change);
       const Matrix6d& covariance = x ? unchanged.X_alone.X_change->covariance : unchanged.Y_alone.Y_change->covariance;
-      Vector6d u = Vector6d::Zero();
-      u.head<3>() = random_direction(rng);
-      const double sigma = 1.0 / std::sqrt(u.dot(covariance.ldlt().solve(u)));
-      const Eigen::Vector3d move = options.multiple * sigma * u.head<3>();
-      (x ? X_now : Y_now).translation() += move;  // a left perturbation's translation part
+      Eigen::Isometry3d& moved = x ? X_now : Y_now;
+      if (options.change == PlantedChange::XTranslation || options.change == PlantedChange::YTranslation) {
+        Vector6d u = Vector6d::Zero();
+        u.head<3>() = random_direction(rng);
+        const double sigma = options.sigma_as_printed ? std::sqrt(u.dot(covariance * u))
+                                                      : 1.0 / std::sqrt(u.dot(covariance.ldlt().solve(u)));
+        moved.translation() += options.multiple * sigma * u.head<3>();  // a left perturbation's translation part
+      } else {  // u = L w moves by 1 sigma along itself: u' Cov^-1 u = |w|^2 = 1
+        std::normal_distribution<double> normal(0.0, 1.0);
+        const Vector6d w = standard_normal6(rng, normal).normalized();
+        const Matrix6d L = Eigen::LLT<Matrix6d>(covariance).matrixL();
+        const Vector6d xi = options.multiple * (L * w);
+        moved.linear() = so3::exp(xi.tail<3>()) * moved.linear();  // the left perturbation, as the check's
+        moved.translation() += xi.head<3>();
+      }
       views = observed(rng, rig, effectors, X_now, Y_now);
     }
     const CalibrationCheck check = check_calibration(calibration, views, options.check);
@@ -262,6 +277,9 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     }
     result.mean_chi2_over_dof += check.chi2 / check.dof / options.checks;
     result.mean_x_y_cosine += check.x_y_cosines.mean() / options.checks;
+    if (options.change != PlantedChange::None) {
+      result.mean_planted_drop += (moves_X(options.change) ? check.X_alone : check.Y_alone).chi2_drop / options.checks;
+    }
     if (check.changed) {
       ++result.changed;
       if (check.change.what == "X") ++result.named_X;

@@ -23,7 +23,14 @@
 
 namespace handeye {
 
-enum class PlantedChange { None, XTranslation, YTranslation };
+/// What a study moves: X's or Y's translation along a direction uniform on the sphere
+/// (issue 41's figure), or X or Y along a direction uniform in its 6 dof as the check
+/// weighs them (u = L w, L L^T the check's covariance of the change, w uniform on the
+/// 6-sphere: the family two_hypothesis_power_bound is the bound for).
+enum class PlantedChange { None, XTranslation, YTranslation, XAnyDirection, YAnyDirection };
+
+/// True when `change` moves X (the camera on its mount), false when it moves Y or nothing.
+bool moves_X(PlantedChange change);
 
 struct CheckStudyOptions {
   Setup setup = Setup::EyeInHand;
@@ -36,6 +43,12 @@ struct CheckStudyOptions {
   MeasurementNoise noise;  // default: the `handeye sim` noise (0.5 mm, 0.05 deg camera; 0.05 mm, 0.01 deg robot)
   PlantedChange change = PlantedChange::None;
   double multiple = 5.0;
+  /// The 1 sigma a translation is moved by `multiple` of. false: along u given the rest of
+  /// the change, 1 / sqrt(u' Cov^-1 u), so that the noncentrality is multiple^2 (the
+  /// bounds' reading); true: as the check prints it beside a change, sqrt(u' Cov_tt u),
+  /// the translation's own spread along u (at least the first: rotation and translation
+  /// estimates correlate).
+  bool sigma_as_printed = false;
   CheckOptions check;
   /// Each calibration measures its own prediction by leave-one-out (Calibration::prediction),
   /// as the session does; false: the check draws each estimated noise number instead.
@@ -55,6 +68,9 @@ struct CheckStudyResult {
   int named_X = 0, named_Y = 0, named_both = 0;  // of those, what it named
   double mean_chi2_over_dof = 0.0;  // the omnibus chi2 / dof (1 when the noise model holds)
   double mean_x_y_cosine = 0.0;     // the mean of each check's six principal cosines between X's and Y's subspaces
+  /// The moved one's chi2 drop (X's when X moved), averaged: 6 + multiple^2 when each move
+  /// is as large as planted in the check's own noise (its drop is noncentral chi2(6)).
+  double mean_planted_drop = 0.0;
   /// The bound: P(noncentral chi2(6, multiple^2) > chi2(6) quantile 1 - alpha); alpha without a change.
   double bound = 0.0;
   /// The bound for a test that must catch a change of X or of Y (either, in any direction,
