@@ -14,6 +14,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/simulation/check_study.h"
 
@@ -348,6 +349,30 @@ TEST(CalibrationCheck, TheResultFileCarriesTheCheck) {
     EXPECT_NEAR(again.p_value, direct.p_value, 0.006) << given;
     EXPECT_NEAR(again.chi2, direct.chi2, 1e-6 * direct.chi2) << given;
   }
+}
+
+// One wrong detection among the new views (its pattern pose 40 mm off) explains more
+// freed alone than any change of X or Y does: it is left out and named, and the rest is
+// consistent. Unchanged, no view is left out.
+TEST(CalibrationCheck, LeavesOutAWrongDetection) {
+  Rng rng(13);
+  const SimulatedSession session =
+      simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, check_study_noise());
+  const Calibration calibration = solve_joint(session.samples);
+  // simulate_session's pattern is fixed: the calibration's Y holds for the new views.
+  SimulatedSession more = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 5, check_study_noise());
+  const CalibrationCheck clean = check_calibration(calibration, more.samples);
+  EXPECT_FALSE(clean.changed) << clean.verdict;
+  EXPECT_TRUE(clean.left_out.empty());
+  more.samples.samples[2].T_camera_pattern.translation() += Eigen::Vector3d(0.04, 0.0, 0.0);
+  const CalibrationCheck check = check_calibration(calibration, more.samples);
+  ASSERT_EQ(check.left_out, std::vector<int>{2}) << check.verdict;
+  EXPECT_FALSE(check.changed) << check.verdict;
+  EXPECT_NE(check.verdict.find("view 2 left out"), std::string::npos) << check.verdict;
+  ASSERT_EQ(check.views.size(), 5u);  // the table keeps every view
+  EXPECT_GT(std::pow(check.views[2].mahalanobis, 2), OutlierOptions{}.residual_gate);
+  // Freed alone it explains nearly all of its own chi2: the other views barely pull on it.
+  EXPECT_GT(check.views[2].wrong_detection_drop, 0.5 * std::pow(check.views[2].mahalanobis, 2));
 }
 
 // What it refuses: a calibration without Y or its noise model (the pairs estimator's,

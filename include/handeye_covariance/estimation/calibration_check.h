@@ -60,6 +60,9 @@ struct CheckedView {
   double predicted_translation_sigma = 0.0;      // sqrt(trace) of the translation block: |e_t|'s RMS, m
   double predicted_rotation_sigma = 0.0;         // likewise, rad
   double mahalanobis = 0.0;                      // sqrt(e_i^T C_ii^-1 e_i): chi(6) when nothing changed
+  /// The joint chi2's drop were this view alone wrong (its 6 numbers freed): what a wrong
+  /// detection explains, to set against what a change of X or Y explains (both 6 dof).
+  double wrong_detection_drop = 0.0;
 };
 
 /// A change of X or Y (or both) as the new views estimate it.
@@ -82,7 +85,9 @@ struct EstimatedChange {
 
 struct CalibrationCheck {
   std::vector<CheckedView> views;
-  std::vector<int> left_out;  // a view beyond the outlier gate alone whose leaving out left the rest consistent
+  /// A view beyond the outlier gate alone that explains more as a wrong detection than a
+  /// change of X or Y explains, and whose leaving out left the rest consistent.
+  std::vector<int> left_out;
   std::vector<int> turned;  // a symmetric target: the views whose other candidate the calibration predicts
   double chi2 = 0.0;        // e^T C^-1 e over the new views
   int dof = 0;              // 6 k
