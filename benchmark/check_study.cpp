@@ -39,8 +39,9 @@ namespace {
 
 using namespace handeye;
 
-/// One table row; `rendered` adds the counts and the new views' chi2 / dof.
-void row(const char* what, const CheckStudyResult& r, double multiple, bool rendered = false) {
+/// One table row; `rendered` adds the counts and the new views' chi2 / dof, `moved` the
+/// moved one's mean chi2 drop and the checks that left a view out as a wrong detection.
+void row(const char* what, const CheckStudyResult& r, double multiple, bool rendered = false, bool moved = false) {
   char two[16] = "-", named[16] = "-", both[32] = "-", counts[32] = "", chi2[24] = "";
   if (multiple > 0.0) {
     std::snprintf(two, sizeof two, "%.1f%%", 100.0 * r.two_hypothesis_bound);
@@ -51,6 +52,7 @@ void row(const char* what, const CheckStudyResult& r, double multiple, bool rend
     std::snprintf(counts, sizeof counts, " (%d of %d)", r.changed, r.checks);
     std::snprintf(chi2, sizeof chi2, " %.1f%% | %.3f |", 100.0 * r.noise_dof_bound, r.mean_chi2_over_dof);
   }
+  if (moved) std::snprintf(chi2, sizeof chi2, " %.2f | %d |", r.mean_planted_drop, r.left_out);
   std::printf("| %s | %.0f | %.1f%%%s | %.1f%% | %s | %s | %s |%s\n", what, multiple, 100.0 * r.rate(), counts,
               100.0 * r.bound, two, named, both, chi2);
   std::fflush(stdout);
@@ -166,7 +168,7 @@ int estimated_scale(unsigned seed) {
 int any_direction_study(int checks, unsigned seed) {
   std::printf("The session's usual views, %d checks a row: the move along a direction uniform in 6 dof as the check "
               "weighs them, and along a translation (issue 41's figure):\n\n", checks);
-  header();
+  header(" the moved one's chi2 drop (6 + sigma^2) | left a view out |");
   CheckStudyOptions o;
   o.noise_given = true;
   o.checks = checks;
@@ -178,18 +180,18 @@ int any_direction_study(int checks, unsigned seed) {
       o.change = change;
       o.multiple = multiple;
       o.seed = seed + 300 + static_cast<unsigned>(10 * multiple) + (moves_X(change) ? 0u : 1000u);
-      row(what, run_check_study(o), multiple);
+      row(what, run_check_study(o), multiple, false, true);
     }
   }
   std::printf("\nThe translation moved by 5 times the 1 sigma the check prints beside a change (the translation's own "
               "spread along the move, its rotation not held fixed):\n\n");
-  header();
+  header(" the moved one's chi2 drop | left a view out |");
   o.sigma_as_printed = true;
   o.multiple = 5.0;
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     o.change = change;
     o.seed = seed + 350 + (moves_X(change) ? 0u : 1000u);
-    row(moves_X(change) ? "X, its translation" : "Y, its translation", run_check_study(o), 5.0);
+    row(moves_X(change) ? "X, its translation" : "Y, its translation", run_check_study(o), 5.0, false, true);
   }
   return 0;
 }

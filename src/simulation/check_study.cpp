@@ -264,6 +264,7 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     }
     const CalibrationCheck check = check_calibration(calibration, views, options.check);
     ++result.checks;
+    if (!check.left_out.empty()) ++result.left_out;
     const double lambda = options.change == PlantedChange::None ? 0.0 : options.multiple * options.multiple;
     result.noise_dof_bound +=
         f_test_power(6, calibration.prediction ? std::max(calibration.prediction->dof, 5.0) : 0.0, lambda,

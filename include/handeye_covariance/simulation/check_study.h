@@ -66,6 +66,7 @@ struct CheckStudyResult {
   int checks = 0;
   int changed = 0;             // the check said changed
   int named_X = 0, named_Y = 0, named_both = 0;  // of those, what it named
+  int left_out = 0;            // the check left a view out as a wrong detection (and said consistent)
   double mean_chi2_over_dof = 0.0;  // the omnibus chi2 / dof (1 when the noise model holds)
   double mean_x_y_cosine = 0.0;     // the mean of each check's six principal cosines between X's and Y's subspaces
   /// The moved one's chi2 drop (X's when X moved), averaged: 6 + multiple^2 when each move
