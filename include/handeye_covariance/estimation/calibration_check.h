@@ -60,9 +60,10 @@ struct CheckedView {
   double predicted_translation_sigma = 0.0;      // sqrt(trace) of the translation block: |e_t|'s RMS, m
   double predicted_rotation_sigma = 0.0;         // likewise, rad
   double mahalanobis = 0.0;                      // sqrt(e_i^T C_ii^-1 e_i): chi(6) when nothing changed
-  /// The joint chi2's drop were this view alone wrong (its 6 numbers freed): what a wrong
-  /// detection explains, to set against what a change of X or Y explains (both 6 dof).
-  double wrong_detection_drop = 0.0;
+  /// What this view alone still explains once the larger single change (X's or Y's) is
+  /// fitted: the chi2's further drop with its own 6 numbers freed, chi2(6) when that
+  /// change is all there is. Beyond the outlier gate: a wrong detection, whatever moved.
+  double chi2_beyond_the_change = 0.0;
 };
 
 /// A change of X or Y (or both) as the new views estimate it.
