@@ -376,6 +376,35 @@ TEST(CalibrationCheck, LeavesOutAWrongDetection) {
   EXPECT_GT(check.views[2].chi2_beyond_the_change, OutlierOptions{}.residual_gate);
 }
 
+// What a view explains beyond the change (chi2_beyond_the_change, the wrong-detection
+// test): freeing its 6 numbers beside the larger change is leaving it out, so it is the
+// chi2 left after that change with every view less the same without the view (the
+// views' predicted covariance is one matrix, the 4 views' its block). Unchanged and with
+// X moved 2 mm on its mount.
+TEST(CalibrationCheck, WhatAViewExplainsBeyondTheChange) {
+  Rng rng(14);
+  const SimulatedSession session =
+      simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, check_study_noise());
+  const Calibration calibration = solve_joint(session.samples);
+  for (bool moved : {false, true}) {
+    Eigen::Isometry3d X = typical_X(Setup::EyeInHand);
+    if (moved) X.translation() += Eigen::Vector3d(0.002, 0.0, 0.0);
+    const SimulatedSession more = simulate_session(rng, Setup::EyeInHand, X, 5, check_study_noise());
+    const CalibrationCheck all = check_calibration(calibration, more.samples);
+    ASSERT_TRUE(all.left_out.empty());
+    EXPECT_EQ(all.changed, moved) << all.verdict;
+    const bool x = all.X_alone.chi2_drop >= all.Y_alone.chi2_drop;
+    const auto left = [x](const CalibrationCheck& c) { return c.chi2 - (x ? c.X_alone : c.Y_alone).chi2_drop; };
+    for (std::size_t i = 0; i < more.samples.samples.size(); ++i) {
+      SampleSet rest = more.samples;
+      rest.samples.erase(rest.samples.begin() + static_cast<std::ptrdiff_t>(i));
+      const CalibrationCheck without = check_calibration(calibration, rest);
+      ASSERT_TRUE(without.left_out.empty());
+      EXPECT_NEAR(all.views[i].chi2_beyond_the_change, left(all) - left(without), 1e-6 * all.chi2) << moved << " " << i;
+    }
+  }
+}
+
 // What it refuses: a calibration without Y or its noise model (the pairs estimator's,
 // an old file), no view at all.
 TEST(CalibrationCheck, RefusesWhatItCannotCheck) {

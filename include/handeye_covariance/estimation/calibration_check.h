@@ -63,6 +63,7 @@ struct CheckedView {
   /// What this view alone still explains once the larger single change (X's or Y's) is
   /// fitted: the chi2's further drop with its own 6 numbers freed, chi2(6) when that
   /// change is all there is. Beyond the outlier gate: a wrong detection, whatever moved.
+  /// 0 with 2 views or fewer (the change and the view's 6 numbers fit all 12).
   double chi2_beyond_the_change = 0.0;
 };
 
@@ -86,8 +87,9 @@ struct EstimatedChange {
 
 struct CalibrationCheck {
   std::vector<CheckedView> views;
-  /// A view beyond the outlier gate alone that explains more as a wrong detection than a
-  /// change of X or Y explains, and whose leaving out left the rest consistent.
+  /// A view beyond the outlier gate alone that stays beyond it once the larger change is
+  /// fitted (CheckedView::chi2_beyond_the_change; with 2 views the gate alone), and whose
+  /// leaving out left the rest consistent: a wrong detection.
   std::vector<int> left_out;
   std::vector<int> turned;  // a symmetric target: the views whose other candidate the calibration predicts
   double chi2 = 0.0;        // e^T C^-1 e over the new views
