@@ -432,10 +432,11 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   // the same 6 directions); the fits then share the drop and "both" is singular.
   const Eigen::MatrixXd Hx = H.leftCols<6>(), Hy = H.rightCols<6>();
   const Fit fx = fit_change(Hx, z), fy = fit_change(Hy, z);
-  const Fit& larger = fx.drop >= fy.drop ? fx : fy;
+  const bool x_larger = fx.drop >= fy.drop;  // the larger single change, the one a verdict names
+  const Fit& larger = x_larger ? fx : fy;
   if (k > 2) {  // view i's own 6 numbers beside the change (with 2 views the 12 fit everything)
     Eigen::MatrixXd with_view(n, 12);
-    with_view.leftCols<6>() = fx.drop >= fy.drop ? Hx : Hy;
+    with_view.leftCols<6>() = x_larger ? Hx : Hy;
     for (int i = 0; i < k; ++i) {
       Eigen::MatrixXd own = Eigen::MatrixXd::Zero(n, 6);
       own.middleRows<6>(6 * i).setIdentity();
@@ -471,7 +472,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   check.x_y_overlap = check.x_y_cosines(0);
   check.p_value = NullDistribution(Qx, Qy, known_white, whitened_parts).p_value(check.statistic, options);
   check.changed = check.p_value < options.alpha;
-  const EstimatedChange& single = fx.drop >= fy.drop ? check.X_alone : check.Y_alone;
+  const EstimatedChange& single = x_larger ? check.X_alone : check.Y_alone;
   check.naming_odds = std::exp(std::min(0.5 * std::abs(fx.drop - fy.drop), 690.0));
   const bool second_explains = both_identified && check.both.chi2_drop - single.chi2_drop > chi2_quantile(6, 1.0 - options.alpha);
   check.change = second_explains ? check.both : single;
