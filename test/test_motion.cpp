@@ -2,7 +2,10 @@
 // the UR5's published DH parameters, the reach bound, collision checks, and
 // seeded planning runs whose commanded trajectories this test checks with its
 // own FCL queries on the unpadded geometry.
+#include <deque>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -20,6 +23,7 @@
 #include "handeye_covariance/motion/move_monitor.h"
 #include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
+#include "handeye_covariance/simulation/trajectory_controller.h"
 
 using namespace handeye;
 using namespace handeye::motion;
@@ -280,19 +284,70 @@ TEST(Collision, ObstacleFilesAreCheckedWithTheirEntryNamed) {
   EXPECT_EQ(code("obstacles: []"), "accepted");
 }
 
-TEST(Trajectory, QuinticMoveKeepsToTheSpeedFraction) {
+TEST(Trajectory, QuinticMoveKeepsToTheSpeedFractionAndTheAccelerationBound) {
   const Arm& arm = sim_arm();
   Eigen::VectorXd a = Eigen::VectorXd::Zero(6), b = a;
   b(0) = 1.0, b(4) = -0.5;
-  const auto points = timed_move(arm, a, b, 0.1);
-  ASSERT_GE(points.size(), 3u);
-  EXPECT_LT((points.front().position - a).norm(), 1e-12);
-  EXPECT_LT((points.back().position - b).norm(), 1e-12);
-  EXPECT_LT(points.back().velocity.norm(), 1e-12);
-  double peak = 0.0;
-  for (const auto& p : points) peak = std::max(peak, std::abs(p.velocity(0)));
-  EXPECT_LE(peak, 0.1 * arm.limits()[0].velocity * (1 + 1e-9));
-  EXPECT_GT(peak, 0.09 * arm.limits()[0].velocity);
+  for (const double bound : {0.2, 1.5, 100.0}) {  // the acceleration bound sets the duration, then the speed does
+    MoveTiming timing;
+    timing.max_acceleration = bound;
+    const auto points = timed_move(arm, a, b, timing);
+    ASSERT_GE(points.size(), 3u);
+    EXPECT_LT((points.front().position - a).norm(), 1e-12);
+    EXPECT_LT((points.back().position - b).norm(), 1e-12);
+    EXPECT_LT(points.back().velocity.norm(), 1e-12);
+    EXPECT_LT(points.back().acceleration.norm(), 1e-12);
+    // Between the points, as a controller interpolates them (quintic: positions, velocities, accelerations).
+    double peak_speed = 0.0, peak_acceleration = 0.0;
+    for (std::size_t k = 0; k + 1 < points.size(); ++k) {
+      const SplineSegment segment(points[k].time, points[k], points[k + 1].time, points[k + 1]);
+      for (int i = 0; i < 20; ++i) {
+        const JointState s = segment.sample(points[k].time + (points[k + 1].time - points[k].time) * i / 20.0);
+        peak_speed = std::max(peak_speed, std::abs(s.velocity(0)));
+        peak_acceleration = std::max(peak_acceleration, s.acceleration.cwiseAbs().maxCoeff());
+      }
+    }
+    const double speed_limit = 0.1 * arm.limits()[0].velocity;
+    EXPECT_LE(peak_speed, speed_limit * (1 + 1e-6));
+    EXPECT_LE(peak_acceleration, bound * (1 + 1e-6));
+    // One of the two bounds is met: the move is no longer than it needs to be.
+    EXPECT_TRUE(peak_speed > 0.999 * speed_limit || peak_acceleration > 0.999 * bound)
+        << peak_speed << " " << peak_acceleration;
+  }
+  MoveTiming per_joint;  // MoveIt's joint limits, where smaller than the bound
+  per_joint.joint_acceleration = {0.0, 0.0, 0.0, 0.0, 0.05, 0.0};
+  const auto slow = timed_move(arm, a, b, per_joint);
+  EXPECT_NEAR(slow.back().time, std::sqrt(10.0 / std::sqrt(3.0) * 0.5 / 0.05), 0.1);
+}
+
+// The splines joint_trajectory_controller runs between two points meet the points'
+// positions, velocities and accelerations, and hold the end after it.
+TEST(Trajectory, SplineSegmentsMeetTheirPoints) {
+  Eigen::VectorXd p0(2), p1(2), v0(2), v1(2), a0(2), a1(2);
+  p0 << 0.1, -0.3, p1 << 0.7, 0.2, v0 << 0.5, -1.0, v1 << -0.2, 0.3, a0 << 2.0, 0.5, a1 << -1.0, 1.5;
+  const TrajectoryPoint linear0{0.0, p0, {}, {}}, linear1{0.0, p1, {}, {}};
+  const TrajectoryPoint cubic0{0.0, p0, v0, {}}, cubic1{0.0, p1, v1, {}};
+  const TrajectoryPoint quintic0{0.0, p0, v0, a0}, quintic1{0.0, p1, v1, a1};
+  for (const auto& [from, to] : {std::pair{linear0, linear1}, {cubic0, cubic1}, {quintic0, quintic1}}) {
+    const SplineSegment s(2.0, from, 3.5, to);
+    EXPECT_LT((s.sample(2.0).position - p0).norm(), 1e-12);
+    EXPECT_LT((s.sample(3.5).position - p1).norm(), 1e-12);
+    EXPECT_LT((s.sample(1.0).position - p0).norm(), 1e-12) << "before its start: at its start";
+    EXPECT_LT((s.sample(9.0).position - p1).norm(), 1e-12) << "after its end: at its end";
+    EXPECT_EQ(s.sample(9.0).velocity.norm(), 0.0) << "at rest after its end";
+    if (from.velocity.size()) {
+      EXPECT_LT((s.sample(2.0).velocity - v0).norm(), 1e-9);
+      EXPECT_LT((s.sample(3.5 - 1e-12).velocity - v1).norm(), 1e-6);
+    }
+    if (from.acceleration.size()) {
+      EXPECT_LT((s.sample(2.0).acceleration - a0).norm(), 1e-9);
+      EXPECT_LT((s.sample(3.5 - 1e-12).acceleration - a1).norm(), 1e-6);
+    }
+    // Velocity and acceleration are the position's derivatives (central differences).
+    const double t = 2.6, h = 1e-5;
+    EXPECT_LT((s.sample(t).velocity - (s.sample(t + h).position - s.sample(t - h).position) / (2 * h)).norm(), 1e-6);
+    EXPECT_LT((s.sample(t).acceleration - (s.sample(t + h).velocity - s.sample(t - h).velocity) / (2 * h)).norm(), 1e-5);
+  }
 }
 
 namespace {
@@ -342,7 +397,7 @@ TEST(ViewPlanner, CommandedMovesStayInLimitsStepsAndFreeSpace) {
     ++planned;
     EXPECT_LT(se3::log(arm.forward(plan.goal).inverse() * candidates[plan.chosen].T_base_effector).norm(), 1e-6);
     const OwnQuery own{arm, world, model.unchecked_pairs()};
-    const auto trajectory = timed_move(arm, *start, plan.goal, 0.1);
+    const auto trajectory = timed_move(arm, *start, plan.goal, MoveTiming{});
     too_far += largest_joint_change(plan.goal, *start) > options.max_joint_step;
     for (std::size_t k = 0; k + 1 < trajectory.size(); ++k) {
       const Eigen::VectorXd& a = trajectory[k].position;
@@ -420,60 +475,317 @@ TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
   EXPECT_EQ(missed, 0);
 }
 
-// A controller that follows the commanded trajectory (joint states every 10 ms),
-// one that stops short, and joint states that stop.
-TEST(MoveMonitor, ArrivalTimeoutAndStalledJointStates) {
-  const Arm& arm = sim_arm();
-  Eigen::VectorXd a = arm_rig().ready, b = a;
-  b(0) += 0.5, b(3) -= 0.2;
-  const auto trajectory = timed_move(arm, a, b, 0.1);
-  const double duration = trajectory.back().time;
-  auto follow = [&](double t, double fraction_reached) {
-    const double tau = std::min(1.0, t / duration);
-    return Eigen::VectorXd(a + std::min(fraction_reached, tau) * (b - a));
+namespace {
+
+// The simulated arm under joint_trajectory_controller's rules (simulation/trajectory_controller.h),
+// its control loop and joint states at 100 Hz, in simulated time.
+struct SimulatedArm {
+  SimulatedTrajectoryController controller;
+  double now = 1000.0;  // s: far from 0, as ROS time is
+  std::vector<CommandOutcome> outcomes;
+
+  static ControllerOptions options_for(const Arm& arm) {
+    ControllerOptions options;
+    for (const JointLimit& limit : arm.limits()) options.joints.push_back(limit.name);
+    return options;
+  }
+  SimulatedArm(const Arm& arm, const Eigen::VectorXd& q) : SimulatedArm(options_for(arm), q) {}
+  SimulatedArm(const ControllerOptions& options, const Eigen::VectorXd& q) : controller(options, q, 1000.0) {}
+  const CommandOutcome& send(const TrajectoryCommand& command) {
+    outcomes.push_back(controller.command(command, now));
+    return outcomes.back();
+  }
+  void tick() { controller.update(now += 0.01); }
+  void run(double seconds) {
+    for (const double until = now + seconds; now < until - 1e-9;) tick();
+  }
+  const Eigen::VectorXd& q() const { return controller.position(); }
+  bool all_taken_whole() const {
+    return std::all_of(outcomes.begin(), outcomes.end(), [](const CommandOutcome& o) { return o.taken_whole(); });
+  }
+};
+
+// One move as the calibration node makes it (ros/arm_mover.cpp): the command, the
+// monitor on every joint state; on a failure the hold, then the arm watched to rest.
+struct Execution {
+  MoveStatus status = MoveStatus::Moving;
+  std::string reason;
+  double decided = 0.0;       // s after the command: arrived or stopped
+  double travel_after = 0.0;  // rad: the largest joint change from the hold to rest
+};
+
+Execution execute(SimulatedArm& sim, const Arm& arm, const std::vector<TrajectoryPoint>& trajectory,
+                  const MoveLimits& limits = {}, const std::function<void(const MoveMonitor&)>& during = {},
+                  const std::function<bool(double elapsed)>& joint_states_heard = {}) {
+  const double start = sim.now;
+  sim.send(move_command(arm, trajectory));
+  MoveMonitor monitor(trajectory, start, limits);
+  Execution e;
+  while (e.status == MoveStatus::Moving && sim.now - start < 2000.0) {
+    sim.tick();
+    if (!joint_states_heard || joint_states_heard(sim.now - start)) monitor.joint_state(sim.now, sim.q());
+    if (during) during(monitor);
+    e.status = monitor.update(sim.now);
+  }
+  e.decided = sim.now - start;
+  e.reason = monitor.reason();
+  if (e.status != MoveStatus::Arrived) {
+    const Eigen::VectorXd at_stop = sim.q();
+    sim.send(hold_command(arm));
+    sim.run(2.0);
+    e.travel_after = largest_joint_change(sim.q(), at_stop);
+  }
+  return e;
+}
+
+// A move of the simulated arm between two random postures, at `fraction` of the velocity limits.
+std::vector<TrajectoryPoint> random_move(Rng& rng, double fraction, Eigen::VectorXd* from = nullptr) {
+  const Arm& arm = arm_rig().arm;
+  const Eigen::VectorXd a = random_joints(rng, arm, 0.5);
+  Eigen::VectorXd b = a + 0.8 * (random_joints(rng, arm, 0.5) - a).cwiseMax(-1.5).cwiseMin(1.5) / 1.5;
+  if (from) *from = a;
+  MoveTiming timing;
+  timing.speed_fraction = fraction;
+  return timed_move(arm, a, b, timing);
+}
+
+}  // namespace
+
+// The rules joint_trajectory_controller applies to a command (init_joint_trajectory.h,
+// joint_trajectory_msg_utils.h, updateTrajectoryCommand, setHoldPosition), each seen
+// in the arm's motion.
+TEST(SimulatedController, FollowsJointTrajectoryControllersRules) {
+  const Arm& arm = arm_rig().arm;
+  const Eigen::VectorXd a = arm_rig().ready;
+  Eigen::VectorXd b = a;
+  b(0) += 0.6, b(3) -= 0.3;
+  MoveTiming timing;
+  timing.speed_fraction = 0.2;
+  const auto move = timed_move(arm, a, b, timing);
+  const double duration = move.back().time;
+
+  {  // The old hold, one point at time 0 with a zero stamp, is dropped: the arm goes on to the goal.
+    SimulatedArm sim(arm, a);
+    EXPECT_EQ(sim.send(move_command(arm, move)).kind, CommandOutcome::Kind::Accepted);
+    sim.run(0.4 * duration);
+    const Eigen::VectorXd there = sim.q();
+    TrajectoryCommand one_point = move_command(arm, {TrajectoryPoint{0.0, there, Eigen::VectorXd::Zero(6), {}}});
+    const CommandOutcome dropped = sim.send(one_point);
+    EXPECT_EQ(dropped.kind, CommandOutcome::Kind::Dropped);
+    EXPECT_NE(dropped.message.find("Dropping all 1 trajectory point(s)"), std::string::npos) << dropped.message;
+    sim.run(duration);
+    EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9) << "the running trajectory went on";
+    std::printf("[ control  ] one point at 0 sent %.0f%% into the move: dropped, the arm went on %.1f deg\n", 40.0,
+                degrees(largest_joint_change(sim.q(), there)));
+  }
+  {  // The empty trajectory holds where the arm is, at once (stop_trajectory_duration 0).
+    SimulatedArm sim(arm, a);
+    sim.send(move_command(arm, move));
+    sim.run(0.5 * duration);
+    const Eigen::VectorXd there = sim.q();
+    EXPECT_EQ(sim.send(hold_command(arm)).kind, CommandOutcome::Kind::Hold);
+    sim.run(1.0);
+    EXPECT_LT(largest_joint_change(sim.q(), there), 1e-12);
+    // One point 0.05 s ahead holds too (the measurement), a little further on.
+    sim.send(move_command(arm, move));
+    sim.run(0.3 * duration);
+    const Eigen::VectorXd moving = sim.q();
+    EXPECT_TRUE(sim.send(move_command(arm, {TrajectoryPoint{0.05, moving, Eigen::VectorXd::Zero(6), {}}})).taken_whole());
+    sim.run(1.0);
+    EXPECT_LT(largest_joint_change(sim.q(), moving), 0.02);
+  }
+  {  // A stamp in the future: the running trajectory (here, the hold) until then.
+    SimulatedArm sim(arm, a);
+    TrajectoryCommand later = move_command(arm, move);
+    later.stamp = sim.now + 1.0;
+    EXPECT_TRUE(sim.send(later).taken_whole());
+    sim.run(0.98);
+    EXPECT_LT(largest_joint_change(sim.q(), a), 1e-12) << "not before its stamp";
+    sim.run(0.5);
+    EXPECT_GT(largest_joint_change(sim.q(), a), 1e-4) << "moving after it";
+    sim.run(duration);
+    EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9);
+    // A stamp in the past: the points before now are dropped, the rest run; all of them: ignored.
+    TrajectoryCommand past = move_command(arm, timed_move(arm, b, a, timing));
+    past.stamp = sim.now - 0.25;
+    const CommandOutcome partly = sim.send(past);
+    EXPECT_EQ(partly.kind, CommandOutcome::Kind::Accepted);
+    EXPECT_GE(partly.points_dropped, 3);
+    EXPECT_FALSE(partly.taken_whole());
+    past.stamp = sim.now - 100.0;
+    EXPECT_EQ(sim.send(past).kind, CommandOutcome::Kind::Dropped);
+  }
+  {  // Refused: times not increasing, another controller's joints; the joints in any order are taken.
+    SimulatedArm sim(arm, a);
+    TrajectoryCommand bad = move_command(arm, move);
+    std::swap(bad.points[2].time, bad.points[3].time);
+    EXPECT_EQ(sim.send(bad).kind, CommandOutcome::Kind::Refused);
+    bad = move_command(arm, move);
+    bad.joint_names[2] = "elbow";
+    EXPECT_EQ(sim.send(bad).kind, CommandOutcome::Kind::Refused);
+    TrajectoryCommand reordered = move_command(arm, move);
+    std::reverse(reordered.joint_names.begin(), reordered.joint_names.end());
+    for (TrajectoryPoint& p : reordered.points) {
+      p.position.reverseInPlace(), p.velocity.reverseInPlace(), p.acceleration.reverseInPlace();
+    }
+    EXPECT_TRUE(sim.send(reordered).taken_whole());
+    sim.run(duration + 0.1);
+    EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9);
+  }
+  {  // A command during a move replaces the rest of it, bridged from where the trajectory is: no jump.
+    SimulatedArm sim(arm, a);
+    sim.send(move_command(arm, move));
+    sim.run(0.5 * duration);
+    Eigen::VectorXd c = a;
+    c(1) += 0.3;
+    sim.send(move_command(arm, timed_move(arm, sim.q(), c, timing)));
+    double jump = 0.0;
+    Eigen::VectorXd last = sim.q();
+    for (int k = 0; k < 600; ++k) {
+      sim.tick();
+      jump = std::max(jump, largest_joint_change(sim.q(), last));
+      last = sim.q();
+    }
+    EXPECT_LT(largest_joint_change(sim.q(), c), 1e-9);
+    EXPECT_LT(jump, 0.2 * arm.limits()[0].velocity * 0.01 * 2.0) << "no step at the switch";
+  }
+  {  // Speed scaling: the trajectory's clock runs at the scale; changed during the move.
+    SimulatedArm sim(arm, a);
+    sim.controller.set_speed_scale(0.1);
+    sim.send(move_command(arm, move));
+    sim.run(9.5 * duration);
+    EXPECT_GT(largest_joint_change(sim.q(), b), 1e-4) << "not there at 9.5 times its duration";
+    sim.run(0.6 * duration);
+    EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9);
+    sim.controller.set_speed_scale(1.0);
+    sim.send(move_command(arm, timed_move(arm, b, a, timing)));
+    sim.run(0.5 * duration);
+    sim.controller.set_speed_scale(0.2);
+    sim.run(0.5 * duration / 0.2 - 1.0);  // 0.2 s of the trajectory left
+    EXPECT_GT(largest_joint_change(sim.q(), a), 1e-3);
+    sim.run(1.1);
+    EXPECT_LT(largest_joint_change(sim.q(), a), 1e-9) << "the second half at a fifth of the speed";
+  }
+  {  // A controller that was not started refuses everything, the hold too; a protective stop halts the arm.
+    ControllerOptions options = SimulatedArm::options_for(arm);
+    options.running = false;
+    SimulatedArm idle(options, a);
+    EXPECT_EQ(idle.send(move_command(arm, move)).kind, CommandOutcome::Kind::Refused);
+    EXPECT_EQ(idle.send(hold_command(arm)).kind, CommandOutcome::Kind::Refused);
+    options.running = true;
+    options.stop_fraction = 0.5;
+    SimulatedArm stopped(options, a);
+    stopped.send(move_command(arm, move));
+    stopped.run(duration + 1.0);
+    EXPECT_NEAR(largest_joint_change(stopped.q(), a), 0.3, 0.02);
+  }
+}
+
+// The move monitor judges progress from joint states, not from the planned duration:
+// a speed-scaled controller (the UR driver's slider) completes, a stall is caught
+// within a second of its start, and every other failure is named; after each, the
+// hold stops the arm (travel after it at speed fraction 0.2).
+TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
+  const Arm& arm = arm_rig().arm;
+  Rng rng(5);
+  int moves = 0, false_failures = 0;
+  double slowest = 0.0;
+  for (int k = 0; k < 24; ++k) {
+    Eigen::VectorXd from;
+    const auto trajectory = random_move(rng, k % 2 ? 0.2 : 0.1, &from);
+    for (const double scale : {1.0, 0.5, 0.1, 0.05}) {
+      SimulatedArm sim(arm, from);
+      sim.controller.set_speed_scale(scale);
+      const Execution e = execute(sim, arm, trajectory);
+      ++moves;
+      if (e.status != MoveStatus::Arrived) {
+        ++false_failures;
+        ADD_FAILURE() << "scale " << scale << ": " << e.reason;
+      }
+      EXPECT_LT(largest_joint_change(sim.q(), trajectory.back().position), MoveLimits{}.arrival_tolerance);
+      EXPECT_TRUE(sim.all_taken_whole());
+      slowest = std::max(slowest, e.decided / trajectory.back().time);
+    }
+    SimulatedArm sim(arm, from);  // 1.0, dropped to 0.2 at half the path
+    const Execution e = execute(sim, arm, trajectory, {}, [&](const MoveMonitor& m) {
+      if (m.covered() > 0.5 * m.path_length()) sim.controller.set_speed_scale(0.2);
+    });
+    ++moves;
+    false_failures += e.status != MoveStatus::Arrived;
+    EXPECT_EQ(e.status, MoveStatus::Arrived) << e.reason;
+  }
+  std::printf("[ monitor  ] %d moves at speed scales 1, 0.5, 0.1, 0.05 and 1 -> 0.2: %d false failures; the "
+              "slowest took %.1f times its planned duration\n", moves, false_failures, slowest);
+  EXPECT_EQ(false_failures, 0);
+
+  // A stall (a protective stop) during a move at speed scale 0.1, at every part of the path.
+  double latest = 0.0, worst_travel = 0.0;
+  for (const double fraction : {0.05, 0.1, 0.3, 0.5, 0.7, 0.9, 0.97}) {
+    for (int k = 0; k < 4; ++k) {
+      Eigen::VectorXd from;
+      const auto trajectory = random_move(rng, 0.2, &from);
+      ControllerOptions options = SimulatedArm::options_for(arm);
+      options.stop_fraction = fraction;
+      SimulatedArm sim(options, from);
+      sim.controller.set_speed_scale(0.1);
+      std::optional<double> stalled_at;  // the first tick the arm did not move
+      Eigen::VectorXd last = from;
+      const Execution e = execute(sim, arm, trajectory, {}, [&](const MoveMonitor&) {
+        if (!stalled_at && largest_joint_change(sim.q(), last) == 0.0 && sim.now > 1000.5) stalled_at = sim.now;
+        last = sim.q();
+      });
+      if (e.status == MoveStatus::Arrived) continue;  // the stall was within the arrival tolerance of the goal
+      EXPECT_EQ(e.status, MoveStatus::Stalled) << e.reason;
+      EXPECT_NE(e.reason.find("no progress"), std::string::npos) << e.reason;
+      ASSERT_TRUE(stalled_at);
+      const double caught = 1000.0 + e.decided - *stalled_at;
+      latest = std::max(latest, caught);
+      worst_travel = std::max(worst_travel, e.travel_after);
+      EXPECT_LE(caught, 1.0) << "stall at " << fraction << " of the path: " << e.reason;
+    }
+  }
+  std::printf("[ monitor  ] a stall at speed scale 0.1, from 5%% to 97%% of the path: caught %.2f s after it "
+              "began at the latest\n", latest);
+
+  // Each failure, then the hold: the arm's travel after it, at speed fraction 0.2, full speed.
+  auto failure = [&](const std::string& name, ControllerOptions options, const MoveLimits& limits,
+                     const std::function<void(SimulatedArm&, const MoveMonitor&)>& during,
+                     const std::function<bool(double)>& heard, MoveStatus expected) {
+    Rng draw(17);
+    Eigen::VectorXd from;
+    const auto trajectory = random_move(draw, 0.2, &from);
+    options.joints = SimulatedArm::options_for(arm).joints;
+    SimulatedArm sim(options, from);
+    const Execution e =
+        execute(sim, arm, trajectory, limits, [&](const MoveMonitor& m) { if (during) during(sim, m); }, heard);
+    EXPECT_EQ(e.status, expected) << name << ": " << e.reason;
+    EXPECT_LE(degrees(e.travel_after), 0.5) << name;
+    std::printf("[ monitor  ] %-20s after %.2f s, travel after the hold %.4f deg: %s\n", name.c_str(), e.decided,
+                degrees(e.travel_after), e.reason.c_str());
+    return e;
   };
-  {
-    MoveMonitor monitor(trajectory, 100.0);
-    double t = 100.0;
-    MoveStatus status = MoveStatus::Moving;
-    for (; status == MoveStatus::Moving && t < 200.0; t += 0.01) {
-      monitor.joint_state(t, follow(t - 100.0, 1.0));
-      status = monitor.update(t);
-    }
-    EXPECT_EQ(status, MoveStatus::Arrived);
-    EXPECT_GE(t - 100.0, duration) << "not arrived while the trajectory still moves";
-    EXPECT_NEAR(t - 100.0, duration, 0.05);
-    EXPECT_EQ(monitor.reason(), "");
-  }
-  {
-    MoveMonitor monitor(trajectory, 0.0);
-    double t = 0.0;
-    MoveStatus status = MoveStatus::Moving;
-    for (; status == MoveStatus::Moving && t < 100.0; t += 0.01) {
-      monitor.joint_state(t, follow(t, 0.8));
-      status = monitor.update(t);
-    }
-    EXPECT_EQ(status, MoveStatus::TimedOut);
-    EXPECT_NEAR(t, monitor.deadline(), 0.02);
-    EXPECT_NE(monitor.reason().find("did not arrive"), std::string::npos) << monitor.reason();
-  }
-  {
-    MoveMonitor monitor(trajectory, 0.0);
-    double t = 0.0;
-    MoveStatus status = MoveStatus::Moving;
-    for (; status == MoveStatus::Moving && t < 100.0; t += 0.01) {
-      if (t < 1.0) monitor.joint_state(t, follow(t, 1.0));
-      monitor.joint_state(t, Eigen::VectorXd::Zero(3));  // another chain's joints: ignored
-      status = monitor.update(t);
-    }
-    EXPECT_EQ(status, MoveStatus::JointStatesStalled);
-    EXPECT_NEAR(t, 1.0 + MoveLimits{}.joint_states_timeout, 0.03);
-    EXPECT_EQ(monitor.update(t + 100.0), MoveStatus::JointStatesStalled) << "once stopped, it stays";
-  }
-  const auto hold = hold_trajectory(b);
-  ASSERT_EQ(hold.size(), 1u);
-  EXPECT_EQ(hold[0].position, b);
-  EXPECT_EQ(hold[0].velocity.norm(), 0.0);
+  ControllerOptions plain;
+  failure("joint states silent", plain, {}, {}, [](double t) { return t < 1.0; }, MoveStatus::JointStatesStalled);
+  ControllerOptions not_running = plain;
+  not_running.running = false;
+  const Execution refused = failure("controller refuses", not_running, {}, {}, {}, MoveStatus::Stalled);
+  EXPECT_NE(refused.reason.find("did not start"), std::string::npos);
+  MoveLimits unscaled;  // a user who says the controller never slows: the deadline is the planned duration + 3 s
+  unscaled.min_speed_scale = 1.0;
+  failure("arrival timeout", plain, unscaled, [](SimulatedArm& sim, const MoveMonitor&) { sim.controller.set_speed_scale(0.1); },
+          {}, MoveStatus::TimedOut);
+  failure("left the path", plain, {},
+          [&](SimulatedArm& sim, const MoveMonitor& m) {  // another node sends the arm elsewhere
+            if (m.covered() > 0.3 * m.path_length() && sim.outcomes.size() == 1) {
+              Eigen::VectorXd elsewhere = sim.q();
+              elsewhere(1) += 0.5;
+              MoveTiming fast;
+              fast.speed_fraction = 0.2;
+              sim.send(move_command(arm, timed_move(arm, sim.q(), elsewhere, fast)));
+            }
+          },
+          {}, MoveStatus::LeftPath);
+  EXPECT_LE(degrees(worst_travel), 0.5);
 }
 
 // The robot moving itself on the simulated arm (motion/auto_calibration.h): the
@@ -486,12 +798,22 @@ struct AutoRun {
   int samples = 0;
   double nees = 0.0;  // X against the truth where it stopped
   int first_moves = 0, first_moves_lost = 0;
-  std::string failure;  // no start pose, or no move found: why
+  int moves = 0;
+  bool commands_whole = true;  // every command taken as sent by the simulated controller
+  std::string failure;  // no start pose, no move found, or a move that failed: why
+};
+
+// Each move through the simulated controller and the move monitor, at a speed scale
+// (dropped to another at a fraction of each move's path), instead of the arm at the goal at once.
+struct ThroughController {
+  double speed_scale = 1.0;
+  double drop_at = 2.0;  // of the path covered; above 1: never
+  double dropped_scale = 0.2;
 };
 
 // `stated`: the session is told the drawn noise; else it estimates it from the residuals.
 AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed, const MeasurementNoise& noise,
-                 bool stated) {
+                 bool stated, const std::optional<ThroughController>& controller = std::nullopt, int max_moves = 15) {
   Rng rng(seed);
   const auto start = setup.random_start(rng, model, PlannerOptions{});
   AutoRun run;
@@ -509,15 +831,43 @@ AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed
   std::vector<PoseSample> samples;
   std::vector<Eigen::Isometry3d> failed;
   Eigen::VectorXd q = *start;
-  for (int move = 0; move <= 15 && !run.reached; ++move) {
+  std::optional<SimulatedArm> sim;
+  if (controller) sim.emplace(setup.arm, q);
+  for (int move = 0; move <= max_moves && !run.reached; ++move) {
     if (move > 0) {
       const NextMove next = automatic.next(session, session.snapshot(), q, failed);
       if (!next.found) {
         run.failure = "seed " + std::to_string(seed) + ": " + next.reason;
         return run;
       }
-      q = next.plan.goal;
-      EXPECT_LT(largest_joint_change(q, next.trajectory.back().position), 1e-12);
+      ++run.moves;
+      EXPECT_LT(largest_joint_change(next.plan.goal, next.trajectory.back().position), 1e-12);
+      if (sim) {
+        sim->controller.set_speed_scale(controller->speed_scale);
+        const Execution e = execute(*sim, setup.arm, next.trajectory, {}, [&](const MoveMonitor& m) {
+          if (m.covered() > controller->drop_at * m.path_length()) sim->controller.set_speed_scale(controller->dropped_scale);
+        });
+        run.commands_whole = run.commands_whole && sim->all_taken_whole();
+        if (e.status != MoveStatus::Arrived) {
+          run.failure = "seed " + std::to_string(seed) + ", move " + std::to_string(move) + ": " + e.reason;
+          return run;
+        }
+        // The node's sampler takes the sample once the robot has been still for its window.
+        const SamplerOptions& still = session.settings().sampler;
+        std::deque<std::pair<double, Eigen::Isometry3d>> window;
+        for (bool settled = false; !settled;) {
+          sim->tick();
+          window.emplace_back(sim->now, setup.arm.forward(sim->q()));
+          while (window.front().first < sim->now - still.still_window) window.pop_front();
+          const Eigen::Isometry3d d = window.front().second.inverse() * window.back().second;
+          settled = sim->now - window.front().first >= still.still_window - 0.011 &&
+                    d.translation().norm() < still.still_translation &&
+                    Eigen::AngleAxisd(d.linear()).angle() < still.still_rotation;
+        }
+        q = sim->q();
+      } else {
+        q = next.plan.goal;
+      }
       run.first_moves += next.bootstrap;
       const Eigen::Isometry3d P = setup.rig.predicted_view(setup.arm.forward(q), setup.X, setup.Y);
       if (view_problem(setup.rig, std::nullopt, P, PlannerOptions{})) {
@@ -618,4 +968,41 @@ TEST(AutoCalibration, WithTheNoiseEstimatedStopsWhereTheCovarianceIsHonest) {
         << "the sessions that stop at " << count << " samples are not the lucky ones";
   }
   EXPECT_LE(beyond / nees.size(), 0.03);
+}
+
+// The robot moving itself against a speed-scaled controller (the pendant's slider at
+// 10%, or dropped from 100% to 20% in the middle of every move): every calibration
+// completes, no move is called failed, every command is taken as sent.
+TEST(AutoCalibration, CompletesUnderASpeedScaledController) {
+  const ArmRig& setup = arm_rig();
+  const CollisionModel model(setup.arm, table_plane());
+  MeasurementNoise noise = camera_noise();
+  noise.robot.translation = std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.rotation = std::pow(0.005 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  ThroughController slow;
+  slow.speed_scale = 0.1;
+  ThroughController dropping;
+  dropping.drop_at = 0.5;
+  for (const auto& [name, profile] : {std::pair{"speed scale 0.1", slow}, {"1.0 -> 0.2 mid-move", dropping}}) {
+    int completed = 0, reached = 0, moves = 0, whole = 0;
+    std::vector<int> samples;
+    for (unsigned seed = 1; seed <= 20; ++seed) {
+      const AutoRun run = auto_run(setup, model, seed, noise, true, profile, 30);
+      EXPECT_EQ(run.failure, "") << name;
+      completed += run.failure.empty();
+      reached += run.reached;
+      whole += run.commands_whole;
+      moves += run.moves;
+      if (run.reached) samples.push_back(run.samples);
+    }
+    std::sort(samples.begin(), samples.end());
+    std::printf("[ auto     ] %s: %d of 20 calibrations completed (%d moves, no false failure), %d reached 1 mm at "
+                "0.7 m, median %d samples; commands taken whole in %d of 20\n",
+                name, completed, moves, reached, samples.empty() ? 0 : samples[samples.size() / 2], whole);
+    EXPECT_EQ(completed, 20) << name;
+    EXPECT_EQ(reached, 20) << name;
+    EXPECT_EQ(whole, 20) << name;
+    ASSERT_FALSE(samples.empty());
+    EXPECT_LE(samples[samples.size() / 2], 8) << name;
+  }
 }

@@ -1,5 +1,14 @@
-// The calibration node moving the simulated arm by itself (test/arm_calibrates.test).
+// The calibration node moving the simulated arm by itself (test/arm_calibrates.test),
+// against a controller that follows joint_trajectory_controller's rules: every stop
+// path ends with the arm held (travel after the stop, from the arm's own joint
+// states), every command is taken as sent, a speed-scaled controller completes.
 #include <actionlib/client/simple_action_client.h>
+#include <ros/master.h>
+#include <ros/network.h>
+#include <std_msgs/Float64.h>
+#include <xmlrpcpp/XmlRpc.h>
+
+#include <csignal>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_msgs/String.h>
@@ -9,6 +18,8 @@
 
 #include <mutex>
 
+#include "arm_watch.h"
+#include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -20,7 +31,6 @@ namespace {
 struct Watch {
   std::mutex mutex;
   std::vector<std::pair<double, std::string>> motion;  // (received, text)
-  std::vector<std::pair<double, std::size_t>> commands;  // (received, points)
   std::optional<CalibrationStatus> status;
   std::optional<geometry_msgs::PoseStamped> truth;
   std::size_t ghost_shapes = 0;  // the planned move's ghost arm (~planned_move_markers)
@@ -40,6 +50,46 @@ std::string last_motion(Watch& w) {
   return w.motion.empty() ? "" : w.motion.back().second;
 }
 
+bool starts(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+// The pid of a node, by the master's lookupNode and the node's own getPid (what rosnode does).
+std::optional<int> node_pid(const std::string& name, std::string* uri_out = nullptr) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  args[1] = name;
+  if (!ros::master::execute("lookupNode", args, result, payload, true)) return std::nullopt;
+  const std::string uri = payload;
+  if (uri_out) *uri_out = uri;
+  std::string host;
+  uint32_t port = 0;
+  if (!ros::network::splitURI(uri, host, port)) return std::nullopt;
+  XmlRpc::XmlRpcClient client(host.c_str(), port, "/");
+  XmlRpc::XmlRpcValue call, reply;
+  call[0] = ros::this_node::getName();
+  if (!client.execute("getPid", call, reply) || reply.size() < 3) return std::nullopt;
+  return static_cast<int>(reply[2]);
+}
+
+// What `rosnode kill` does: the node's "shutdown" XML-RPC call.
+bool shutdown_node(const std::string& uri) {
+  std::string host;
+  uint32_t port = 0;
+  if (!ros::network::splitURI(uri, host, port)) return false;
+  XmlRpc::XmlRpcClient client(host.c_str(), port, "/");
+  XmlRpc::XmlRpcValue call, reply;
+  call[0] = ros::this_node::getName();
+  call[1] = std::string("test: rosnode kill during a move");
+  return client.execute("shutdown", call, reply);
+}
+
+// The arm's travel after a stop at time t (ROS time), in degrees, printed and held to 0.5 deg.
+void expect_held(const test::ArmWatch& arm, const std::string& path, double t) {
+  const std::optional<double> travel = arm.travel_after(t);
+  ASSERT_TRUE(travel) << path << ": the arm did not come to rest within 10 s";
+  std::printf("[ arm      ] %s: joint travel after the stop %.3f deg\n", path.c_str(), degrees(*travel));
+  EXPECT_LE(degrees(*travel), 0.5) << path;
+}
+
 }  // namespace
 
 TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
@@ -49,16 +99,12 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
   ros::AsyncSpinner spinner(2);
   spinner.start();
   Watch w;
+  test::ArmWatch arm;
   auto motion_sub = node.subscribe<std_msgs::String>(ns + "/handeye_calibration/motion_status", 100,
                                                      [&](const std_msgs::StringConstPtr& m) {
                                                        std::lock_guard<std::mutex> lock(w.mutex);
-                                                       w.motion.emplace_back(ros::WallTime::now().toSec(), m->data);
+                                                       w.motion.emplace_back(ros::Time::now().toSec(), m->data);
                                                      });
-  auto command_sub = node.subscribe<trajectory_msgs::JointTrajectory>(
-      "/arm_controller/command", 10, [&](const trajectory_msgs::JointTrajectoryConstPtr& m) {
-        std::lock_guard<std::mutex> lock(w.mutex);
-        w.commands.emplace_back(ros::WallTime::now().toSec(), m->points.size());
-      });
   auto status_sub = node.subscribe<CalibrationStatus>(ns + "/handeye_calibration/status", 10,
                                                       [&](const CalibrationStatus::ConstPtr& m) {
                                                         std::lock_guard<std::mutex> lock(w.mutex);
@@ -77,19 +123,28 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
         std::lock_guard<std::mutex> lock(w.mutex);
         w.ghost_shapes = std::max(w.ghost_shapes, shapes);
       });
+  auto scale_pub = node.advertise<std_msgs::Float64>("/arm_controller/set_speed_scale", 1, true);
   ASSERT_TRUE(ros::service::waitForService(ns + "/stop_motion", ros::Duration(30.0)));
+  // Every case but the refusing controller's: the controller took every command as sent.
+  auto all_taken_whole = [&] {
+    if (test_case == "refused") return;
+    const std::vector<std::string> bad = arm.not_taken_whole();
+    EXPECT_TRUE(bad.empty()) << bad.size() << " command(s) not taken as sent, the first: " << bad.front();
+    std::printf("[ arm      ] %zu commands, every one taken as sent by joint_trajectory_controller's rules\n",
+                arm.outcomes().size());
+  };
 
   if (test_case == "auto") {
-    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("done:", 0) == 0 || last_motion(w).rfind("failed:", 0) == 0; }, 150.0))
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "done:") || starts(last_motion(w), "failed:"); }, 150.0))
         << last_motion(w);
     std::printf("[ arm      ] %s\n", last_motion(w).c_str());
-    ASSERT_EQ(last_motion(w).rfind("done:", 0), 0u) << last_motion(w);
+    ASSERT_TRUE(starts(last_motion(w), "done:")) << last_motion(w);
     {  // Wall time per view: from the first move's start to the end, over the moves.
       std::lock_guard<std::mutex> lock(w.mutex);
       int moves = 0;
       double first = 0.0;
       for (const auto& [t, text] : w.motion)
-        if (text.rfind("moving:", 0) == 0) first = moves++ ? first : t;
+        if (starts(text, "moving:")) first = moves++ ? first : t;
       std::printf("[ arm      ] %d moves, %.1f s per view (planning, moving at 10%% speed, settling, sampling)\n", moves,
                   (w.motion.back().first - first) / std::max(moves, 1));
     }
@@ -97,6 +152,7 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
       std::lock_guard<std::mutex> lock(w.mutex);
       return w.status && w.status->target_reached && w.truth;
     }, 10.0));
+    all_taken_whole();
     std::lock_guard<std::mutex> lock(w.mutex);
     EXPECT_LE(w.status->samples, 10);
     // The rule that guards this draw is target_progress's (test_motion's Monte-Carlo is its test):
@@ -136,18 +192,15 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
       std::lock_guard<std::mutex> lock(feedback_mutex);
       return !states.empty() && states.back() == "moving";
     }, 30.0));
-    std::size_t commands_before;
-    {
-      std::lock_guard<std::mutex> lock(w.mutex);
-      commands_before = w.commands.size();
-    }
+    ros::WallDuration(0.3).sleep();  // well into the move
+    const std::size_t commands_before = arm.commands();
+    const double cancelled = ros::Time::now().toSec();
     client.cancelGoal();
     ASSERT_TRUE(client.waitForResult(ros::Duration(5.0)));
     EXPECT_EQ(client.getState(), actionlib::SimpleClientGoalState::PREEMPTED) << client.getState().toString();
-    ASSERT_TRUE(wait_for([&] {
-      std::lock_guard<std::mutex> lock(w.mutex);
-      return w.commands.size() > commands_before && w.commands.back().second == 1u;
-    }, 1.0)) << "cancelling sends a hold";
+    ASSERT_TRUE(wait_for([&] { return arm.hold_received(commands_before).has_value(); }, 1.0))
+        << "cancelling sends a hold (an empty trajectory)";
+    expect_held(arm, "action cancelled", cancelled);
     {
       std::lock_guard<std::mutex> lock(feedback_mutex);
       states.clear();
@@ -159,6 +212,7 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     EXPECT_TRUE(result->reached);
     EXPECT_LE(result->object_error_mm, 1.0);
     EXPECT_GT(result->object_error_mm, 0.0);
+    all_taken_whole();
     std::lock_guard<std::mutex> lock(feedback_mutex);
     std::printf("[ arm      ] action: cancelled during a move, then %s with %d samples, %.3f mm, %zu feedback messages\n",
                 client.getState().toString().c_str(), result->samples, result->object_error_mm, states.size());
@@ -168,72 +222,128 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
 
   if (test_case == "no_detection") {
     // A goal without a detection is skipped, and the next view is planned after it.
-    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("skipped:", 0) == 0; }, 90.0)) << last_motion(w);
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "skipped:"); }, 90.0)) << last_motion(w);
     ASSERT_TRUE(wait_for([&] {
       const std::string m = last_motion(w);
-      return m.rfind("planned:", 0) == 0 || m.rfind("moving:", 0) == 0;
+      return starts(m, "planned:") || starts(m, "moving:");
     }, 30.0)) << last_motion(w);
     std::printf("[ arm      ] after a skipped goal: %s\n", last_motion(w).c_str());
+    all_taken_whole();
     return;
   }
 
-  // stop, stops_short and stall: one move, asked for.
-  std_srvs::Trigger move;
+  // The other cases: moves asked for one at a time (confirm mode).
   ASSERT_TRUE(wait_for([&] {
     std::lock_guard<std::mutex> lock(w.mutex);
     return w.status && w.status->samples >= 1;
   }, 30.0));
-  ASSERT_TRUE(ros::service::call(ns + "/move", move));
-  ASSERT_TRUE(move.response.success) << move.response.message;
-  ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("moving:", 0) == 0; }, 10.0)) << last_motion(w);
-  const double moving_at = ros::WallTime::now().toSec();
-  if (test_case == "stop") {
-    ros::WallDuration(0.2).sleep();
-    std::size_t before;
-    {
-      std::lock_guard<std::mutex> lock(w.mutex);
-      before = w.commands.size();
-    }
-    std_srvs::Trigger stop;
-    const double asked = ros::WallTime::now().toSec();
-    ASSERT_TRUE(ros::service::call(ns + "/stop_motion", stop));
-    ASSERT_TRUE(wait_for([&] {
-      std::lock_guard<std::mutex> lock(w.mutex);
-      return w.commands.size() > before;
-    }, 1.0));
-    // ~motion_status says so too (a separate topic: it may come after the hold).
-    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("stopped:", 0) == 0; }, 1.0)) << last_motion(w);
+  auto move_once = [&] {
+    std_srvs::Trigger move;
+    EXPECT_TRUE(wait_for([&] { return starts(last_motion(w), "planned:"); }, 30.0)) << last_motion(w);
+    EXPECT_TRUE(ros::service::call(ns + "/move", move));
+    EXPECT_TRUE(move.response.success) << move.response.message;
+    EXPECT_TRUE(wait_for([&] { return starts(last_motion(w), "moving:"); }, 10.0)) << last_motion(w);
+    return ros::Time::now().toSec();
+  };
+  // The move's planned duration, from its "moving: <s> s to the goal" line.
+  auto planned_duration = [&] {
     std::lock_guard<std::mutex> lock(w.mutex);
-    const double latency = w.commands.back().first - asked;
-    std::printf("[ arm      ] hold trajectory %.1f ms after stop_motion was called (%zu point)\n", latency * 1e3,
-                w.commands.back().second);
-    EXPECT_EQ(w.commands.back().second, 1u) << "a hold is one point";
-    EXPECT_EQ(w.ghost_shapes, 7u) << "the planned move showed the arm's 7 cylinders at the goal";
-    EXPECT_LT(latency, 0.05);
-  } else if (test_case == "stall") {
-    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("failed:", 0) == 0; }, 10.0)) << last_motion(w);
-    std::printf("[ arm      ] %.2f s after the move began: %s\n", ros::WallTime::now().toSec() - moving_at,
-                last_motion(w).c_str());
-    EXPECT_NE(last_motion(w).find("no joint states for"), std::string::npos);
-  } else {  // stops_short
-    ASSERT_TRUE(wait_for([&] { return last_motion(w).rfind("failed:", 0) == 0; }, 60.0)) << last_motion(w);
-    const double stopped = ros::WallTime::now().toSec() - moving_at;
-    std::printf("[ arm      ] %.2f s after the move began: %s\n", stopped, last_motion(w).c_str());
-    EXPECT_NE(last_motion(w).find("did not arrive"), std::string::npos);
-    // The deadline is the move's duration + ~motion/arrival_timeout (3 s); it is in the plan's text.
-    std::string planned;
-    {
-      std::lock_guard<std::mutex> lock(w.mutex);
-      for (const auto& [t, text] : w.motion)
-        if (text.rfind("moving:", 0) == 0) planned = text;
-    }
-    const double duration = std::stod(planned.substr(std::string("moving: ").size()));
-    EXPECT_LT(stopped, duration + 3.0 + 1.0) << planned;
-    EXPECT_TRUE(wait_for([&] {  // the hold and the status come on separate topics
-      std::lock_guard<std::mutex> lock(w.mutex);
-      return !w.commands.empty() && w.commands.back().second == 1u;
-    }, 1.0)) << "the failure sent a hold";
+    for (auto it = w.motion.rbegin(); it != w.motion.rend(); ++it)
+      if (starts(it->second, "moving:")) return std::stod(it->second.substr(std::string("moving: ").size()));
+    return 0.0;
+  };
+
+  if (test_case == "speed_scale") {
+    // The pendant's slider at 10%: the move takes ten times its planned duration and completes.
+    std_msgs::Float64 scale;
+    scale.data = 0.1;
+    scale_pub.publish(scale);
+    const double began = move_once();
+    const double duration = planned_duration();
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "sampled:") || starts(last_motion(w), "failed:"); }, 120.0))
+        << last_motion(w);
+    EXPECT_TRUE(starts(last_motion(w), "sampled:")) << last_motion(w);
+    std::printf("[ arm      ] speed scale 0.1: a %.2f s move arrived and sampled after %.2f s\n", duration,
+                ros::Time::now().toSec() - began);
+    // Full speed, dropped to 20% half way through the move.
+    scale.data = 1.0;
+    scale_pub.publish(scale);
+    const double second = move_once();
+    const double second_duration = planned_duration();
+    ros::WallDuration(0.5 * second_duration).sleep();
+    scale.data = 0.2;
+    scale_pub.publish(scale);
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "sampled:") || starts(last_motion(w), "failed:"); }, 120.0))
+        << last_motion(w);
+    EXPECT_TRUE(starts(last_motion(w), "sampled:")) << last_motion(w);
+    std::printf("[ arm      ] speed scale 1.0 -> 0.2 half way: a %.2f s move arrived and sampled after %.2f s\n",
+                second_duration, ros::Time::now().toSec() - second);
+    all_taken_whole();
+    return;
   }
+
+  const double moving_at = move_once();
+  if (test_case == "stop") {
+    ros::WallDuration(0.3).sleep();  // at speed
+    const std::size_t before = arm.commands();
+    std_srvs::Trigger stop;
+    const double asked = ros::Time::now().toSec();
+    ASSERT_TRUE(ros::service::call(ns + "/stop_motion", stop));
+    ASSERT_TRUE(wait_for([&] { return arm.hold_received(before).has_value(); }, 1.0)) << "the stop sent a hold";
+    // ~motion_status says so too (a separate topic: it may come after the hold).
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "stopped:"); }, 1.0)) << last_motion(w);
+    const double latency = *arm.hold_received(before) - asked;
+    std::printf("[ arm      ] the hold (an empty trajectory) %.1f ms after stop_motion was called\n", latency * 1e3);
+    EXPECT_LT(latency, 0.05);
+    EXPECT_EQ(w.ghost_shapes, 7u) << "the planned move showed the arm's 7 cylinders at the goal";
+    expect_held(arm, "stop_motion", asked);
+  } else if (test_case == "shutdown" || test_case == "rosnode_kill") {
+    // The node is stopped during a move (Ctrl-C on roslaunch, or rosnode kill): it holds the arm first.
+    ros::WallDuration(0.3).sleep();
+    const std::size_t before = arm.commands();
+    std::string uri;
+    const std::optional<int> pid = node_pid(ns + "/handeye_calibration", &uri);
+    ASSERT_TRUE(pid) << "no pid for " << ns << "/handeye_calibration";
+    const double asked = ros::Time::now().toSec();
+    if (test_case == "shutdown") ASSERT_EQ(::kill(*pid, SIGINT), 0);
+    else ASSERT_TRUE(shutdown_node(uri));
+    ASSERT_TRUE(wait_for([&] { return arm.hold_received(before).has_value(); }, 2.0))
+        << "the node sent a hold before it went";
+    std::printf("[ arm      ] %s: the hold %.1f ms after the request\n", test_case.c_str(),
+                (*arm.hold_received(before) - asked) * 1e3);
+    expect_held(arm, test_case == "shutdown" ? "SIGINT to the node" : "rosnode kill", asked);
+  } else {
+    // The node stops the move itself: a stall (stops_short), silent joint states (stall),
+    // the arrival timeout (timeout), a controller that refuses commands (refused).
+    ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "failed:"); }, 90.0)) << last_motion(w);
+    const double failed = ros::Time::now().toSec() - moving_at;
+    std::printf("[ arm      ] %.2f s after the move began: %s\n", failed, last_motion(w).c_str());
+    ASSERT_TRUE(wait_for([&] { return arm.hold_received().has_value(); }, 1.0)) << "the failure sent a hold";
+    const double held = *arm.hold_received();
+    if (test_case == "stops_short") {
+      EXPECT_NE(last_motion(w).find("no progress"), std::string::npos);
+      // Caught within a second of the arm's stop (the first instant its joints stopped changing).
+      double stopped = held;
+      for (double t = held; t > moving_at; t -= 0.01) {
+        const auto a = arm.at(t), b = arm.at(t - 0.01);
+        if (!a || !b || (*a - *b).cwiseAbs().maxCoeff() > 1e-9) break;
+        stopped = t - 0.01;
+      }
+      std::printf("[ arm      ] the arm stopped %.2f s into the move; the hold came %.2f s later\n",
+                  stopped - moving_at, held - stopped);
+      EXPECT_LE(held - stopped, 1.0);
+    } else if (test_case == "stall") {
+      EXPECT_NE(last_motion(w).find("no joint states for"), std::string::npos);
+    } else if (test_case == "timeout") {
+      EXPECT_NE(last_motion(w).find("did not arrive within"), std::string::npos);
+      EXPECT_LT(failed, planned_duration() + 3.0 + 1.0) << "the deadline: the duration + ~motion/arrival_timeout";
+    } else if (test_case == "refused") {
+      EXPECT_NE(last_motion(w).find("did not start"), std::string::npos);
+      for (const std::string& o : arm.outcomes()) EXPECT_TRUE(starts(o, "refused:")) << o;
+    }
+    expect_held(arm, test_case, held);
+  }
+  all_taken_whole();
 }
 
 int main(int argc, char** argv) {

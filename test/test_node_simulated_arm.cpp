@@ -1,11 +1,13 @@
 // The simulated arm under rostest: a move timed by the planner (timed_move) sent
 // as trajectory_msgs/JointTrajectory to /arm_controller/command, watched from
 // /joint_states by MoveMonitor, with robot_state_publisher's TF checked against
-// the planner's forward kinematics. ~fault: none (arrives), stops_short (times
-// out at the deadline), stall (joint states stop).
+// the planner's forward kinematics. ~fault: none (arrives), stops_short (the arm
+// stops at 80% of the move: no progress), stall (joint states stop). Every command
+// is taken whole by the controller's rules (its ~command_outcomes).
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
+#include <std_msgs/String.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 #include <trajectory_msgs/JointTrajectory.h>
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "handeye_covariance/motion/arm.h"
 #include "handeye_covariance/motion/move_monitor.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 
@@ -26,19 +29,6 @@ motion::Arm load_arm() {
   std::stringstream text;
   text << in.rdbuf();
   return motion::Arm::from_urdf(text.str(), "base_link", "tool0", "~urdf_path");
-}
-
-trajectory_msgs::JointTrajectory to_message(const motion::Arm& arm, const std::vector<motion::TrajectoryPoint>& points) {
-  trajectory_msgs::JointTrajectory msg;
-  for (const auto& limit : arm.limits()) msg.joint_names.push_back(limit.name);
-  for (const auto& p : points) {
-    trajectory_msgs::JointTrajectoryPoint point;
-    point.positions.assign(p.position.data(), p.position.data() + p.position.size());
-    point.velocities.assign(p.velocity.data(), p.velocity.data() + p.velocity.size());
-    point.time_from_start = ros::Duration(p.time);
-    msg.points.push_back(point);
-  }
-  return msg;
 }
 
 }  // namespace
@@ -59,6 +49,9 @@ TEST(SimulatedArm, FollowsATimedMoveOrSaysWhyNot) {
     q = read;
     last_state = m->header.stamp.toSec();
   });
+  std::vector<std::string> outcomes;  // the controller's verdict on each command
+  auto outcome_sub = node.subscribe<std_msgs::String>(
+      "arm_controller/command_outcomes", 10, [&](const std_msgs::StringConstPtr& m) { outcomes.push_back(m->data); });
   auto pub = node.advertise<trajectory_msgs::JointTrajectory>("arm_controller/command", 1, true);
   tf2_ros::Buffer buffer;
   tf2_ros::TransformListener listener(buffer);
@@ -71,10 +64,12 @@ TEST(SimulatedArm, FollowsATimedMoveOrSaysWhyNot) {
 
   Eigen::VectorXd goal = q;
   goal(0) += 0.4, goal(2) -= 0.3, goal(5) += 0.5;
-  const auto trajectory = motion::timed_move(arm, q, goal, 0.5);
+  motion::MoveTiming timing;
+  timing.speed_fraction = 0.5;
+  const auto trajectory = motion::timed_move(arm, q, goal, timing);
   const double sent = ros::Time::now().toSec();
   motion::MoveMonitor monitor(trajectory, sent);
-  pub.publish(to_message(arm, trajectory));
+  pub.publish(conversions::to_msg(motion::move_command(arm, trajectory)));
   motion::MoveStatus status = motion::MoveStatus::Moving;
   double last_seen = -1.0;
   while (ros::ok() && status == motion::MoveStatus::Moving) {
@@ -98,10 +93,23 @@ TEST(SimulatedArm, FollowsATimedMoveOrSaysWhyNot) {
     EXPECT_LT(Eigen::AngleAxisd(T.linear().transpose() * arm.forward(q).linear()).angle(), 1e-6);
     EXPECT_LT((T.translation() - arm.forward(goal).translation()).norm(), 0.005);
   } else if (fault == "stops_short") {
-    ASSERT_EQ(status, motion::MoveStatus::TimedOut);
-    EXPECT_LT(ended, monitor.deadline() - sent + 1.0) << "stopped within the timeout + 1 s";
+    ASSERT_EQ(status, motion::MoveStatus::Stalled);
+    // The arm stops at 80% of the path, before the planned end: caught within stall_time of that.
+    EXPECT_LT(ended, trajectory.back().time + motion::MoveLimits{}.stall_time) << monitor.reason();
   } else if (fault == "stall") {
     ASSERT_EQ(status, motion::MoveStatus::JointStatesStalled);
+  }
+  if (status != motion::MoveStatus::Arrived) pub.publish(conversions::to_msg(motion::hold_command(arm)));
+  const ros::Time until = ros::Time::now() + ros::Duration(1.0);
+  while (ros::ok() && outcomes.size() < (status == motion::MoveStatus::Arrived ? 1u : 2u) && ros::Time::now() < until) {
+    ros::spinOnce();
+    ros::Duration(0.01).sleep();
+  }
+  ASSERT_FALSE(outcomes.empty());
+  EXPECT_EQ(outcomes.front(), "accepted") << "the move is taken whole";
+  if (status != motion::MoveStatus::Arrived) {
+    ASSERT_EQ(outcomes.size(), 2u);
+    EXPECT_EQ(outcomes.back(), "hold");
   }
 }
 

@@ -32,6 +32,8 @@
 #include <filesystem>
 #include <memory>
 
+#include "arm_watch.h"
+#include "handeye_covariance/core/errors.h"
 #include "node_test_helpers.h"
 
 namespace handeye {
@@ -257,6 +259,7 @@ TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
   if (test_case != "motion") GTEST_SKIP() << "needs the simulated arm (rviz_panel_motion.test)";
   ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "no X display: run under ./scripts/test (it starts Xvfb)";
   test::StatusWatcher status(kNs + "handeye_calibration/status");
+  const test::ArmWatch arm;
   const test::DisplayLock display;
   std::unique_ptr<rviz::VisualizationFrame> frame;
   QWidget* panel = nullptr;
@@ -276,13 +279,22 @@ TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
       << motion->text().toStdString();
   ASSERT_GE(status.latest.samples, 2) << motion->text().toStdString();
   ASSERT_TRUE(pump_until([&] { return motion->text().contains("planned:"); }, 30.0)) << motion->text().toStdString();
-  // Auto, then Stop during a move: stopped, and the arm holds.
+  // Auto, then Stop half way through a move (at speed): stopped, and the arm holds where it was.
   press(automatic);
   ASSERT_TRUE(pump_until([&] { return motion->text().contains("moving:"); }, 30.0)) << motion->text().toStdString();
+  const double duration = std::stod(motion->text().toStdString().substr(motion->text().indexOf("moving:") + 8));
+  pump_until([] { return false; }, 0.5 * duration);
   EXPECT_TRUE(stop->isEnabled()) << "Stop is never disabled";
+  const double pressed = ros::Time::now().toSec();
   QTest::mouseClick(stop, Qt::LeftButton);
   ASSERT_TRUE(pump_until([&] { return motion->text().contains("stopped:"); }, 2.0)) << motion->text().toStdString();
   const int after_stop = status.latest.samples;
+  pump_until([&] { return arm.still_for(0.5); }, 5.0);
+  const std::optional<double> travel = arm.travel_after(pressed, 0.0);
+  ASSERT_TRUE(travel) << "the arm did not come to rest";
+  std::printf("[rviz panel] Stop half way through a %.2f s move: joint travel after it %.3f deg\n", duration,
+              degrees(*travel));
+  EXPECT_LE(degrees(*travel), 0.5);
   pump_until([] { return false; }, 3.0);
   EXPECT_TRUE(motion->text().contains("stopped:")) << "nothing moves after Stop: " << motion->text().toStdString();
   EXPECT_EQ(status.latest.samples, after_stop);
@@ -293,6 +305,8 @@ TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
   EXPECT_TRUE(motion->text().contains("done:")) << motion->text().toStdString();
   ASSERT_TRUE(pump_until([&] { return status.latest.target_reached; }, 10.0));
   std::printf("[rviz panel] %s (%d samples)\n", motion->text().toStdString().c_str(), status.latest.samples);
+  const std::vector<std::string> not_whole = arm.not_taken_whole();
+  EXPECT_TRUE(not_whole.empty()) << "a command the controller did not take as sent: " << not_whole.front();
   screenshot("rviz_panel_motion.png");
   frame.reset();
 }

@@ -125,7 +125,7 @@ NextMove AutoCalibration::next(const CalibrationSession& session, const SessionS
   move.found = true;
   move.view = candidates[move.plan.chosen];
   move.predicted_object_sigma = predicted[move.plan.chosen];
-  move.trajectory = motion::timed_move(collision_.arm(), current, move.plan.goal, options_.speed_fraction);
+  move.trajectory = motion::timed_move(collision_.arm(), current, move.plan.goal, options_.timing);
   return move;
 }
 

@@ -183,25 +183,4 @@ ViewPlan plan_view(const CollisionModel& collision, const Rig& rig, const std::o
   return plan;
 }
 
-std::vector<TrajectoryPoint> timed_move(const Arm& arm, const Eigen::VectorXd& from, const Eigen::VectorXd& to,
-                                        double speed_fraction, double dt) {
-  if (!(speed_fraction > 0.0 && speed_fraction <= 1.0))
-    throw HandEyeError(ErrorCode::MalformedFile, "the speed fraction " + number_text(speed_fraction) + " is not in (0, 1]",
-                       "timed_move", "give a fraction of the URDF's velocity limits, e.g. 0.1");
-  // s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5 peaks at ds/dtau = 15/8 (tau = 1/2).
-  double duration = 0.0;
-  for (int j = 0; j < arm.joints(); ++j)
-    duration = std::max(duration, 1.875 * std::abs(to(j) - from(j)) / (speed_fraction * arm.limits()[j].velocity));
-  duration = std::max(duration, dt);
-  const int steps = std::max(1, static_cast<int>(std::ceil(duration / dt - 1e-9)));
-  std::vector<TrajectoryPoint> points;
-  for (int k = 0; k <= steps; ++k) {
-    const double t = std::min(k * dt, duration), tau = t / duration;
-    const double s = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
-    const double ds = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / duration;
-    points.push_back({t, from + s * (to - from), ds * (to - from)});
-  }
-  return points;
-}
-
 }  // namespace handeye::motion

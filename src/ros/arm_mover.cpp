@@ -1,6 +1,8 @@
 #include "handeye_covariance/ros/arm_mover.h"
 
 #include <trajectory_msgs/JointTrajectory.h>
+
+#include <algorithm>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "handeye_covariance/core/errors.h"
@@ -33,7 +35,15 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
       *arm_, obstacles_file.empty() ? motion::table_plane() : motion::read_obstacles(obstacles_file), collision);
 
   AutoCalibrationOptions options;
-  options.speed_fraction = param(pn, "motion/speed_fraction", options.speed_fraction);
+  options.timing.speed_fraction = param(pn, "motion/speed_fraction", options.timing.speed_fraction);
+  options.timing.max_acceleration = deg(pn, "motion/max_acceleration_deg", degrees(options.timing.max_acceleration));
+  // MoveIt's joint limits where they are loaded (robot_description_planning/joint_limits/<joint>/max_acceleration).
+  for (const motion::JointLimit& joint : arm_->limits()) {
+    const std::string limits = "robot_description_planning/joint_limits/" + joint.name + "/";
+    double a = 0.0;
+    options.timing.joint_acceleration.push_back(
+        param(node, limits + "has_acceleration_limits", false) && node.getParam(limits + "max_acceleration", a) ? a : 0.0);
+  }
   options.planner.joint_margin = deg(pn, "motion/joint_margin_deg", 5.0);
   options.planner.max_joint_step = deg(pn, "motion/max_joint_step_deg", 90.0);
   const std::vector<double> box = param(pn, "motion/workspace", std::vector<double>{-1.0, -1.0, 0.05, 1.0, 1.0, 1.2});
@@ -46,6 +56,11 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   options.planner.field_of_view_y = fov.at(1) * M_PI / 180.0;
   automatic_ = std::make_unique<AutoCalibration>(*collision_, std::nullopt, options);
   limits_.arrival_allowance = param(pn, "motion/arrival_timeout", limits_.arrival_allowance);
+  limits_.stall_time = param(pn, "motion/stall_time", limits_.stall_time);
+  limits_.min_speed_scale = param(pn, "motion/min_speed_scale", limits_.min_speed_scale);
+  limits_.path_tolerance = deg(pn, "motion/path_tolerance_deg", degrees(limits_.path_tolerance));
+  limits_.progress_step = deg(pn, "motion/progress_step_deg", degrees(limits_.progress_step));
+  motion::check_limits(limits_);
   limits_.joint_states_timeout = param(pn, "motion/joint_states_timeout", limits_.joint_states_timeout);
   sample_timeout_ = param(pn, "motion/sample_timeout", access_.session->settings().sampler.still_window + 3.0);
   max_views_ = param(pn, "motion/max_views", max_views_);
@@ -79,6 +94,7 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
 }
 
 ArmMover::~ArmMover() {
+  if (ros::ok()) stop_for_shutdown();
   if (action_) action_->shutdown();
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -136,17 +152,17 @@ void ArmMover::status(const std::string& state, const std::string& text) {
     ROS_INFO("motion %s", msg.data.c_str());
 }
 
-void ArmMover::publish(const std::vector<motion::TrajectoryPoint>& trajectory) {
-  trajectory_msgs::JointTrajectory msg;  // a zero stamp: start now
-  for (const motion::JointLimit& limit : arm_->limits()) msg.joint_names.push_back(limit.name);
-  for (const motion::TrajectoryPoint& p : trajectory) {
-    trajectory_msgs::JointTrajectoryPoint point;
-    point.positions.assign(p.position.data(), p.position.data() + p.position.size());
-    point.velocities.assign(p.velocity.data(), p.velocity.data() + p.velocity.size());
-    point.time_from_start = ros::Duration(p.time);
-    msg.points.push_back(point);
+bool ArmMover::send(const motion::TrajectoryCommand& command, std::optional<std::uint64_t> id) {
+  // One at a time, and a move only while its request stands: a stop in between
+  // either follows the move (and holds it) or comes first (and the move is not sent).
+  std::lock_guard<std::mutex> sending(send_mutex_);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (id && request_id_ != *id) return false;
+    commanding_ = !command.points.empty();
   }
-  command_pub_.publish(msg);
+  command_pub_.publish(conversions::to_msg(command));
+  return true;
 }
 
 std::optional<std::string> ArmMover::ask(Request request) {  // mutex_ held
@@ -200,19 +216,27 @@ bool ArmMover::stop_service(std_srvs::Trigger::Request&, std_srvs::Trigger::Resp
 
 void ArmMover::stop_now(const std::string& why) {
   // The hold goes out from here, not through the motion thread.
-  std::optional<Eigen::VectorXd> q;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++request_id_;  // whatever runs sees it is no longer asked for
     request_ = Request::None;
     action_goal_ = false;
     planned_.reset();
-    if (joints_.size()) q = joints_;
   }
   wake_.notify_all();
-  if (q) publish(motion::hold_trajectory(*q));
-  status("stopped", (q ? "a hold trajectory was sent at the current joints (" : "no joint states yet: nothing to hold (") +
-                        why + ")");
+  send(motion::hold_command(*arm_));
+  status("stopped", "the controller was told to hold where the arm is (an empty trajectory) (" + why + ")");
+}
+
+void ArmMover::stop_for_shutdown() {
+  bool moving;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    moving = commanding_;
+  }
+  if (!moving) return;  // an arm at rest is left alone: something else may be moving it by now
+  stop_now("the node is shutting down");
+  ros::WallDuration(0.2).sleep();  // for the hold to leave before the connections close
 }
 
 void ArmMover::on_goal() {
@@ -325,8 +349,8 @@ bool ArmMover::execute(std::uint64_t id) {
   }
   const std::size_t samples_before = access_.samples();
   const double start = ros::Time::now().toSec();
-  publish(move->trajectory);
-  status("moving", number_text(move->trajectory.back().time, 3) + " s to the goal");
+  if (!send(motion::move_command(*arm_, move->trajectory), id)) return false;  // stopped meanwhile
+  status("moving", number_text(move->trajectory.back().time, 3) + " s to the goal at full speed");
   motion::MoveMonitor monitor(move->trajectory, start, limits_);
   double seen = -1.0;
   for (ros::Rate rate(200.0); ros::ok(); rate.sleep()) {
@@ -341,14 +365,15 @@ bool ArmMover::execute(std::uint64_t id) {
     const motion::MoveStatus s = monitor.update(ros::Time::now().toSec());
     if (s == motion::MoveStatus::Arrived) break;
     if (s != motion::MoveStatus::Moving) {
-      publish(motion::hold_trajectory(monitor.position()));
-      status("failed", monitor.reason() + "; a hold trajectory was sent");
+      send(motion::hold_command(*arm_));
+      status("failed", monitor.reason() + "; the controller was told to hold (an empty trajectory)");
       return false;
     }
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     planned_.reset();
+    commanding_ = false;
   }
   publish_plan_markers(std::nullopt);
   // The sample at the goal: the session's sampler takes it once the arm and the

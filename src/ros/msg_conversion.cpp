@@ -227,5 +227,31 @@ CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp
   return msg;
 }
 
+trajectory_msgs::JointTrajectory to_msg(const motion::TrajectoryCommand& command) {
+  trajectory_msgs::JointTrajectory msg;
+  if (command.stamp != 0.0) msg.header.stamp = ros::Time(command.stamp);
+  msg.joint_names = command.joint_names;
+  for (const motion::TrajectoryPoint& p : command.points) {
+    trajectory_msgs::JointTrajectoryPoint point;
+    point.positions.assign(p.position.data(), p.position.data() + p.position.size());
+    point.velocities.assign(p.velocity.data(), p.velocity.data() + p.velocity.size());
+    point.accelerations.assign(p.acceleration.data(), p.acceleration.data() + p.acceleration.size());
+    point.time_from_start = ros::Duration(p.time);
+    msg.points.push_back(point);
+  }
+  return msg;
+}
+
+motion::TrajectoryCommand to_core(const trajectory_msgs::JointTrajectory& msg) {
+  motion::TrajectoryCommand command;
+  command.stamp = msg.header.stamp.isZero() ? 0.0 : msg.header.stamp.toSec();
+  command.joint_names = msg.joint_names;
+  auto vector = [](const std::vector<double>& v) { return Eigen::Map<const Eigen::VectorXd>(v.data(), v.size()); };
+  for (const auto& point : msg.points)
+    command.points.push_back({point.time_from_start.toSec(), vector(point.positions), vector(point.velocities),
+                              vector(point.accelerations)});
+  return command;
+}
+
 }  // namespace conversions
 }  // namespace handeye

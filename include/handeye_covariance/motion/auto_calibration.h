@@ -12,8 +12,8 @@
 //   - then the session ranks candidate views by the covariance they leave
 //     (CalibrationSession::suggest, next_best_pose.h) and the planner takes the
 //     most informative one the arm reaches safely (motion/view_planner.h).
-// The move is a timed straight joint-space path at speed_fraction of the URDF's
-// velocity limits (motion::timed_move).
+// The move is a timed straight joint-space path within `timing`'s speed and
+// acceleration bounds (motion::timed_move).
 #pragma once
 
 #include <optional>
@@ -27,7 +27,7 @@ namespace handeye {
 
 struct AutoCalibrationOptions {
   motion::PlannerOptions planner;
-  double speed_fraction = 0.1;                   // of each joint's URDF velocity limit
+  motion::MoveTiming timing;                     // speed fraction of the URDF's limits, acceleration bound
   double bootstrap_translation = 0.05;           // m, the first moves' shifts
   double bootstrap_angle = 20.0 * M_PI / 180.0;  // rad, the first turns
 };

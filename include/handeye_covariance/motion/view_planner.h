@@ -25,6 +25,7 @@
 #include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/rig.h"
 #include "handeye_covariance/motion/collision.h"
+#include "handeye_covariance/motion/trajectory.h"
 
 namespace handeye::motion {
 
@@ -106,15 +107,5 @@ std::optional<std::string> view_problem(const Rig& rig, const std::optional<Came
 ViewPlan plan_view(const CollisionModel& collision, const Rig& rig,
                    const std::optional<CameraModel>& camera, const Eigen::VectorXd& current,
                    const std::vector<ViewCandidate>& candidates, const PlannerOptions& options);
-
-/// A timed straight joint-space move, as a trajectory controller takes it: a
-/// quintic time scaling (zero velocity and acceleration at both ends) whose peak
-/// speed is `speed_fraction` of each joint's URDF velocity limit, sampled every dt.
-struct TrajectoryPoint {
-  double time = 0.0;  // s from the start
-  Eigen::VectorXd position, velocity;
-};
-std::vector<TrajectoryPoint> timed_move(const Arm& arm, const Eigen::VectorXd& from, const Eigen::VectorXd& to,
-                                        double speed_fraction, double dt = 0.1);
 
 }  // namespace handeye::motion

@@ -55,7 +55,11 @@ class ArmMover {
  public:
   /// Reads ~motion/* and robot_description; throws HandEyeError naming what is wrong.
   ArmMover(ros::NodeHandle node, ros::NodeHandle private_node, SessionAccess access);
+  /// Holds the arm if a move is under way (stop_for_shutdown).
   ~ArmMover();
+  /// Before ROS shuts down: a move under way is stopped with a hold, given time to
+  /// leave; an arm at rest is not commanded.
+  void stop_for_shutdown();
 
  private:
   enum class Request { None, Plan, Move, Auto };
@@ -67,7 +71,7 @@ class ArmMover {
   std::optional<std::string> ask(Request request);
   void on_goal();
   void on_preempt();
-  /// Sends the hold at the latest joints, from the calling thread; the motion thread stops.
+  /// Sends the hold, from the calling thread; the motion thread stops.
   void stop_now(const std::string& why);
   void on_joint_states(const sensor_msgs::JointStateConstPtr& msg);
   void run();
@@ -76,7 +80,8 @@ class ArmMover {
   /// Moves to the planned goal and takes the sample there, for request `id`; false
   /// when the motion stopped or another request came.
   bool execute(std::uint64_t id);
-  void publish(const std::vector<motion::TrajectoryPoint>& trajectory);
+  /// Publishes a command; with `id`, only while that request stands (false: not sent).
+  bool send(const motion::TrajectoryCommand& command, std::optional<std::uint64_t> id = std::nullopt);
   void status(const std::string& state, const std::string& text);
   std::optional<Eigen::VectorXd> joints() const;
 
@@ -101,6 +106,8 @@ class ArmMover {
   std::unique_ptr<actionlib::SimpleActionServer<AutoCalibrateAction>> action_;
 
   mutable std::mutex mutex_;
+  std::mutex send_mutex_;  // one command at a time (send)
+  bool commanding_ = false;  // a move was sent and has not arrived, failed or been stopped
   std::condition_variable wake_;
   Request request_ = Request::None;
   bool shutting_down_ = false;

@@ -41,6 +41,10 @@ class CalibrationNode {
   /// reloads the session file.
   CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_node);
   ~CalibrationNode();
+  /// Before ROS shuts down (shutdown_request.h): a move under way is held.
+  void stop_for_shutdown() {
+    if (mover_) mover_->stop_for_shutdown();
+  }
 
  private:
   // Inputs, on the detection thread (detection_input.h): each gives a detection of the pattern.

@@ -10,6 +10,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <trajectory_msgs/JointTrajectory.h>
 
 #include <boost/array.hpp>
 #include <memory>
@@ -18,6 +19,7 @@
 #include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/estimation/calibration_check.h"
+#include "handeye_covariance/motion/trajectory.h"
 #include "handeye_covariance/ros/messages.h"
 
 namespace handeye {
@@ -61,6 +63,12 @@ void set_corners(const TargetCorners& corners, TagDetection& detection);
 CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp);
 
 double quaternion_norm(const geometry_msgs::Quaternion& q);
+
+/// A trajectory controller's command (a zero stamp stays zero: "start now"; no
+/// points: "hold"). Velocities and accelerations only where the points have them.
+trajectory_msgs::JointTrajectory to_msg(const motion::TrajectoryCommand& command);
+/// Any message, as sent: fields of other sizes are kept for the controller to refuse.
+motion::TrajectoryCommand to_core(const trajectory_msgs::JointTrajectory& msg);
 
 }  // namespace conversions
 }  // namespace handeye

@@ -1,0 +1,83 @@
+// A position-controlled arm under ros_controllers' joint_trajectory_controller,
+// simulated without ROS, for the simulated arm's node and the motion tests. It
+// applies the controller's rules to each command (joint_trajectory_controller's
+// updateTrajectoryCommand and initJointTrajectory, summarised in docs/motion.md):
+//   - not running: every command is refused, the empty one too;
+//   - no points: hold the current (actual) position, decelerating over
+//     `stop_trajectory_duration` (its parameter; 0 by default: at once);
+//   - refused: times not strictly increasing, joints other than the controller's,
+//     point sizes that do not match;
+//   - a zero stamp starts the command at the next control update, a stamp in the
+//     future at that time; points at or before that start are dropped (a first
+//     point at time 0 with a zero stamp silently); all of them dropped: the
+//     command is ignored and the running trajectory goes on;
+//   - otherwise the running trajectory is kept up to the command's start and
+//     bridged from its desired state there to the first point kept;
+//   - between points: linear, cubic or quintic as positions, velocities and
+//     accelerations are given; after the last point it holds it.
+// Path and goal tolerances are not enforced (the topic interface has none).
+// Speed scaling, as the UR driver's scaled_pos_joint_traj_controller: the
+// trajectory's clock advances by speed_scale times each control period.
+// Faults for the tests: the arm stops at a fraction of each move (a protective
+// stop: the controller's trajectory goes on, the arm does not).
+// Times are seconds on the caller's clock (the node's ROS time).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "handeye_covariance/motion/trajectory.h"
+
+namespace handeye {
+
+struct ControllerOptions {
+  std::vector<std::string> joints;  // the controller's joints, in the order its state is reported
+  double stop_trajectory_duration = 0.0;  // s, joint_trajectory_controller's parameter
+  double speed_scale = 1.0;               // (0, 1]: the trajectory runs this much slower in time
+  bool running = true;                    // false: a controller that was not started refuses every command
+  double stop_fraction = 1.0;             // < 1: the arm stops once it has covered this fraction of a move
+};
+
+/// What the controller made of one command.
+struct CommandOutcome {
+  enum class Kind { Accepted, Hold, Dropped, Refused };
+  Kind kind = Kind::Accepted;
+  int points_dropped = 0;  // points before the start, beyond a first one at 0 with a zero stamp
+  std::string message;     // the controller's own words for a drop or a refusal ("" when taken whole)
+  /// Taken as sent: accepted with no point dropped, or a hold.
+  bool taken_whole() const { return (kind == Kind::Accepted && points_dropped == 0) || kind == Kind::Hold; }
+};
+const char* to_string(CommandOutcome::Kind kind);  // "accepted", "hold", "dropped", "refused"
+
+class SimulatedTrajectoryController {
+ public:
+  /// Holding `initial` (one value per options.joints) from `now`. Throws HandEyeError for sizes that differ.
+  SimulatedTrajectoryController(ControllerOptions options, Eigen::VectorXd initial, double now);
+
+  /// A command received at `now` (the controller takes it against its last control update).
+  CommandOutcome command(const motion::TrajectoryCommand& command, double now);
+  /// One control update at `now` (after the last one): the arm moves.
+  void update(double now);
+
+  void set_speed_scale(double scale);  // clamped to [0, 1]
+  double speed_scale() const { return options_.speed_scale; }
+  const Eigen::VectorXd& position() const { return position_; }  // the arm's, after the last update
+  const Eigen::VectorXd& velocity() const { return velocity_; }
+  /// Whether the trajectory is still moving the desired state at the last update.
+  bool moving() const;
+  const ControllerOptions& options() const { return options_; }
+
+ private:
+  void hold();
+  std::vector<motion::SplineSegment>::const_iterator active(double uptime) const;
+  motion::JointState desired(double uptime) const;
+
+  ControllerOptions options_;
+  Eigen::VectorXd position_, velocity_;
+  double time_ = 0.0, period_ = 0.0, uptime_ = 0.0;  // the last update: its time, scaled period, trajectory clock
+  std::vector<motion::SplineSegment> trajectory_;    // on the trajectory clock
+  Eigen::VectorXd move_from_, move_goal_;            // the latest move, for stop_fraction
+  bool stopped_short_ = false;
+};
+
+}  // namespace handeye
