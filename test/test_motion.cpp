@@ -1006,3 +1006,46 @@ TEST(AutoCalibration, CompletesUnderASpeedScaledController) {
     EXPECT_LE(samples[samples.size() / 2], 8) << name;
   }
 }
+
+// One ranking for what the node shows and where the arm goes: planned from the
+// worker's analysis (its estimate and ranking), the move is the one the session's
+// own suggest() gives, and an analysis of other samples is not used.
+TEST(AutoCalibration, PlansFromTheWorkersRankingAsFromItsOwn) {
+  const ArmRig& setup = arm_rig();
+  const CollisionModel model(setup.arm, table_plane());
+  const AutoCalibration automatic(model, std::nullopt);
+  SessionSettings settings;
+  settings.rig = setup.rig;
+  settings.noise = camera_noise();
+  settings.suggest.views = setup.views;
+  settings.honesty.splits = 0;
+  CalibrationSession session(settings);
+  Rng rng(3);
+  const Eigen::VectorXd start = *setup.random_start(rng, model, PlannerOptions{});
+  std::vector<PoseSample> samples{setup.sample_at(rng, start, camera_noise())};
+  Eigen::VectorXd q = start;
+  int compared = 0;
+  for (int move = 0; move < 8; ++move) {
+    session.replace(samples, "sample");
+    const SessionSnapshot snapshot = session.snapshot();
+    const Analysis analysis = session.analyse(snapshot);
+    const NextMove own = automatic.next(session, snapshot, q);
+    const NextMove shared = automatic.next(session, snapshot, q, {}, &analysis);
+    ASSERT_TRUE(own.found && shared.found) << own.reason << shared.reason;
+    EXPECT_EQ(own.bootstrap, shared.bootstrap);
+    EXPECT_LT(largest_joint_change(own.plan.goal, shared.plan.goal), 1e-12);
+    EXPECT_DOUBLE_EQ(own.predicted_object_sigma, shared.predicted_object_sigma);
+    EXPECT_DOUBLE_EQ(own.object_sigma, shared.object_sigma);
+    if (!own.bootstrap) {
+      ++compared;
+      Analysis stale = analysis;
+      ++stale.generation;  // of other samples: not used
+      stale.ranked = {stale.ranked.back()};
+      const NextMove fresh = automatic.next(session, snapshot, q, {}, &stale);
+      EXPECT_LT(largest_joint_change(own.plan.goal, fresh.plan.goal), 1e-12);
+    }
+    q = own.plan.goal;
+    samples.push_back(setup.sample_at(rng, q, camera_noise()));
+  }
+  EXPECT_GE(compared, 3);
+}

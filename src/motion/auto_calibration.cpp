@@ -85,21 +85,30 @@ std::vector<motion::ViewCandidate> AutoCalibration::bootstrap_views(const Rig& r
 }
 
 NextMove AutoCalibration::next(const CalibrationSession& session, const SessionSnapshot& snapshot,
-                               const Eigen::VectorXd& current, const std::vector<Eigen::Isometry3d>& failed) const {
+                               const Eigen::VectorXd& current, const std::vector<Eigen::Isometry3d>& failed,
+                               const Analysis* analysis) const {
   NextMove move;
   const Rig& rig = session.settings().rig;
   std::vector<motion::ViewCandidate> candidates;
   std::vector<double> predicted;
-  try {
-    SuggestRequest request;
-    request.count = session.settings().suggest.candidates;
-    const SuggestResult suggestion = session.suggest(snapshot, request);
-    move.object_sigma = suggestion.suggestion.current_object_sigma;
-    move.X = suggestion.estimate.T_parent_camera;
-    for (const ScoredPose& pose : suggestion.suggestion.ranked) {
+  auto rank = [&](const Calibration& estimate, const std::vector<ScoredPose>& ranked) {
+    move.object_sigma = object_sigma({estimate.T_parent_camera, estimate.pose_covariance},
+                                     session.settings().suggest.working_distance);
+    move.X = estimate.T_parent_camera;
+    for (const ScoredPose& pose : ranked) {
       if (near_any(pose.T_base_effector, failed, session.settings().sampler)) continue;
       candidates.push_back({pose.T_base_effector, pose.T_camera_pattern, true});
       predicted.push_back(pose.object_sigma);
+    }
+  };
+  try {
+    if (analysis && analysis->generation == snapshot.generation && analysis->estimate && !analysis->ranked.empty()) {
+      rank(*analysis->estimate, analysis->ranked);
+    } else {
+      SuggestRequest request;
+      request.count = session.settings().suggest.candidates;
+      const SuggestResult suggestion = session.suggest(snapshot, request);
+      rank(suggestion.estimate, suggestion.suggestion.ranked);
     }
   } catch (const HandEyeError&) {
     // No estimate yet: the first moves, skipping poses the session has or that gave no detection.

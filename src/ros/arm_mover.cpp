@@ -316,8 +316,11 @@ bool ArmMover::plan() {
     status("failed", "no joint states of the arm's joints on " + joint_states_.getTopic());
     return false;
   }
-  const NextMove move = automatic_->next(*access_.session, access_.snapshot(), *q, failed_);
+  const SessionSnapshot snapshot = access_.snapshot();
+  const std::optional<Analysis> analysis = access_.analysis();
+  const NextMove move = automatic_->next(*access_.session, snapshot, *q, failed_, analysis ? &*analysis : nullptr);
   if (!move.found) {
+    access_.show_plan(std::nullopt);
     status("failed", move.reason);
     return false;
   }
@@ -326,6 +329,14 @@ bool ArmMover::plan() {
     planned_ = move;
   }
   publish_plan_markers(move);
+  std::optional<ScoredPose> view;
+  if (!move.bootstrap) {
+    view.emplace();
+    view->T_base_effector = move.view.T_base_effector;
+    view->T_camera_pattern = move.view.T_camera_pattern;
+    view->object_sigma = move.predicted_object_sigma;
+  }
+  access_.show_plan(view);
   status("planned", (move.bootstrap ? "a first move (" : "view " + std::to_string(move.plan.chosen + 1) + " of the ranking (") +
                         move.plan.summary() + "), " + number_text(move.trajectory.back().time, 3) + " s" +
                         (move.bootstrap ? ""
@@ -376,6 +387,7 @@ bool ArmMover::execute(std::uint64_t id) {
     commanding_ = false;
   }
   publish_plan_markers(std::nullopt);
+  access_.show_plan(std::nullopt);
   // The sample at the goal: the session's sampler takes it once the arm and the
   // detection are still; without auto-sampling, ask for it.
   status("sampling", "arrived; waiting for a still detection");

@@ -127,6 +127,18 @@ CalibrationNode::CalibrationNode(ros::NodeHandle node, ros::NodeHandle private_n
       if (!analysis_->estimate) return {true, std::nullopt};
       return {true, target_progress(*analysis_->estimate, target, config_.working_distance)};
     };
+    access.analysis = [this]() -> std::optional<Analysis> {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!analysis_ || analysis_->generation != session_.generation()) return std::nullopt;
+      return analysis_;
+    };
+    access.show_plan = [this](const std::optional<ScoredPose>& view) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      planned_view_ = view;
+      publish_next_pose();
+      publish_status();
+    };
+    motion_ = true;
     mover_ = std::make_unique<ArmMover>(node_, private_node_, std::move(access));
   }
   worker_ = std::thread(&CalibrationNode::work, this);  // last: nothing below may throw
@@ -242,18 +254,25 @@ void CalibrationNode::work() {
   }
 }
 
+std::optional<ScoredPose> CalibrationNode::next_view() const {  // lock held
+  // With the robot moving itself, the next pose is where the arm goes: the mover's plan.
+  if (motion_) return planned_view_;
+  return analysis_ ? analysis_->next_pose : std::nullopt;
+}
+
 void CalibrationNode::publish_next_pose() {  // lock held
   std::optional<Eigen::Isometry3d> pose;
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   std::string label;
   // Drawn only while it is of the current samples, as ~status's has_suggestion.
-  if (analysis_ && analysis_->generation == session_.generation() && analysis_->estimate && analysis_->next_pose) {
-    pose = analysis_->next_pose->T_base_effector;
+  const std::optional<ScoredPose> next = next_view();
+  if (analysis_ && analysis_->generation == session_.generation() && analysis_->estimate && next) {
+    pose = next->T_base_effector;
     X = analysis_->estimate->T_parent_camera;
     // ASCII: rviz's text markers draw no Greek letters or arrows.
     label = "next pose: object " +
             number_text(object_sigma({X, analysis_->estimate->pose_covariance}, config_.working_distance) * 1e3, 3) +
-            " -> " + number_text(analysis_->next_pose->object_sigma * 1e3, 3) + " mm (1 sigma)";
+            " -> " + number_text(next->object_sigma * 1e3, 3) + " mm (1 sigma)";
   }
   next_pose_pub_.publish(next_pose_markers(config_.rig, pose, X, config_.working_distance, label,
                                            config_.rig.frames.base, ros::Time::now()));
@@ -306,11 +325,11 @@ void CalibrationNode::publish_status() {  // lock held
       status.sample_residual_sigma.push_back(fit.sigmas);
     }
   }
-  if (current && analysis_->next_pose) {
+  if (const std::optional<ScoredPose> next = current ? next_view() : std::nullopt) {
     status.has_suggestion = true;
-    status.next_pose = stamped(analysis_->next_pose->T_base_effector, config_.rig.frames.base);
+    status.next_pose = stamped(next->T_base_effector, config_.rig.frames.base);
     status.next_pose.header.stamp = status.header.stamp;
-    status.next_pose_object_error_mm = analysis_->next_pose->object_sigma * 1e3;
+    status.next_pose_object_error_mm = next->object_sigma * 1e3;
   }
   status_pub_.publish(status);
 }

@@ -451,8 +451,9 @@ Analysis CalibrationSession::analyse(const SessionSnapshot& snapshot) const {
     const SuggestOptions options = suggest_options("", a.samples);
     const std::vector<Eigen::Isometry3d> candidates =
         settings_.candidate_poses.empty() ? sample_candidates(kept, *a.estimate, options) : settings_.candidate_poses;
-    const Suggestion s = rank_candidates(kept, *a.estimate, candidates, options);
+    Suggestion s = rank_candidates(kept, *a.estimate, candidates, options);
     if (!s.ranked.empty()) a.next_pose = s.ranked.front();
+    a.ranked = std::move(s.ranked);
   } catch (const HandEyeError& e) {
     a.problem = std::string("no next pose: ") + e.what();
   }

@@ -53,10 +53,12 @@ class AutoCalibration {
 
   /// The next move from `current` joints. Effector poses within the sampler's
   /// minimum step of one in `failed` (moves that gave no detection) are not
-  /// proposed again. Never throws for the session's state: what stops it is in
-  /// NextMove::reason.
+  /// proposed again. With `analysis` of the snapshot's generation (the node's
+  /// worker's), its estimate and ranking are used, not computed again: what the
+  /// node shows and where the arm goes come from one ranking. Never throws for the
+  /// session's state: what stops it is in NextMove::reason.
   NextMove next(const CalibrationSession& session, const SessionSnapshot& snapshot, const Eigen::VectorXd& current,
-                const std::vector<Eigen::Isometry3d>& failed = {}) const;
+                const std::vector<Eigen::Isometry3d>& failed = {}, const Analysis* analysis = nullptr) const;
 
   /// The first moves' candidates for these samples, in order (see above).
   std::vector<motion::ViewCandidate> bootstrap_views(const Rig& rig, const std::vector<PoseSample>& samples) const;

@@ -49,6 +49,10 @@ struct SessionAccess {
   /// Whether the latest analysis is of the current samples, and, when it has an
   /// estimate, its progress against a target object sigma (m; target_progress).
   std::function<std::pair<bool, std::optional<TargetProgress>>(double target)> progress;
+  /// The worker's analysis when it is of the current samples (its ranking is what the mover plans from).
+  std::function<std::optional<Analysis>()> analysis;
+  /// The view the arm is to move to next (none: no plan), for the node's ~status and next-pose markers.
+  std::function<void(const std::optional<ScoredPose>&)> show_plan;
 };
 
 class ArmMover {

@@ -109,6 +109,10 @@ class CalibrationNode {
   bool stopping_ = false;
   CalibrationSession session_;
   std::optional<Analysis> analysis_;  // of the latest generation analysed
+  bool motion_ = false;                      // ~motion/enabled: the next pose is the mover's plan
+  std::optional<ScoredPose> planned_view_;   // the mover's planned view (none: no plan, or a first move)
+  /// The next pose shown (~status, next-pose markers): the mover's plan with motion, else the analysis's best.
+  std::optional<ScoredPose> next_view() const;
   std::uint64_t last_removal_ = 0;    // generation of the last change that was not an appended sample
   struct Calibrated {
     Calibration calibration;

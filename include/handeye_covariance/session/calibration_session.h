@@ -96,6 +96,7 @@ struct Analysis {
   std::optional<Calibration> estimate;  // X with its covariance; `rejected` indexes the samples
   std::vector<SampleFit> fits;          // with an estimate: every sample's residual (outliers.h), rejected ones too
   std::optional<ScoredPose> next_pose;  // the best next pose by the configured criterion
+  std::vector<ScoredPose> ranked;       // every candidate the prediction kept, best first (next_pose is the first)
   std::string problem;                  // why there is no estimate or no next pose; empty otherwise
 };
 
