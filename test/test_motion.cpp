@@ -575,6 +575,7 @@ TEST(SimulatedController, FollowsJointTrajectoryControllersRules) {
     EXPECT_NE(dropped.message.find("Dropping all 1 trajectory point(s)"), std::string::npos) << dropped.message;
     sim.run(duration);
     EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9) << "the running trajectory went on";
+    EXPECT_GT(degrees(largest_joint_change(sim.q(), there)), 20.0) << "docs/motion.md: more than 20 deg further";
     std::printf("[ control  ] one point at 0 sent %.0f%% into the move: dropped, the arm went on %.1f deg\n", 40.0,
                 degrees(largest_joint_change(sim.q(), there)));
   }
