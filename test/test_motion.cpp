@@ -477,67 +477,6 @@ TEST(ViewPlanner, PathCheckMissesNoThinObstacle) {
 
 namespace {
 
-// The simulated arm under joint_trajectory_controller's rules (simulation/trajectory_controller.h),
-// its control loop and joint states at 100 Hz, in simulated time.
-struct SimulatedArm {
-  SimulatedTrajectoryController controller;
-  double now = 1000.0;  // s: far from 0, as ROS time is
-  std::vector<CommandOutcome> outcomes;
-
-  static ControllerOptions options_for(const Arm& arm) {
-    ControllerOptions options;
-    for (const JointLimit& limit : arm.limits()) options.joints.push_back(limit.name);
-    return options;
-  }
-  SimulatedArm(const Arm& arm, const Eigen::VectorXd& q) : SimulatedArm(options_for(arm), q) {}
-  SimulatedArm(const ControllerOptions& options, const Eigen::VectorXd& q) : controller(options, q, 1000.0) {}
-  const CommandOutcome& send(const TrajectoryCommand& command) {
-    outcomes.push_back(controller.command(command, now));
-    return outcomes.back();
-  }
-  void tick() { controller.update(now += 0.01); }
-  void run(double seconds) {
-    for (const double until = now + seconds; now < until - 1e-9;) tick();
-  }
-  const Eigen::VectorXd& q() const { return controller.position(); }
-  bool all_taken_whole() const {
-    return std::all_of(outcomes.begin(), outcomes.end(), [](const CommandOutcome& o) { return o.taken_whole(); });
-  }
-};
-
-// One move as the calibration node makes it (ros/arm_mover.cpp): the command, the
-// monitor on every joint state; on a failure the hold, then the arm watched to rest.
-struct Execution {
-  MoveStatus status = MoveStatus::Moving;
-  std::string reason;
-  double decided = 0.0;       // s after the command: arrived or stopped
-  double travel_after = 0.0;  // rad: the largest joint change from the hold to rest
-};
-
-Execution execute(SimulatedArm& sim, const Arm& arm, const std::vector<TrajectoryPoint>& trajectory,
-                  const MoveLimits& limits = {}, const std::function<void(const MoveMonitor&)>& during = {},
-                  const std::function<bool(double elapsed)>& joint_states_heard = {}) {
-  const double start = sim.now;
-  sim.send(move_command(arm, trajectory));
-  MoveMonitor monitor(trajectory, start, limits);
-  Execution e;
-  while (e.status == MoveStatus::Moving && sim.now - start < 2000.0) {
-    sim.tick();
-    if (!joint_states_heard || joint_states_heard(sim.now - start)) monitor.joint_state(sim.now, sim.q());
-    if (during) during(monitor);
-    e.status = monitor.update(sim.now);
-  }
-  e.decided = sim.now - start;
-  e.reason = monitor.reason();
-  if (e.status != MoveStatus::Arrived) {
-    const Eigen::VectorXd at_stop = sim.q();
-    sim.send(hold_command(arm));
-    sim.run(2.0);
-    e.travel_after = largest_joint_change(sim.q(), at_stop);
-  }
-  return e;
-}
-
 // A move of the simulated arm between two random postures, at `fraction` of the velocity limits.
 std::vector<TrajectoryPoint> random_move(Rng& rng, double fraction, Eigen::VectorXd* from = nullptr) {
   const Arm& arm = arm_rig().arm;
@@ -598,7 +537,7 @@ TEST(SimulatedController, FollowsJointTrajectoryControllersRules) {
   {  // A stamp in the future: the running trajectory (here, the hold) until then.
     SimulatedArm sim(arm, a);
     TrajectoryCommand later = move_command(arm, move);
-    later.stamp = sim.now + 1.0;
+    later.stamp = sim.now() + 1.0;
     EXPECT_TRUE(sim.send(later).taken_whole());
     sim.run(0.98);
     EXPECT_LT(largest_joint_change(sim.q(), a), 1e-12) << "not before its stamp";
@@ -608,12 +547,12 @@ TEST(SimulatedController, FollowsJointTrajectoryControllersRules) {
     EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9);
     // A stamp in the past: the points before now are dropped, the rest run; all of them: ignored.
     TrajectoryCommand past = move_command(arm, timed_move(arm, b, a, timing));
-    past.stamp = sim.now - 0.25;
+    past.stamp = sim.now() - 0.25;
     const CommandOutcome partly = sim.send(past);
     EXPECT_EQ(partly.kind, CommandOutcome::Kind::Accepted);
     EXPECT_GE(partly.points_dropped, 3);
     EXPECT_FALSE(partly.taken_whole());
-    past.stamp = sim.now - 100.0;
+    past.stamp = sim.now() - 100.0;
     EXPECT_EQ(sim.send(past).kind, CommandOutcome::Kind::Dropped);
   }
   {  // Refused: times not increasing, another controller's joints; the joints in any order are taken.
@@ -652,30 +591,30 @@ TEST(SimulatedController, FollowsJointTrajectoryControllersRules) {
   }
   {  // Speed scaling: the trajectory's clock runs at the scale; changed during the move.
     SimulatedArm sim(arm, a);
-    sim.controller.set_speed_scale(0.1);
+    sim.controller().set_speed_scale(0.1);
     sim.send(move_command(arm, move));
     sim.run(9.5 * duration);
     EXPECT_GT(largest_joint_change(sim.q(), b), 1e-4) << "not there at 9.5 times its duration";
     sim.run(0.6 * duration);
     EXPECT_LT(largest_joint_change(sim.q(), b), 1e-9);
-    sim.controller.set_speed_scale(1.0);
+    sim.controller().set_speed_scale(1.0);
     sim.send(move_command(arm, timed_move(arm, b, a, timing)));
     sim.run(0.5 * duration);
-    sim.controller.set_speed_scale(0.2);
+    sim.controller().set_speed_scale(0.2);
     sim.run(0.5 * duration / 0.2 - 1.0);  // 0.2 s of the trajectory left
     EXPECT_GT(largest_joint_change(sim.q(), a), 1e-3);
     sim.run(1.1);
     EXPECT_LT(largest_joint_change(sim.q(), a), 1e-9) << "the second half at a fifth of the speed";
   }
   {  // A controller that was not started refuses everything, the hold too; a protective stop halts the arm.
-    ControllerOptions options = SimulatedArm::options_for(arm);
+    ControllerOptions options = ControllerOptions{};
     options.running = false;
-    SimulatedArm idle(options, a);
+    SimulatedArm idle(arm, a, options);
     EXPECT_EQ(idle.send(move_command(arm, move)).kind, CommandOutcome::Kind::Refused);
     EXPECT_EQ(idle.send(hold_command(arm)).kind, CommandOutcome::Kind::Refused);
     options.running = true;
     options.stop_fraction = 0.5;
-    SimulatedArm stopped(options, a);
+    SimulatedArm stopped(arm, a, options);
     stopped.send(move_command(arm, move));
     stopped.run(duration + 1.0);
     EXPECT_NEAR(largest_joint_change(stopped.q(), a), 0.3, 0.02);
@@ -696,8 +635,8 @@ TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
     const auto trajectory = random_move(rng, k % 2 ? 0.2 : 0.1, &from);
     for (const double scale : {1.0, 0.5, 0.1, 0.05}) {
       SimulatedArm sim(arm, from);
-      sim.controller.set_speed_scale(scale);
-      const Execution e = execute(sim, arm, trajectory);
+      sim.controller().set_speed_scale(scale);
+      const MoveRun e = run_move(sim, arm, trajectory);
       ++moves;
       if (e.status != MoveStatus::Arrived) {
         ++false_failures;
@@ -708,9 +647,9 @@ TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
       slowest = std::max(slowest, e.decided / trajectory.back().time);
     }
     SimulatedArm sim(arm, from);  // 1.0, dropped to 0.2 at half the path
-    const Execution e = execute(sim, arm, trajectory, {}, [&](const MoveMonitor& m) {
-      if (m.covered() > 0.5 * m.path_length()) sim.controller.set_speed_scale(0.2);
-    });
+    const MoveRun e = run_move(sim, arm, trajectory, {}, {[](SimulatedArm& s, const MoveMonitor& m) {
+      if (m.covered() > 0.5 * m.path_length()) s.controller().set_speed_scale(0.2);
+    }});
     ++moves;
     false_failures += e.status != MoveStatus::Arrived;
     EXPECT_EQ(e.status, MoveStatus::Arrived) << e.reason;
@@ -725,16 +664,16 @@ TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
     for (int k = 0; k < 4; ++k) {
       Eigen::VectorXd from;
       const auto trajectory = random_move(rng, 0.2, &from);
-      ControllerOptions options = SimulatedArm::options_for(arm);
+      ControllerOptions options;
       options.stop_fraction = fraction;
-      SimulatedArm sim(options, from);
-      sim.controller.set_speed_scale(0.1);
+      SimulatedArm sim(arm, from, options);
+      sim.controller().set_speed_scale(0.1);
       std::optional<double> stalled_at;  // the first tick the arm did not move
       Eigen::VectorXd last = from;
-      const Execution e = execute(sim, arm, trajectory, {}, [&](const MoveMonitor&) {
-        if (!stalled_at && largest_joint_change(sim.q(), last) == 0.0 && sim.now > 1000.5) stalled_at = sim.now;
-        last = sim.q();
-      });
+      const MoveRun e = run_move(sim, arm, trajectory, {}, {[&](SimulatedArm& s, const MoveMonitor&) {
+        if (!stalled_at && largest_joint_change(s.q(), last) == 0.0 && s.now() > 1000.5) stalled_at = s.now();
+        last = s.q();
+      }});
       if (e.status == MoveStatus::Arrived) continue;  // the stall was within the arrival tolerance of the goal
       EXPECT_EQ(e.status, MoveStatus::Stalled) << e.reason;
       EXPECT_NE(e.reason.find("no progress"), std::string::npos) << e.reason;
@@ -755,10 +694,8 @@ TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
     Rng draw(17);
     Eigen::VectorXd from;
     const auto trajectory = random_move(draw, 0.2, &from);
-    options.joints = SimulatedArm::options_for(arm).joints;
-    SimulatedArm sim(options, from);
-    const Execution e =
-        execute(sim, arm, trajectory, limits, [&](const MoveMonitor& m) { if (during) during(sim, m); }, heard);
+    SimulatedArm sim(arm, from, options);
+    const MoveRun e = run_move(sim, arm, trajectory, limits, {during, heard});
     EXPECT_EQ(e.status, expected) << name << ": " << e.reason;
     EXPECT_LE(degrees(e.travel_after), 0.5) << name;
     std::printf("[ monitor  ] %-20s after %.2f s, travel after the hold %.4f deg: %s\n", name.c_str(), e.decided,
@@ -769,15 +706,15 @@ TEST(MoveMonitor, ArrivesAtAnySpeedScaleAndCatchesEveryFailure) {
   failure("joint states silent", plain, {}, {}, [](double t) { return t < 1.0; }, MoveStatus::JointStatesStalled);
   ControllerOptions not_running = plain;
   not_running.running = false;
-  const Execution refused = failure("controller refuses", not_running, {}, {}, {}, MoveStatus::Stalled);
+  const MoveRun refused = failure("controller refuses", not_running, {}, {}, {}, MoveStatus::Stalled);
   EXPECT_NE(refused.reason.find("did not start"), std::string::npos);
   MoveLimits unscaled;  // a user who says the controller never slows: the deadline is the planned duration + 3 s
   unscaled.min_speed_scale = 1.0;
-  failure("arrival timeout", plain, unscaled, [](SimulatedArm& sim, const MoveMonitor&) { sim.controller.set_speed_scale(0.1); },
+  failure("arrival timeout", plain, unscaled, [](SimulatedArm& sim, const MoveMonitor&) { sim.controller().set_speed_scale(0.1); },
           {}, MoveStatus::TimedOut);
   failure("left the path", plain, {},
           [&](SimulatedArm& sim, const MoveMonitor& m) {  // another node sends the arm elsewhere
-            if (m.covered() > 0.3 * m.path_length() && sim.outcomes.size() == 1) {
+            if (m.covered() > 0.3 * m.path_length() && sim.outcomes().size() == 1) {
               Eigen::VectorXd elsewhere = sim.q();
               elsewhere(1) += 0.5;
               MoveTiming fast;
@@ -844,10 +781,10 @@ AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed
       ++run.moves;
       EXPECT_LT(largest_joint_change(next.plan.goal, next.trajectory.back().position), 1e-12);
       if (sim) {
-        sim->controller.set_speed_scale(controller->speed_scale);
-        const Execution e = execute(*sim, setup.arm, next.trajectory, {}, [&](const MoveMonitor& m) {
-          if (m.covered() > controller->drop_at * m.path_length()) sim->controller.set_speed_scale(controller->dropped_scale);
-        });
+        sim->controller().set_speed_scale(controller->speed_scale);
+        const MoveRun e = run_move(*sim, setup.arm, next.trajectory, {}, {[&](SimulatedArm& s, const MoveMonitor& m) {
+          if (m.covered() > controller->drop_at * m.path_length()) s.controller().set_speed_scale(controller->dropped_scale);
+        }});
         run.commands_whole = run.commands_whole && sim->all_taken_whole();
         if (e.status != MoveStatus::Arrived) {
           run.failure = "seed " + std::to_string(seed) + ", move " + std::to_string(move) + ": " + e.reason;
@@ -855,16 +792,7 @@ AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed
         }
         // The node's sampler takes the sample once the robot has been still for its window.
         const SamplerOptions& still = session.settings().sampler;
-        std::deque<std::pair<double, Eigen::Isometry3d>> window;
-        for (bool settled = false; !settled;) {
-          sim->tick();
-          window.emplace_back(sim->now, setup.arm.forward(sim->q()));
-          while (window.front().first < sim->now - still.still_window) window.pop_front();
-          const Eigen::Isometry3d d = window.front().second.inverse() * window.back().second;
-          settled = sim->now - window.front().first >= still.still_window - 0.011 &&
-                    d.translation().norm() < still.still_translation &&
-                    Eigen::AngleAxisd(d.linear()).angle() < still.still_rotation;
-        }
+        EXPECT_TRUE(sim->wait_still(setup.arm, still.still_window, still.still_translation, still.still_rotation));
         q = sim->q();
       } else {
         q = next.plan.goal;

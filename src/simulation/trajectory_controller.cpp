@@ -3,7 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <deque>
+
+#include <Eigen/Geometry>
+
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/motion/arm.h"
 
 namespace handeye {
 
@@ -157,6 +162,71 @@ void SimulatedTrajectoryController::update(double now) {
     }
   }
   position_ = d.position, velocity_ = d.velocity;
+}
+
+namespace {
+ControllerOptions with_joints(ControllerOptions options, const motion::Arm& arm) {
+  if (options.joints.empty())
+    for (const motion::JointLimit& limit : arm.limits()) options.joints.push_back(limit.name);
+  return options;
+}
+}  // namespace
+
+SimulatedArm::SimulatedArm(const motion::Arm& arm, const Eigen::VectorXd& q, ControllerOptions options, double now,
+                           double period)
+    : controller_(with_joints(std::move(options), arm), q, now), now_(now), period_(period) {}
+
+const CommandOutcome& SimulatedArm::send(const motion::TrajectoryCommand& command) {
+  outcomes_.push_back(controller_.command(command, now_));
+  return outcomes_.back();
+}
+
+void SimulatedArm::tick() { controller_.update(now_ += period_); }
+
+void SimulatedArm::run(double seconds) {
+  for (const double until = now_ + seconds; now_ < until - 1e-9;) tick();
+}
+
+bool SimulatedArm::all_taken_whole() const {
+  return std::all_of(outcomes_.begin(), outcomes_.end(), [](const CommandOutcome& o) { return o.taken_whole(); });
+}
+
+bool SimulatedArm::wait_still(const motion::Arm& arm, double window, double translation, double rotation,
+                              double give_up) {
+  std::deque<std::pair<double, Eigen::Isometry3d>> recent;
+  for (const double until = now_ + give_up; now_ < until;) {
+    tick();
+    recent.emplace_back(now_, arm.forward(q()));
+    while (recent.front().first < now_ - window) recent.pop_front();
+    const Eigen::Isometry3d d = recent.front().second.inverse() * recent.back().second;
+    if (now_ - recent.front().first >= window - 1.1 * period_ && d.translation().norm() < translation &&
+        Eigen::AngleAxisd(d.linear()).angle() < rotation)
+      return true;
+  }
+  return false;
+}
+
+MoveRun run_move(SimulatedArm& sim, const motion::Arm& arm, const std::vector<motion::TrajectoryPoint>& trajectory,
+                 const motion::MoveLimits& limits, const MoveRunHooks& hooks) {
+  const double start = sim.now();
+  sim.send(motion::move_command(arm, trajectory));
+  motion::MoveMonitor monitor(trajectory, start, limits);
+  MoveRun run;
+  while (run.status == motion::MoveStatus::Moving) {
+    sim.tick();
+    if (!hooks.joint_states_heard || hooks.joint_states_heard(sim.now() - start)) monitor.joint_state(sim.now(), sim.q());
+    if (hooks.during) hooks.during(sim, monitor);
+    run.status = monitor.update(sim.now());
+  }
+  run.decided = sim.now() - start;
+  run.reason = monitor.reason();
+  if (run.status != motion::MoveStatus::Arrived) {
+    const Eigen::VectorXd at_stop = sim.q();
+    sim.send(motion::hold_command(arm));
+    sim.run(2.0);
+    run.travel_after = motion::largest_joint_change(sim.q(), at_stop);
+  }
+  return run;
 }
 
 }  // namespace handeye

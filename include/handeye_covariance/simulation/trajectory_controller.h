@@ -20,12 +20,16 @@
 // trajectory's clock advances by speed_scale times each control period.
 // Faults for the tests: the arm stops at a fraction of each move (a protective
 // stop: the controller's trajectory goes on, the arm does not).
-// Times are seconds on the caller's clock (the node's ROS time).
+// Times are seconds on the caller's clock (the node's ROS time). SimulatedArm runs
+// one on a simulated clock, and run_move makes a move through it as the calibration
+// node does (ros/arm_mover.cpp), for the tests and studies without ROS.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/motion/move_monitor.h"
 #include "handeye_covariance/motion/trajectory.h"
 
 namespace handeye {
@@ -79,5 +83,46 @@ class SimulatedTrajectoryController {
   Eigen::VectorXd move_from_, move_goal_;            // the latest move, for stop_fraction
   bool stopped_short_ = false;
 };
+
+/// The controller on a simulated clock, its control loop and joint states every
+/// `period`, with every command's outcome kept.
+class SimulatedArm {
+ public:
+  /// options.joints empty: the arm's joints.
+  SimulatedArm(const motion::Arm& arm, const Eigen::VectorXd& q, ControllerOptions options = {}, double now = 1000.0,
+               double period = 0.01);
+  const CommandOutcome& send(const motion::TrajectoryCommand& command);
+  void tick();
+  void run(double seconds);
+  /// Ticks until the effector has moved less than `translation` (m) and `rotation` (rad) over the
+  /// last `window` s (the sampler's stillness); false if not within `give_up` s.
+  bool wait_still(const motion::Arm& arm, double window, double translation, double rotation, double give_up = 120.0);
+
+  SimulatedTrajectoryController& controller() { return controller_; }
+  const Eigen::VectorXd& q() const { return controller_.position(); }
+  double now() const { return now_; }
+  const std::vector<CommandOutcome>& outcomes() const { return outcomes_; }
+  bool all_taken_whole() const;
+
+ private:
+  SimulatedTrajectoryController controller_;
+  double now_, period_;
+  std::vector<CommandOutcome> outcomes_;
+};
+
+/// One move as the calibration node makes it: the command, the monitor on each joint
+/// state; on a failure the hold (an empty trajectory), then the arm watched to rest.
+struct MoveRun {
+  motion::MoveStatus status = motion::MoveStatus::Moving;
+  std::string reason;
+  double decided = 0.0;       // s after the command: arrived, or stopped
+  double travel_after = 0.0;  // rad: the largest joint change from the hold to rest
+};
+struct MoveRunHooks {
+  std::function<void(SimulatedArm&, const motion::MoveMonitor&)> during;  // after each joint state
+  std::function<bool(double elapsed)> joint_states_heard;                 // none: always
+};
+MoveRun run_move(SimulatedArm& sim, const motion::Arm& arm, const std::vector<motion::TrajectoryPoint>& trajectory,
+                 const motion::MoveLimits& limits = {}, const MoveRunHooks& hooks = {});
 
 }  // namespace handeye
