@@ -7,8 +7,13 @@
 // planner checks. A sample is taken where the board is whole in the image.
 // Seeded; no ROS.
 //
-//   handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated]
+//   handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated] [--controller on]
 // Prints a Markdown table (scripts/bench puts it in BENCHMARKS.md).
+// --controller on: every move through the simulated joint_trajectory_controller
+// (simulation/trajectory_controller.h) and the move monitor, at speed scales from 1
+// to 0.05 and dropped during each move: calibrations completed, false failures, how
+// much longer moves took; then a stall at every part of a move (how soon it is caught
+// after the arm stops) and a controller that refuses every command (how soon that is said).
 // --noise estimated is the node's own configuration in simulated_arm.launch (the rig's
 // detections without a covariance, the robot exact from TF, so the noise is estimated
 // from the residuals): auto alone, and how honest X's covariance is where it stops
@@ -23,12 +28,16 @@
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
+#include "handeye_covariance/simulation/trajectory_controller.h"
 
 namespace {
 
 using namespace handeye;
 
 struct Run {
+  std::string failure;       // --controller: a move that failed
+  std::vector<double> slowdown;  // --controller: each move's time to arrival over its planned duration
+  bool commands_whole = true;    // --controller: every command taken as sent
   int samples = 0;           // taken in all
   int to_target = -1;        // samples when the target was first reached; -1: not reached
   std::vector<double> sigma; // object sigma after each sample (0 before an estimate)
@@ -99,11 +108,19 @@ struct Sim {
   }
 };
 
+// --controller: the speed scale each move starts at, and the one it drops to once half its path is covered.
+struct SpeedProfile {
+  const char* name;
+  double scale = 1.0, dropped = 1.0;
+};
+
 Run run_auto(const ArmRig& rig, const motion::CollisionModel& collision, const Eigen::VectorXd& start, unsigned seed,
-             double target, int max_views) {
+             double target, int max_views, const SpeedProfile* profile = nullptr) {
   Sim sim(rig, collision, seed, target);
   const AutoCalibration automatic(collision, std::nullopt);
   Eigen::VectorXd q = start;
+  std::optional<SimulatedArm> arm;
+  if (profile) arm.emplace(rig.arm, start);
   sim.take(q);
   while (sim.run.to_target < 0 && sim.run.moves < max_views) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -114,10 +131,114 @@ Run run_auto(const ArmRig& rig, const motion::CollisionModel& collision, const E
       break;
     }
     q = move.plan.goal;
+    if (arm) {  // through the controller and the monitor, then the sampler's stillness
+      arm->controller().set_speed_scale(profile->scale);
+      const MoveRun m = run_move(*arm, rig.arm, move.trajectory, {}, {[&](SimulatedArm& a, const motion::MoveMonitor& mon) {
+        if (mon.covered() > 0.5 * mon.path_length()) a.controller().set_speed_scale(profile->dropped);
+      }});
+      sim.run.commands_whole = sim.run.commands_whole && arm->all_taken_whole();
+      if (m.status != motion::MoveStatus::Arrived) {
+        sim.run.failure = m.reason;
+        break;
+      }
+      sim.run.slowdown.push_back(m.decided / move.trajectory.back().time);
+      const SamplerOptions& still = sim.session.settings().sampler;
+      arm->wait_still(rig.arm, still.still_window, still.still_translation, still.still_rotation);
+      q = arm->q();
+    }
     ++sim.run.moves;
     sim.take(q);
   }
   return sim.run;
+}
+
+// A straight move between two random postures of the arm, at `fraction` of its velocity limits.
+std::vector<motion::TrajectoryPoint> random_move(const motion::Arm& arm, Rng& rng, double fraction) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Eigen::VectorXd a(arm.joints()), b(arm.joints());
+  for (int j = 0; j < arm.joints(); ++j) {
+    const motion::JointLimit& l = arm.limits()[j];
+    a(j) = l.lower + 0.5 + unit(rng) * (l.upper - l.lower - 1.0);
+    b(j) = a(j) + 0.8 * (2.0 * unit(rng) - 1.0);
+  }
+  motion::MoveTiming timing;
+  timing.speed_fraction = fraction;
+  return motion::timed_move(arm, a, b, timing);
+}
+
+double median_of_counts(std::vector<double> v);
+
+int controller_study(const ArmRig& rig, const motion::CollisionModel& collision, int seeds, double target,
+                     int max_views) {
+  std::printf("| speed scale | calibrations completed | moves | false failures | reached %.2g mm | median samples | "
+              "move time over planned: median, max | commands not taken as sent |\n",
+              target * 1e3);
+  std::printf("|---|---:|---:|---:|---:|---:|---|---:|\n");
+  for (const SpeedProfile& profile : {SpeedProfile{"1", 1.0, 1.0}, SpeedProfile{"0.5", 0.5, 0.5},
+                                      SpeedProfile{"0.1", 0.1, 0.1}, SpeedProfile{"0.05", 0.05, 0.05},
+                                      SpeedProfile{"1, 0.2 from half way", 1.0, 0.2},
+                                      SpeedProfile{"0.1, 1 from half way", 0.1, 1.0}}) {
+    int runs = 0, completed = 0, reached = 0, moves = 0, not_whole = 0;
+    std::vector<double> samples, slowdown;
+    std::string first_failure;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      Rng rng(seed);
+      const auto start = rig.random_start(rng, collision, motion::PlannerOptions{});
+      if (!start) continue;
+      ++runs;
+      const Run r = run_auto(rig, collision, *start, 1000 + seed, target, max_views, &profile);
+      completed += r.failure.empty();
+      if (first_failure.empty()) first_failure = r.failure;
+      reached += r.to_target > 0;
+      moves += r.moves;
+      not_whole += !r.commands_whole;
+      if (r.to_target > 0) samples.push_back(r.to_target);
+      slowdown.insert(slowdown.end(), r.slowdown.begin(), r.slowdown.end());
+    }
+    std::printf("| %s | %d of %d | %d | %d | %d | %.0f | %.1f, %.1f | %d |\n", profile.name, completed, runs, moves,
+                runs - completed, reached, median_of_counts(samples), median_of_counts(slowdown),
+                slowdown.empty() ? 0.0 : *std::max_element(slowdown.begin(), slowdown.end()), not_whole);
+    if (!first_failure.empty()) std::printf("\nfirst failure at speed scale %s: %s\n\n", profile.name, first_failure.c_str());
+  }
+  // A protective stop at a fraction of a move's path: how soon after the arm stops the node says so.
+  std::printf("\n| speed scale | the arm stops at | stalls | caught after the stop: median, 95%%, max [s] |\n");
+  std::printf("|---:|---:|---:|---|\n");
+  Rng rng(7);
+  for (const double scale : {1.0, 0.1}) {
+    for (const double fraction : {0.05, 0.25, 0.5, 0.75, 0.95}) {
+      std::vector<double> caught;
+      for (int k = 0; k < 40; ++k) {
+        const auto trajectory = random_move(rig.arm, rng, k % 2 ? 0.1 : 0.2);
+        ControllerOptions options;
+        options.stop_fraction = fraction;
+        SimulatedArm arm(rig.arm, trajectory.front().position, options);
+        arm.controller().set_speed_scale(scale);
+        double stopped = 0.0;
+        Eigen::VectorXd last = arm.q();
+        const MoveRun m = run_move(arm, rig.arm, trajectory, {}, {[&](SimulatedArm& a, const motion::MoveMonitor&) {
+          if (stopped == 0.0 && motion::largest_joint_change(a.q(), last) == 0.0 && a.now() > 1000.05) stopped = a.now();
+          last = a.q();
+        }});
+        if (m.status == motion::MoveStatus::Stalled && stopped > 0.0) caught.push_back(1000.0 + m.decided - stopped);
+      }
+      std::printf("| %.2g | %.0f%% | %zu | %.2f, %.2f, %.2f |\n", scale, 100.0 * fraction, caught.size(),
+                  linear_quantile(caught, 0.5), linear_quantile(caught, 0.95),
+                  caught.empty() ? 0.0 : *std::max_element(caught.begin(), caught.end()));
+    }
+  }
+  // A controller that was not started: every command refused, the arm never moves.
+  std::vector<double> said;
+  for (int k = 0; k < 200; ++k) {
+    const auto trajectory = random_move(rig.arm, rng, k % 2 ? 0.1 : 0.2);
+    ControllerOptions options;
+    options.running = false;
+    SimulatedArm arm(rig.arm, trajectory.front().position, options);
+    said.push_back(run_move(arm, rig.arm, trajectory).decided);
+  }
+  std::printf("\na controller that refuses every command, 200 random moves: \"did not start\" after median %.2f s, "
+              "at most %.2f s\n",
+              linear_quantile(said, 0.5), *std::max_element(said.begin(), said.end()));
+  return 0;
 }
 
 // easy_handeye's CalibrationMovements._compute_poses_around_state, in its order.
@@ -205,11 +326,15 @@ double median_of_counts(std::vector<double> v) {  // of an even count, the mean 
 int main(int argc, char** argv) {
   int seeds = 20, max_views = 40;
   double target_mm = 1.0;
-  const char* usage = "usage: handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated]\n";
+  bool controller = false;
+  const char* usage =
+      "usage: handeye_auto_study [--seeds 20] [--target-mm 1.0] [--max-views 40] [--noise stated|estimated] "
+      "[--controller on]\n";
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seeds")) seeds = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--target-mm")) target_mm = std::atof(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--max-views")) max_views = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--controller") && !std::strcmp(argv[i + 1], "on")) controller = true;
     else if (!std::strcmp(argv[i], "--noise") && (!std::strcmp(argv[i + 1], "stated") || !std::strcmp(argv[i + 1], "estimated")))
       estimated_noise = !std::strcmp(argv[i + 1], "estimated");
     else {
@@ -225,6 +350,7 @@ int main(int argc, char** argv) {
   const motion::CollisionModel collision(rig.arm, motion::table_plane());
   const double target = target_mm * 1e-3;
   if (estimated_noise) return estimated_noise_study(rig, collision, seeds, target, max_views);
+  if (controller) return controller_study(rig, collision, seeds, target, max_views);
   std::printf("| seed | auto: samples to %.2g mm | star: samples to %.2g mm | star: samples taken: sigma [mm] | "
               "auto: samples to the star's sigma | auto: NEES of X | moves without a detection (auto / star) |\n",
               target_mm, target_mm);

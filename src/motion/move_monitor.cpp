@@ -92,9 +92,12 @@ double MoveMonitor::deadline() const {
 }
 
 double MoveMonitor::stall_window() const {
+  // Twice the time the trajectory takes, at min_speed_scale, to the next step from the latest
+  // progress, less start_step: a previous move's last creep may have put the arm that far ahead.
   const double step = started_ ? limits_.progress_step : limits_.start_step;
-  const double next = std::min(mark_arc_ + 2.0 * step, arc_.back());
-  return std::max(limits_.stall_time, (planned_time(next) - planned_time(mark_arc_)) / limits_.min_speed_scale);
+  const double next = std::min(mark_arc_ + step, arc_.back());
+  const double from = std::max(0.0, mark_arc_ - limits_.start_step);
+  return std::max(limits_.stall_time, 2.0 * (planned_time(next) - planned_time(from)) / limits_.min_speed_scale);
 }
 
 void MoveMonitor::joint_state(double t, const Eigen::VectorXd& q) {
@@ -156,7 +159,7 @@ MoveStatus MoveMonitor::update(double now) {
       return stop(MoveStatus::Stalled,
                   "did not arrive: the arm did not start along the planned path within " + number_text(now - start_time_, 3) +
                       " s (it moved less than " + deg(limits_.start_step, 2) +
-                      ", which the trajectory covers in that time at " + scale +
+                      ", which the trajectory covers in half that time at " + scale +
                       "): is the controller running, and does it take this command?");
     return stop(MoveStatus::Stalled, "did not arrive: no progress along the planned path for " +
                                          number_text(now - mark_time_, 3) + " s (less than " +

@@ -6,10 +6,11 @@
 // goal) and stops the move when
 //   - joint states stop coming (joint_states_timeout);
 //   - the distance left stops shrinking: less than progress_step in stall_time,
-//     or, near the move's ends where the planned speed is near zero, in the time
-//     the trajectory itself takes to cover 2 progress_step at min_speed_scale
-//     (at the start, start_step: the controller may still be finishing the
-//     previous move, whose last creep is not this move's progress);
+//     or, near the move's ends where the planned speed is near zero, in twice
+//     the time the trajectory itself takes at min_speed_scale to the next step
+//     (the first one start_step) from start_step behind the latest progress: the
+//     controller may still be finishing the previous move, whose last creep is
+//     not this move's progress;
 //   - the arm leaves the planned path by more than path_tolerance;
 //   - it has not arrived by the trajectory's duration at min_speed_scale plus
 //     arrival_allowance (a last bound).
