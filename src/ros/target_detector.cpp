@@ -16,7 +16,9 @@ TargetDetectorNode::TargetDetectorNode(ros::NodeHandle node, ros::NodeHandle pn)
       publish_tf_(param(pn, "publish_tf", false)),
       image_is_rectified_(param(pn, "image_is_rectified", false)),
       transport_(node),
-      pixel_noise_(param(pn, "pixel_sigma_floor", 0.05), static_cast<std::size_t>(param(pn, "noise_window", 200))) {
+      // The floor and window of `handeye images` and the library (PixelNoise's defaults).
+      pixel_noise_(param(pn, "pixel_sigma_floor", PixelNoise{}.floor()),
+                   static_cast<std::size_t>(param(pn, "noise_window", 200))) {
   options_.apriltag.quad_decimate = param(pn, "quad_decimate", 0.0);  // 0: by the image width (tag_detector.h)
   options_.apriltag.threads = param(pn, "threads", 2);
   options_.apriltag.max_hamming = param(pn, "max_hamming", 0);

@@ -35,7 +35,8 @@ ArmRig ArmRig::load(const std::string& urdf_path) {
 }
 
 motion::ViewCandidate ArmRig::random_candidate(Rng& rng) const {
-  const Eigen::Isometry3d view = random_view(rng, views);
+  // random_view looks at a frame whose z faces the camera: the target's face (T_camera_face).
+  const Eigen::Isometry3d view = random_view(rng, views) * rig.T_pattern_face.inverse();
   return {rig.effector_for_view(X, Y, view), view};
 }
 

@@ -103,6 +103,14 @@ PatternRenderer::PatternRenderer(const Target& target, const CameraModel& camera
     cv::Mat gray;
     plane.texture.convertTo(gray, CV_32F, (options_.white - options_.black) / 255.0, options_.black);
     plane.texture = gray;
+    std::vector<cv::Mat> pyramid;
+    for (cv::Mat level = gray; level.cols > 1 || level.rows > 1;) {
+      cv::Mat half;  // each texel the mean of the finer texels it covers (a side of odd length: area weights)
+      cv::resize(level, half, cv::Size((level.cols + 1) / 2, (level.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+      pyramid.push_back(half);
+      level = half;
+    }
+    pyramids_.push_back(std::move(pyramid));
     planes_.push_back(std::move(plane));
   }
   board_corners_ = std::move(drawn.board_corners);
@@ -215,17 +223,46 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
       drawn |= cv::Rect(fixed.x / 16 - 2, fixed.y / 16 - 2, fixed.width / 16 + 5, fixed.height / 16 + 5);
     }
   }
-  for (const PrintedPlane& plane : planes_) {
+  for (std::size_t p = 0; p < planes_.size(); ++p) {
+    const PrintedPlane& plane = planes_[p];
     const Isometry3d T_camera_plane = T_camera_pattern * plane.T_pattern_plane;
-    const double W = plane.texture.cols, H_texels = plane.texture.rows;
-    // Texel (u, v) (row down) -> plane (x right, y up): centre texels at +-(W-1)/2.
-    Matrix3d M;
-    M << plane.width / W, 0, -0.5 * plane.width * (W - 1) / W, 0, -plane.height / H_texels,
-        0.5 * plane.height * (H_texels - 1) / H_texels, 0, 0, 1;
     Matrix3d on_plane;  // [r1 r2 t]: plane -> camera
     on_plane.col(0) = T_camera_plane.linear().col(0);
     on_plane.col(1) = T_camera_plane.linear().col(1);
     on_plane.col(2) = T_camera_plane.translation();
+    // Texel (u, v) (row down) -> plane (x right, y up): centre texels at +-(W-1)/2.
+    const auto texel_to_plane = [&plane](const cv::Mat& texture) {
+      const double W = texture.cols, H_texels = texture.rows;
+      Matrix3d M;
+      M << plane.width / W, 0, -0.5 * plane.width * (W - 1) / W, 0, -plane.height / H_texels,
+          0.5 * plane.height * (H_texels - 1) / H_texels, 0, 0, 1;
+      return M;
+    };
+    // warpPerspective samples the texture at each canvas pixel's centre (bilinearly): texels
+    // smaller than the canvas's pixels are skipped, and a square's edge lands by the phase of
+    // the two grids (on the simulated arm's pixel-aligned views, 96 texels a 20 mm square at
+    // 0.5 m, 0.75 canvas px a texel: every corner of a view off by the same 0.02 px). The
+    // texture is taken from the finest level whose texels span a canvas pixel or more, where
+    // they are smallest on the plane (its corners; a homography's scale changes monotonically).
+    const cv::Mat* texture = &plane.texture;
+    for (std::size_t level = 0;; ++level) {
+      const double W = texture->cols, H_texels = texture->rows;
+      const Matrix3d H = KS * on_plane * texel_to_plane(*texture);
+      double smallest = INFINITY;  // canvas px a texel spans, least over the plane's corners and directions
+      for (const auto& texel : {Eigen::Vector2d(-0.5, -0.5), Eigen::Vector2d(W - 0.5, -0.5),
+                                Eigen::Vector2d(W - 0.5, H_texels - 0.5), Eigen::Vector2d(-0.5, H_texels - 0.5)}) {
+        const Vector3d h = H * Vector3d(texel.x(), texel.y(), 1.0);
+        if (!(h.z() > 0.0)) continue;
+        Eigen::Matrix2d J;  // d canvas / d texel
+        J.col(0) = (H.block<2, 1>(0, 0) - h.head<2>() / h.z() * H(2, 0)) / h.z();
+        J.col(1) = (H.block<2, 1>(0, 1) - h.head<2>() / h.z() * H(2, 1)) / h.z();
+        smallest = std::min(smallest, Eigen::JacobiSVD<Eigen::Matrix2d>(J).singularValues()(1));
+      }
+      if (!(smallest < 1.0) || level >= pyramids_[p].size()) break;
+      texture = &pyramids_[p][level];
+    }
+    const double W = texture->cols, H_texels = texture->rows;
+    const Matrix3d M = texel_to_plane(*texture);
     const Matrix3d H = KS * on_plane * M;
     std::vector<cv::Point2f> outline;
     bool visible = true;
@@ -245,7 +282,7 @@ cv::Mat PatternRenderer::render(const Isometry3d& T_camera_pattern, Rng& rng) co
     shift(0, 2) = -roi.x;
     shift(1, 2) = -roi.y;
     cv::Mat target = canvas(roi);
-    cv::warpPerspective(plane.texture, target, to_cv(shift * H), target.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+    cv::warpPerspective(*texture, target, to_cv(shift * H), target.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
     drawn |= roi;
   }
   cv::Rect changed = drawn;  // the canvas differs from the background only here

@@ -24,7 +24,9 @@ struct ArmRig {
   /// Reads the URDF (urdf/sim_arm.urdf of the package) from `urdf_path`.
   static ArmRig load(const std::string& urdf_path);
 
-  /// A random view of the board and the effector pose that shows it.
+  /// A random view of the board's face (rig.T_pattern_face: the pattern frame's own for
+  /// the default board, a target's printed face once set_target gave it one) and the
+  /// effector pose that shows it.
   motion::ViewCandidate random_candidate(Rng& rng) const;
   /// A start: the joints of a random view with the board whole in the image
   /// (motion::view_problem, no camera model), reachable within the limits less

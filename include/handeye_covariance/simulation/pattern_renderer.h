@@ -1,7 +1,10 @@
 // Images of a calibration target seen by a camera at a known pose, for the tests
 // and the simulated rig: the target's printed planes (libapriltag's tag bitmaps,
 // OpenCV's ArUco markers and ChArUco board, a drawn chessboard) warped by OpenCV
-// onto a supersampled ideal (pinhole) image, blurred, distorted with the camera's
+// onto a supersampled ideal (pinhole) image, from the finest level of each plane's
+// texture pyramid whose texels are no smaller than the ideal image's samples
+// (mip-mapping: warpPerspective samples the texture at points, so finer texels
+// alias), blurred, distorted with the camera's
 // distortion model at the supersampled resolution, area-averaged to the sensor's
 // pixels (as a sensor integrates light over each pixel), and given Gaussian
 // pixel noise. No ROS.
@@ -83,6 +86,9 @@ class PatternRenderer {
   CameraModel camera_;
   RenderOptions options_;
   std::vector<PrintedPlane> planes_;  // texture CV_32F, gray levels
+  /// Per plane, its texture halved by area averaging, level by level (the first level is
+  /// planes_[i].texture's half), down to a texel per side.
+  std::vector<std::vector<cv::Mat>> pyramids_;
   std::vector<Eigen::Vector3d> board_corners_;  // pattern frame; empty without a white board behind
   cv::Mat map_x_, map_y_;  // supersampled distorted pixel -> supersampled ideal canvas pixel (margin included)
   struct MapTile {
