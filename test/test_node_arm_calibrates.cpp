@@ -137,7 +137,7 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
                 arm.outcomes().size());
   };
 
-  if (test_case == "auto") {
+  if (test_case == "auto" || test_case == "images") {
     ASSERT_TRUE(wait_for([&] { return starts(last_motion(w), "done:") || starts(last_motion(w), "failed:"); }, 150.0))
         << last_motion(w);
     std::printf("[ arm      ] %s\n", last_motion(w).c_str());
@@ -160,7 +160,8 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     EXPECT_LE(w.status->samples, 10);
     // The rule that guards this draw is target_progress's (test_motion's Monte-Carlo is its test):
     // the rig's noise is estimated here, so the target counts from 7 samples of the estimate.
-    EXPECT_GE(w.status->estimate_samples, kTargetMinimumSamplesEstimatedNoise);
+    // From images each detection carries target_detector's covariance: no noise to estimate.
+    if (test_case == "auto") EXPECT_GE(w.status->estimate_samples, kTargetMinimumSamplesEstimatedNoise);
     // X against the truth, under its covariance: one draw. The noise is estimated from the
     // residuals of about 7 samples, so the NEES has an F-like tail, not chi2(6)'s: in the
     // node's configuration on this arm (`handeye_auto_study --seeds 10000 --noise estimated`,
@@ -170,7 +171,9 @@ TEST(ArmCalibrates, ByItselfOrStopsAndSaysWhy) {
     const double nees = e.dot(X.covariance.ldlt().solve(e));
     std::printf("[ arm      ] %d samples, object sigma %.3f mm, NEES of X %.2f\n", w.status->samples,
                 w.status->object_error_mm, nees);
-    EXPECT_LT(nees, 32.5);
+    // Images: the detections' stated covariance, so chi2(6)'s 99.9% point (test_arm_images holds the mean
+    // over 40 runs of this path without ROS to its band).
+    EXPECT_LT(nees, test_case == "images" ? 22.46 : 32.5);
     return;
   }
 
