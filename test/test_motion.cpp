@@ -739,6 +739,7 @@ struct AutoRun {
   int moves = 0;
   bool commands_whole = true;  // every command taken as sent by the simulated controller
   std::string failure;  // no start pose, no move found, or a move that failed: why
+  bool move_failed = false;  // the last: a move through the controller did not arrive
 };
 
 // Each move through the simulated controller and the move monitor, at a speed scale
@@ -750,6 +751,7 @@ struct ThroughController {
 };
 
 // `stated`: the session is told the drawn noise; else it estimates it from the residuals.
+// Every test moves through the simulated controller (no `controller`: the arm at the goal at once).
 AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed, const MeasurementNoise& noise,
                  bool stated, const std::optional<ThroughController>& controller = std::nullopt, int max_moves = 15) {
   Rng rng(seed);
@@ -788,6 +790,7 @@ AutoRun auto_run(const ArmRig& setup, const CollisionModel& model, unsigned seed
         run.commands_whole = run.commands_whole && sim->all_taken_whole();
         if (e.status != MoveStatus::Arrived) {
           run.failure = "seed " + std::to_string(seed) + ", move " + std::to_string(move) + ": " + e.reason;
+          run.move_failed = true;
           return run;
         }
         // The node's sampler takes the sample once the robot has been still for its window.
@@ -839,8 +842,9 @@ TEST(AutoCalibration, ReachesOneMillimetreFromOneStartWithTheBoardInView) {
   double nees = 0.0;
   std::vector<int> samples_needed;
   for (unsigned seed = 1; seed <= 8; ++seed) {
-    const AutoRun run = auto_run(setup, model, seed, noise, true);
+    const AutoRun run = auto_run(setup, model, seed, noise, true, ThroughController{});
     ASSERT_EQ(run.failure, "");
+    EXPECT_TRUE(run.commands_whole);
     ++runs;
     first_moves += run.first_moves, first_moves_lost += run.first_moves_lost;
     if (!run.reached) continue;
@@ -872,7 +876,9 @@ TEST(AutoCalibration, WithTheNoiseEstimatedStopsWhereTheCovarianceIsHonest) {
   std::vector<double> nees;
   int runs = 0;
   for (unsigned seed = 1; seed <= 200; ++seed, ++runs) {
-    const AutoRun run = auto_run(setup, model, 1000 + seed, camera_noise(), false);
+    const AutoRun run = auto_run(setup, model, 1000 + seed, camera_noise(), false, ThroughController{});
+    EXPECT_FALSE(run.move_failed) << run.failure;  // (a start with no first move the planner passes is not one)
+    EXPECT_TRUE(run.commands_whole);
     if (!run.reached) continue;
     by_count[run.samples].push_back(run.nees);
     nees.push_back(run.nees);
