@@ -291,9 +291,12 @@ TEST(RvizPanel, MovesTheArmStopsItAndCalibratesByItself) {
   pump_until([&] { return arm.still_for(0.5); }, 5.0);
   const std::optional<double> travel = arm.travel_after(pressed, 0.0);
   ASSERT_TRUE(travel) << "the arm did not come to rest";
-  std::printf("[rviz panel] Stop half way through a %.2f s move: joint travel after it %.3f deg\n", duration,
-              degrees(*travel));
+  const std::optional<Eigen::VectorXd> before = arm.at(pressed - 0.05), then = arm.at(pressed);
+  const double speed = before && then ? (*then - *before).cwiseAbs().maxCoeff() / 0.05 : 0.0;
+  std::printf("[rviz panel] Stop half way through a %.2f s move, the fastest joint at %.1f deg/s: joint travel after it "
+              "%.3f deg\n", duration, degrees(speed), degrees(*travel));
   EXPECT_LE(degrees(*travel), 0.5);
+  EXPECT_GT(degrees(speed), 5.0) << "Stop came while the arm moved";
   // Nothing is commanded after Stop (the sampler may take a sample where the arm stands).
   const std::size_t commands_after_stop = arm.commands();
   pump_until([] { return false; }, 3.0);

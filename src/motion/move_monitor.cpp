@@ -36,10 +36,13 @@ void check_limits(const MoveLimits& limits) {
     throw HandEyeError(ErrorCode::MalformedFile,
                        "a move limit out of range (min speed scale " + number_text(limits.min_speed_scale) +
                            ", stall time " + number_text(limits.stall_time) + " s, progress step " +
-                           number_text(limits.progress_step) + " rad, path tolerance " +
-                           number_text(limits.path_tolerance) + " rad, arrival allowance " +
-                           number_text(limits.arrival_allowance) + " s)",
-                       "~motion/min_speed_scale, stall_time, progress_step_deg, path_tolerance_deg, arrival_timeout",
+                           number_text(degrees(limits.progress_step)) + " deg (at most the start step, " +
+                           number_text(degrees(limits.start_step)) + " deg), path tolerance " +
+                           number_text(degrees(limits.path_tolerance)) + " deg, arrival timeout " +
+                           number_text(limits.arrival_allowance) + " s, joint states timeout " +
+                           number_text(limits.joint_states_timeout) + " s)",
+                       "~motion/min_speed_scale, stall_time, progress_step_deg, path_tolerance_deg, arrival_timeout, "
+                       "joint_states_timeout",
                        "give a min speed scale in (0, 1] and positive times and angles");
 }
 
@@ -101,7 +104,7 @@ double MoveMonitor::stall_window() const {
 }
 
 void MoveMonitor::joint_state(double t, const Eigen::VectorXd& q) {
-  if (q.size() != position_.size()) return;  // another chain's message: not ours
+  if (q.size() != position_.size() || !q.allFinite()) return;  // another chain's message, or no joint state
   position_ = q;
   const std::optional<double> previous = last_state_;
   last_state_ = t;
@@ -129,7 +132,6 @@ MoveStatus MoveMonitor::update(double now) {
   if (status_ != MoveStatus::Moving) return status_;
   const Eigen::VectorXd& goal = trajectory_.back().position;
   const double off = (position_ - goal).cwiseAbs().maxCoeff();
-  const double left = arc_.back() - covered_;
   auto stop = [&](MoveStatus status, const std::string& why) {
     status_ = status;
     reason_ = why;
@@ -149,28 +151,31 @@ MoveStatus MoveMonitor::update(double now) {
     }
   }
   if (off_path_ > limits_.path_tolerance)
-    return stop(MoveStatus::LeftPath, "the arm left the planned path: it is " + deg(off_path_) + " from it (more than " +
+    return stop(MoveStatus::LeftPath, "the arm left the planned path: it is " + deg(off_path_) + " (joint space) from it (more than " +
                                           deg(limits_.path_tolerance) +
                                           "): another command or controller is moving it");
   const double window = stall_window();
   if (now - mark_time_ > window) {
     const std::string scale = number_text(100.0 * limits_.min_speed_scale, 3) + "% speed";
-    if (!started_)
+    if (!started_) {
+      const double covers = (planned_time(std::min(mark_arc_ + limits_.start_step, arc_.back())) - planned_time(mark_arc_)) /
+                            limits_.min_speed_scale;
       return stop(MoveStatus::Stalled,
                   "did not arrive: the arm did not start along the planned path within " + number_text(now - start_time_, 3) +
-                      " s (it moved less than " + deg(limits_.start_step, 2) +
-                      ", which the trajectory covers in half that time at " + scale +
+                      " s (it moved less than " + deg(limits_.start_step, 2) + "; the trajectory covers that in " +
+                      number_text(covers, 2) + " s at " + scale +
                       "): is the controller running, and does it take this command?");
+    }
     return stop(MoveStatus::Stalled, "did not arrive: no progress along the planned path for " +
                                          number_text(now - mark_time_, 3) + " s (less than " +
-                                         deg(limits_.progress_step, 2) + "), " + deg(left) +
-                                         " short of the goal: the arm stopped or was stopped (a protective stop, "
+                                         deg(limits_.progress_step, 2) + "), a joint still " + deg(off) +
+                                         " from the goal: the arm stopped or was stopped (a protective stop, "
                                          "an obstacle, the speed slider at 0)");
   }
   if (now > deadline())
     return stop(MoveStatus::TimedOut, "did not arrive within " + number_text(deadline() - start_time_, 3) +
-                                          " s (the trajectory's " +
-                                          number_text(trajectory_.back().time - trajectory_.front().time, 3) + " s at " +
+                                          " s (its planned " +
+                                          number_text(trajectory_.back().time - trajectory_.front().time, 3) + " s run at " +
                                           number_text(100.0 * limits_.min_speed_scale, 3) + "% speed, + " +
                                           number_text(limits_.arrival_allowance, 3) + " s): a joint is still " +
                                           deg(off) + " from the goal (tolerance " + deg(limits_.arrival_tolerance) + ")");

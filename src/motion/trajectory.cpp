@@ -14,16 +14,20 @@ double MoveTiming::acceleration(int j) const {
   return max_acceleration;
 }
 
-std::vector<TrajectoryPoint> timed_move(const Arm& arm, const Eigen::VectorXd& from, const Eigen::VectorXd& to,
-                                        const MoveTiming& timing) {
+void check_timing(const MoveTiming& timing) {
   if (!(timing.speed_fraction > 0.0 && timing.speed_fraction <= 1.0))
     throw HandEyeError(ErrorCode::MalformedFile, "the speed fraction " + number_text(timing.speed_fraction) + " is not in (0, 1]",
-                       "timed_move", "give a fraction of the URDF's velocity limits, e.g. 0.1");
+                       "~motion/speed_fraction", "give a fraction of the URDF's velocity limits, e.g. 0.1");
   if (!(timing.max_acceleration > 0.0) || !(timing.dt > 0.0))
     throw HandEyeError(ErrorCode::MalformedFile,
                        "the acceleration bound " + number_text(timing.max_acceleration) + " rad/s^2 or the step " +
                            number_text(timing.dt) + " s is not positive",
-                       "timed_move", "give a positive acceleration bound (~motion/max_acceleration_deg) and step");
+                       "~motion/max_acceleration_deg", "give a positive acceleration bound, e.g. 86 deg/s^2");
+}
+
+std::vector<TrajectoryPoint> timed_move(const Arm& arm, const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                                        const MoveTiming& timing) {
+  check_timing(timing);
   // s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5: ds/dtau peaks at 15/8 (tau = 1/2),
   // d2s/dtau2 at 10/sqrt(3) (tau = (3 - sqrt(3))/6).
   const double peak_speed = 1.875, peak_acceleration = 10.0 / std::sqrt(3.0);
@@ -33,10 +37,13 @@ std::vector<TrajectoryPoint> timed_move(const Arm& arm, const Eigen::VectorXd& f
     duration = std::max(duration, peak_speed * travel / (timing.speed_fraction * arm.limits()[j].velocity));
     duration = std::max(duration, std::sqrt(peak_acceleration * travel / timing.acceleration(j)));
   }
-  const int steps = std::max(1, static_cast<int>(std::ceil(duration / timing.dt - 1e-9)));
+  // Points every dt, the last at the duration: one closer than 1 ms to it is left out (a
+  // controller refuses times that are not strictly increasing, once rounded to ros::Duration).
+  int steps = std::max(1, static_cast<int>(std::ceil(duration / timing.dt - 1e-9)));
+  if (steps > 1 && duration - (steps - 1) * timing.dt < 1e-3) --steps;
   std::vector<TrajectoryPoint> points;
   for (int k = 0; k <= steps; ++k) {
-    const double t = std::min(k * timing.dt, duration), tau = t / duration;
+    const double t = k == steps ? duration : k * timing.dt, tau = t / duration;
     const double s = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
     const double ds = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / duration;
     const double dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / (duration * duration);

@@ -60,8 +60,9 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   limits_.min_speed_scale = param(pn, "motion/min_speed_scale", limits_.min_speed_scale);
   limits_.path_tolerance = deg(pn, "motion/path_tolerance_deg", degrees(limits_.path_tolerance));
   limits_.progress_step = deg(pn, "motion/progress_step_deg", degrees(limits_.progress_step));
-  motion::check_limits(limits_);
   limits_.joint_states_timeout = param(pn, "motion/joint_states_timeout", limits_.joint_states_timeout);
+  motion::check_limits(limits_);
+  motion::check_timing(options.timing);
   sample_timeout_ = param(pn, "motion/sample_timeout", access_.session->settings().sampler.still_window + 3.0);
   max_views_ = param(pn, "motion/max_views", max_views_);
   auto_start_ = param(pn, "motion/auto_start", false);
@@ -73,6 +74,9 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   auto_start_ = auto_start_ || mode == "auto";
   target_object_sigma_ = access_.session->settings().target_object_sigma;
 
+  // Stop, the action and joint states on their own queue and thread: the node's slow services
+  // (suggest_pose, check_calibration) on its two threads cannot delay them.
+  node.setCallbackQueue(&queue_);
   command_pub_ = node.advertise<trajectory_msgs::JointTrajectory>(
       param<std::string>(pn, "motion/controller_topic", "/arm_controller/command"), 1);
   status_pub_ = pn.advertise<std_msgs::String>("motion_status", 10, true);
@@ -90,11 +94,14 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
   action_->start();
   status("idle", "the arm " + rig.frames.base + " -> " + rig.frames.effector + " (" + std::to_string(arm_->joints()) +
                      " joints), " + std::to_string(collision_->obstacles().size()) + " obstacle(s)");
+  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
+  spinner_->start();
   thread_ = std::thread(&ArmMover::run, this);
 }
 
 ArmMover::~ArmMover() {
   if (ros::ok()) stop_for_shutdown();
+  if (spinner_) spinner_->stop();
   if (action_) action_->shutdown();
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -112,9 +119,11 @@ void ArmMover::on_joint_states(const sensor_msgs::JointStateConstPtr& msg) {
     if (at == msg->name.end() || static_cast<std::size_t>(at - msg->name.begin()) >= msg->position.size()) return;
     q(j) = msg->position[at - msg->name.begin()];
   }
+  if (!q.allFinite()) return;  // a driver's NaN is no joint state
   std::lock_guard<std::mutex> lock(mutex_);
   joints_ = q;
-  joints_stamp_ = msg->header.stamp.isZero() ? ros::Time::now().toSec() : msg->header.stamp.toSec();
+  // When it came, on this node's clock (the monitor's timeouts): a driver's stamps may be on another host's.
+  joints_stamp_ = ros::Time::now().toSec();
 }
 
 std::optional<Eigen::VectorXd> ArmMover::joints() const {
@@ -123,9 +132,10 @@ std::optional<Eigen::VectorXd> ArmMover::joints() const {
   return joints_;
 }
 
-void ArmMover::status(const std::string& state, const std::string& text) {
+void ArmMover::status(const std::string& state, const std::string& text, std::optional<std::uint64_t> id) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (id && request_id_ != *id) return;  // stopped or replaced meanwhile: its "stopped" stands
     state_ = state;
   }
   std_msgs::String msg;
@@ -158,7 +168,7 @@ bool ArmMover::send(const motion::TrajectoryCommand& command, std::optional<std:
   std::lock_guard<std::mutex> sending(send_mutex_);
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (id && request_id_ != *id) return false;
+    if (!command.points.empty() && (closing_ || (id && request_id_ != *id))) return false;
     commanding_ = !command.points.empty();
   }
   command_pub_.publish(conversions::to_msg(command));
@@ -166,6 +176,7 @@ bool ArmMover::send(const motion::TrajectoryCommand& command, std::optional<std:
 }
 
 std::optional<std::string> ArmMover::ask(Request request) {  // mutex_ held
+  if (closing_) return std::string("the node is shutting down");
   // A plan only shows a move: anything asked for replaces it (confirm mode plans at start).
   if ((request_ != Request::None && request_ != Request::Plan) || state_ == "moving")
     return "busy (" + state_ + "): call ~stop_motion first";
@@ -226,17 +237,28 @@ void ArmMover::stop_now(const std::string& why) {
   wake_.notify_all();
   send(motion::hold_command(*arm_));
   status("stopped", "the controller was told to hold where the arm is (an empty trajectory) (" + why + ")");
+  publish_plan_markers(std::nullopt);
+  access_.show_plan(std::nullopt);
 }
 
 void ArmMover::stop_for_shutdown() {
   bool moving;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    closing_ = true;  // no request is taken and no move is sent from now on
+    ++request_id_;
+    request_ = Request::None;
     moving = commanding_;
   }
+  wake_.notify_all();
   if (!moving) return;  // an arm at rest is left alone: something else may be moving it by now
   stop_now("the node is shutting down");
   ros::WallDuration(0.2).sleep();  // for the hold to leave before the connections close
+}
+
+bool ArmMover::asked(std::uint64_t id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return request_id_ == id && !shutting_down_ && !closing_;
 }
 
 void ArmMover::on_goal() {
@@ -310,10 +332,10 @@ void ArmMover::publish_plan_markers(const std::optional<NextMove>& move) {
   markers_pub_.publish(markers);
 }
 
-bool ArmMover::plan() {
+bool ArmMover::plan(std::uint64_t id) {
   const std::optional<Eigen::VectorXd> q = joints();
   if (!q) {
-    status("failed", "no joint states of the arm's joints on " + joint_states_.getTopic());
+    status("failed", "no joint states of the arm's joints on " + joint_states_.getTopic(), id);
     return false;
   }
   const SessionSnapshot snapshot = access_.snapshot();
@@ -321,11 +343,12 @@ bool ArmMover::plan() {
   const NextMove move = automatic_->next(*access_.session, snapshot, *q, failed_, analysis ? &*analysis : nullptr);
   if (!move.found) {
     access_.show_plan(std::nullopt);
-    status("failed", move.reason);
+    status("failed", move.reason, id);
     return false;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (request_id_ != id) return false;  // stopped while planning: nothing is shown
     planned_ = move;
   }
   publish_plan_markers(move);
@@ -341,7 +364,8 @@ bool ArmMover::plan() {
                         move.plan.summary() + "), " + number_text(move.trajectory.back().time, 3) + " s" +
                         (move.bootstrap ? ""
                                         : ", object sigma " + mm(move.object_sigma) + " -> " +
-                                              mm(move.predicted_object_sigma)));
+                                              mm(move.predicted_object_sigma)),
+         id);
   return true;
 }
 
@@ -354,17 +378,21 @@ bool ArmMover::execute(std::uint64_t id) {
   const std::optional<Eigen::VectorXd> now_joints = joints();
   // A plan from elsewhere (the arm moved since): plan again from here.
   if (!move || !now_joints || motion::largest_joint_change(*now_joints, move->plan.start) > 0.01) {
-    if (!plan()) return false;
+    if (!plan(id)) return false;
     std::lock_guard<std::mutex> lock(mutex_);
     move = planned_;
   }
   const std::size_t samples_before = access_.samples();
   const double start = ros::Time::now().toSec();
+  motion::MoveMonitor monitor(move->trajectory, start, limits_);  // before the move goes out
   if (!send(motion::move_command(*arm_, move->trajectory), id)) return false;  // stopped meanwhile
-  status("moving", number_text(move->trajectory.back().time, 3) + " s to the goal at full speed");
-  motion::MoveMonitor monitor(move->trajectory, start, limits_);
+  status("moving", number_text(move->trajectory.back().time, 3) + " s to the goal at full speed", id);
   double seen = -1.0;
-  for (ros::Rate rate(200.0); ros::ok(); rate.sleep()) {
+  for (ros::Rate rate(200.0);; rate.sleep()) {
+    if (!ros::ok()) {  // ROS went down under the move: try to hold it
+      send(motion::hold_command(*arm_));
+      return false;
+    }
     Eigen::VectorXd q;
     double stamp;
     {
@@ -377,7 +405,7 @@ bool ArmMover::execute(std::uint64_t id) {
     if (s == motion::MoveStatus::Arrived) break;
     if (s != motion::MoveStatus::Moving) {
       send(motion::hold_command(*arm_));
-      status("failed", monitor.reason() + "; the controller was told to hold (an empty trajectory)");
+      status("failed", monitor.reason() + "; the controller was told to hold (an empty trajectory)", id);
       return false;
     }
   }
@@ -390,7 +418,7 @@ bool ArmMover::execute(std::uint64_t id) {
   access_.show_plan(std::nullopt);
   // The sample at the goal: the session's sampler takes it once the arm and the
   // detection are still; without auto-sampling, ask for it.
-  status("sampling", "arrived; waiting for a still detection");
+  status("sampling", "arrived; waiting for a still detection", id);
   const double arrived = ros::Time::now().toSec();
   const bool auto_sample = access_.session->settings().sampler.auto_sample;
   const double still = access_.session->settings().sampler.still_window;
@@ -400,7 +428,7 @@ bool ArmMover::execute(std::uint64_t id) {
       if (request_id_ != id) return false;
     }
     if (access_.samples() > samples_before) {
-      status("sampled", "a sample at the goal (" + std::to_string(access_.samples()) + " in the session)");
+      status("sampled", "a sample at the goal (" + std::to_string(access_.samples()) + " in the session)", id);
       return true;
     }
     const double waited = ros::Time::now().toSec() - arrived;
@@ -411,19 +439,32 @@ bool ArmMover::execute(std::uint64_t id) {
   status("skipped", "no sample at the goal within " + number_text(sample_timeout_, 3) +
                         " s (is the target detected there, and TF " + access_.session->settings().rig.frames.base +
                         " -> " + access_.session->settings().rig.frames.effector +
-                        " available?); the next view is planned without it");
+                        " available?); the next view is planned without it",
+         id);
   return true;
 }
 
 void ArmMover::run() {
+  try {
+    work();
+  } catch (const std::exception& e) {  // a bug: the arm is held, and the motion says so
+    send(motion::hold_command(*arm_));
+    status("failed", std::string("internal error in the motion thread: ") + e.what() +
+                         "; the controller was told to hold (an empty trajectory)");
+    ROS_ERROR("motion thread: %s", e.what());
+  }
+}
+
+void ArmMover::work() {
   // Wait for the arm's joints and a first sample; then auto: calibrate by itself;
   // confirm: plan the next move and show it (Move moves).
   while (auto_start_ || confirm_) {
+    const bool sampled = access_.samples() > 0;  // the node's lock, not this one's
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (shutting_down_) return;
+      if (shutting_down_ || closing_) return;
       if (request_ != Request::None) break;  // asked for something meanwhile
-      if (joints_.size() && access_.samples() > 0) {
+      if (joints_.size() && sampled) {
         if (auto_start_) request_ = Request::Auto, ++request_id_;
         else request_ = Request::Plan, ++request_id_;
         break;
@@ -441,9 +482,9 @@ void ArmMover::run() {
       request = request_, id = request_id_;
     }
     if (request == Request::Plan) {
-      plan();
+      plan(id);
     } else if (request == Request::Move) {
-      if (execute(id) && confirm_) plan();  // the next one, shown for the operator's Move
+      if (execute(id) && confirm_) plan(id);  // the next one, shown for the operator's Move
     } else if (request == Request::Auto) {
       double target = target_object_sigma_;
       int max_views = max_views_;
@@ -453,27 +494,25 @@ void ArmMover::run() {
       }
       bool reached = false;
       for (int views = 0;; ++views) {
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          if (request_id_ != id) break;
-        }
+        if (!asked(id)) break;
         // A fresh estimate of every sample so far (the node's worker follows each sample).
         auto [fresh, progress] = access_.progress(target);
-        for (int wait = 0; wait < 200 && !fresh; ++wait) {
+        for (int wait = 0; wait < 200 && !fresh && asked(id); ++wait) {
           ros::Duration(0.05).sleep();
           std::tie(fresh, progress) = access_.progress(target);
         }
+        if (!asked(id)) break;  // stopped, or the node is going
         if (progress && progress->reached) {
           reached = true;
           status("done", "object sigma " + mm(progress->object_sigma) + " <= " + mm(target) + " after " +
-                             std::to_string(access_.samples()) + " samples");
+                             std::to_string(access_.samples()) + " samples", id);
           break;
         }
         if (views >= max_views) {
-          status("failed", std::to_string(max_views) + " moves (the most allowed) without reaching " + mm(target));
+          status("failed", std::to_string(max_views) + " moves (the most allowed) without reaching " + mm(target), id);
           break;
         }
-        if (!plan() || !execute(id)) break;
+        if (!plan(id) || !execute(id)) break;
       }
       bool goal;
       std::string last;

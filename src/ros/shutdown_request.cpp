@@ -4,12 +4,15 @@
 #include <ros/xmlrpc_manager.h>
 
 #include <atomic>
+#include <signal.h>
+
 #include <csignal>
 
 namespace handeye {
 namespace {
 
 std::atomic<bool> requested{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler stores a lock-free flag, nothing else");
 
 void on_signal(int) { requested = true; }
 
@@ -27,8 +30,13 @@ void on_shutdown_call(XmlRpc::XmlRpcValue& params, XmlRpc::XmlRpcValue& result) 
 }  // namespace
 
 void spin_until_shutdown(int threads, const std::function<void()>& before_shutdown) {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  // Once: a second Ctrl-C ends the process at once (SA_RESETHAND restores the default).
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
   ros::XMLRPCManager::instance()->unbind("shutdown");
   ros::XMLRPCManager::instance()->bind("shutdown", on_shutdown_call);
   ros::AsyncSpinner spinner(threads);

@@ -52,7 +52,7 @@ class SimulatedControllerNode {
     states_ = node.advertise<sensor_msgs::JointState>("joint_states", 10);
     actual_ = pn.advertise<sensor_msgs::JointState>("actual_joint_states", 100);
     outcomes_ = pn.advertise<std_msgs::String>("command_outcomes", 100, true);
-    command_ = pn.subscribe("command", 10, &SimulatedControllerNode::on_command, this);
+    command_ = pn.subscribe("command", 1, &SimulatedControllerNode::on_command, this);  // as the controller's
     scale_ = pn.subscribe("set_speed_scale", 10, &SimulatedControllerNode::on_scale, this);
     timer_ = node.createTimer(ros::Duration(1.0 / param(pn, "rate", 100.0)), &SimulatedControllerNode::tick, this);
   }

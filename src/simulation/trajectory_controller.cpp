@@ -41,11 +41,11 @@ void SimulatedTrajectoryController::set_speed_scale(double scale) {
 
 void SimulatedTrajectoryController::hold() {
   // joint_trajectory_controller's setHoldPosition: from the arm's position and velocity
-  // to rest in stop_trajectory_duration d (the midpoint of a symmetric segment to
-  // (p, -v) over 2d: p + v d / 2, at rest), from the last update's trajectory time.
+  // to rest in stop_trajectory_duration d, at the midpoint of its (quintic) segment from
+  // (p, v) to (p, -v) over 2d: p + 5 v d / 8, at rest; from the last update's trajectory time.
   const double d = options_.stop_trajectory_duration;
   motion::TrajectoryPoint from{0.0, position_, velocity_, Eigen::VectorXd::Zero(position_.size())};
-  motion::TrajectoryPoint to{d, position_ + velocity_ * (d / 2.0), Eigen::VectorXd::Zero(position_.size()),
+  motion::TrajectoryPoint to{d, position_ + velocity_ * (5.0 * d / 8.0), Eigen::VectorXd::Zero(position_.size()),
                              Eigen::VectorXd::Zero(position_.size())};
   trajectory_ = {motion::SplineSegment(uptime_, from, uptime_ + d, to)};
 }
@@ -146,7 +146,8 @@ CommandOutcome SimulatedTrajectoryController::command(const motion::TrajectoryCo
 }
 
 void SimulatedTrajectoryController::update(double now) {
-  const double period = std::max(0.0, now - time_) * options_.speed_scale;
+  // A protective stop holds the trajectory's clock too (a UR's driver scales it to 0).
+  const double period = stopped_short_ ? 0.0 : std::max(0.0, now - time_) * options_.speed_scale;
   time_ = now, period_ = period, uptime_ += period;
   if (stopped_short_) {
     velocity_.setZero();

@@ -34,6 +34,9 @@ struct MoveTiming {
   double acceleration(int j) const;
 };
 
+/// Throws HandEyeError naming the parameter when a bound is out of range.
+void check_timing(const MoveTiming& timing);
+
 /// A timed straight joint-space move: a quintic time scaling (zero velocity and
 /// acceleration at both ends), as long as the slowest joint needs so that neither
 /// its peak speed (15/8 of the mean) nor its peak acceleration (10/sqrt(3) L/T^2)

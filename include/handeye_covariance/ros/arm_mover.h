@@ -21,6 +21,7 @@
 #pragma once
 
 #include <actionlib/server/simple_action_server.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_msgs/String.h>
@@ -78,18 +79,25 @@ class ArmMover {
   /// Sends the hold, from the calling thread; the motion thread stops.
   void stop_now(const std::string& why);
   void on_joint_states(const sensor_msgs::JointStateConstPtr& msg);
-  void run();
-  /// Plans the next move (mutex_ not held); false with the reason on ~motion_status.
-  bool plan();
+  void run();   // the motion thread: work(), and a hold if it throws
+  void work();
+  /// Whether request `id` still stands (not stopped, replaced, or shutting down).
+  bool asked(std::uint64_t id) const;
+  /// Plans the next move for request `id` (mutex_ not held); false with the reason on ~motion_status.
+  bool plan(std::uint64_t id);
   /// Moves to the planned goal and takes the sample there, for request `id`; false
   /// when the motion stopped or another request came.
   bool execute(std::uint64_t id);
   /// Publishes a command; with `id`, only while that request stands (false: not sent).
   bool send(const motion::TrajectoryCommand& command, std::optional<std::uint64_t> id = std::nullopt);
-  void status(const std::string& state, const std::string& text);
+  /// ~motion_status (and the action's feedback); with `id`, only while that request stands.
+  void status(const std::string& state, const std::string& text, std::optional<std::uint64_t> id = std::nullopt);
   std::optional<Eigen::VectorXd> joints() const;
 
   SessionAccess access_;
+  // The services, the action and joint states, on their own thread (spinner_); before the
+  // handles that use it, which are destroyed first.
+  ros::CallbackQueue queue_;
   std::unique_ptr<motion::Arm> arm_;
   std::unique_ptr<motion::CollisionModel> collision_;
   std::unique_ptr<AutoCalibration> automatic_;
@@ -112,6 +120,7 @@ class ArmMover {
   mutable std::mutex mutex_;
   std::mutex send_mutex_;  // one command at a time (send)
   bool commanding_ = false;  // a move was sent and has not arrived, failed or been stopped
+  bool closing_ = false;     // stop_for_shutdown: no request is taken, no move is sent
   std::condition_variable wake_;
   Request request_ = Request::None;
   bool shutting_down_ = false;
@@ -125,6 +134,7 @@ class ArmMover {
   Eigen::VectorXd joints_;
   double joints_stamp_ = 0.0;
   std::string state_ = "idle";
+  std::unique_ptr<ros::AsyncSpinner> spinner_;  // queue_'s thread
   std::thread thread_;  // last
 };
 

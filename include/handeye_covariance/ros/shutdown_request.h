@@ -2,7 +2,9 @@
 // XML-RPC (rosnode kill, a second node of the same name) are caught before
 // roscpp closes the node's topics, so that the node can still publish (a hold to
 // an arm it is moving). Call ros::init with ros::init_options::NoSigintHandler.
-// What cannot be caught: SIGKILL, and the master or the network going away.
+// A second Ctrl-C ends the process at once. What cannot be caught: SIGKILL, and the
+// master or the network going away; when a second node takes this one's name, the
+// master drops this one's topics too, so its hold is a best effort.
 #pragma once
 
 #include <functional>

@@ -4,7 +4,8 @@
 // updateTrajectoryCommand and initJointTrajectory, summarised in docs/motion.md):
 //   - not running: every command is refused, the empty one too;
 //   - no points: hold the current (actual) position, decelerating over
-//     `stop_trajectory_duration` (its parameter; 0 by default: at once);
+//     `stop_trajectory_duration` (its parameter; 0 by default: at once; with d,
+//     the arm comes to rest 5/8 v d further, its quintic segment's midpoint);
 //   - refused: times not strictly increasing, joints other than the controller's,
 //     point sizes that do not match;
 //   - a zero stamp starts the command at the next control update, a stamp in the
@@ -19,7 +20,9 @@
 // Speed scaling, as the UR driver's scaled_pos_joint_traj_controller: the
 // trajectory's clock advances by speed_scale times each control period.
 // Faults for the tests: the arm stops at a fraction of each move (a protective
-// stop: the controller's trajectory goes on, the arm does not).
+// stop: the arm and the trajectory's clock stop, as a UR's driver scales it to 0).
+// Not modelled: a continuous joint's wraparound in the bridge, and tracking lag (the
+// arm is where the trajectory puts it, as ros_control's simulated position interface).
 // Times are seconds on the caller's clock (the node's ROS time). SimulatedArm runs
 // one on a simulated clock, and run_move makes a move through it as the calibration
 // node does (ros/arm_mover.cpp), for the tests and studies without ROS.
