@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/motion/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
@@ -51,10 +52,10 @@ bool estimated_noise = false;  // --noise estimated
 MeasurementNoise rig_noise() {  // the simulated rig's detections (rig_simulator's defaults), a small robot noise
   MeasurementNoise noise;
   noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
-  noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(radians(0.05), 2) * Eigen::Matrix3d::Identity();
   if (estimated_noise) return noise;  // the node's robot pose comes from TF, exact
   noise.robot.translation = std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity();
-  noise.robot.rotation = std::pow(0.005 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.robot.rotation = std::pow(radians(0.005), 2) * Eigen::Matrix3d::Identity();
   return noise;
 }
 
@@ -172,7 +173,7 @@ int controller_study(const ArmRig& rig, const motion::CollisionModel& collision,
                      int max_views) {
   std::printf("| speed scale | calibrations completed | moves | false failures | reached %.2g mm | median samples | "
               "move time over planned: median, max | commands not taken as sent |\n",
-              target * 1e3);
+              millimetres(target));
   std::printf("|---|---:|---:|---:|---:|---:|---|---:|\n");
   for (const SpeedProfile& profile : {SpeedProfile{"1", 1.0, 1.0}, SpeedProfile{"0.5", 0.5, 0.5},
                                       SpeedProfile{"0.1", 0.1, 0.1}, SpeedProfile{"0.05", 0.05, 0.05},
@@ -266,7 +267,7 @@ Run run_star(const ArmRig& rig, const motion::CollisionModel& collision, const E
   Sim sim(rig, collision, seed, target);
   sim.take(start);
   Eigen::VectorXd q = start;
-  for (const Eigen::Isometry3d& pose : star(rig.arm.forward(start), 25.0 * M_PI / 180.0, 0.1)) {
+  for (const Eigen::Isometry3d& pose : star(rig.arm.forward(start), radians(25.0), 0.1)) {
     // Each star pose from the start (easy_handeye plans every one from there), checked as ours are.
     const motion::ViewPlan plan =
         motion::plan_view(collision, rig.rig, std::nullopt, q, {{pose, Eigen::Isometry3d::Identity(), false}}, {});
@@ -310,7 +311,7 @@ int estimated_noise_study(const ArmRig& rig, const motion::CollisionModel& colli
   std::printf("\nnoise estimated from the residuals, robot exact: auto reached %.2g mm in %zu of %d runs; NEES of X where "
               "it stopped: mean %.2f +- %.2f (6 for an honest covariance), beyond chi2(6)'s 99%% point 16.81 in %.1f%%, "
               "beyond its 99.9%% point 22.46 in %.1f%%; quantiles 90%% %.2f, 99%% %.2f, 99.9%% %.2f.\n",
-              target * 1e3, nees.size(), runs, mean, std::sqrt(square / std::max<std::size_t>(nees.size(), 1)), beyond(16.81),
+              millimetres(target), nees.size(), runs, mean, std::sqrt(square / std::max<std::size_t>(nees.size(), 1)), beyond(16.81),
               beyond(22.46), linear_quantile(nees, 0.9), linear_quantile(nees, 0.99), linear_quantile(nees, 0.999));
   return 0;
 }
@@ -348,7 +349,7 @@ int main(int argc, char** argv) {
   }
   const ArmRig rig = ArmRig::load(HANDEYE_SOURCE_DIR "/urdf/sim_arm.urdf");
   const motion::CollisionModel collision(rig.arm, motion::table_plane());
-  const double target = target_mm * 1e-3;
+  const double target = metres(target_mm);
   if (estimated_noise) return estimated_noise_study(rig, collision, seeds, target, max_views);
   if (controller) return controller_study(rig, collision, seeds, target, max_views);
   std::printf("| seed | auto: samples to %.2g mm | star: samples to %.2g mm | star: samples taken: sigma [mm] | "
@@ -375,7 +376,7 @@ int main(int argc, char** argv) {
     nees.push_back(a.nees);
     char star_text[64];
     if (star_sigma > 0.0)
-      std::snprintf(star_text, sizeof star_text, "%d: %.3f", s.samples, star_sigma * 1e3);
+      std::snprintf(star_text, sizeof star_text, "%d: %.3f", s.samples, millimetres(star_sigma));
     else
       std::snprintf(star_text, sizeof star_text, "%d: no estimate", s.samples);
     std::printf("| %d | %s | %s | %s | %s | %.2f | %d / %d |\n", seed,

@@ -8,6 +8,7 @@
 //   ./scripts/bench.
 #include <benchmark/benchmark.h>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "handeye_covariance/simulation/simulation.h"
@@ -32,7 +33,7 @@ const Session& session() {
     out.rig.setup = Setup::EyeInHand;
     out.X = truth.X;
     out.Y = truth.T_world_pattern;
-    out.robot.diagonal() << Eigen::Vector3d::Constant(0.09e-6), Eigen::Vector3d::Constant(std::pow(0.03 * M_PI / 180.0, 2));
+    out.robot.diagonal() << Eigen::Vector3d::Constant(0.09e-6), Eigen::Vector3d::Constant(std::pow(radians(0.03), 2));
     std::normal_distribution<double> pixel(0.0, 0.3);
     for (const PoseSample& sample : truth.samples.samples) {
       CornerView v;

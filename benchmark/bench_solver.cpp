@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
@@ -186,7 +187,7 @@ void BM_SharedErrorSession(benchmark::State& state) {
   Rng rng(5);
   SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                         static_cast<int>(state.range(0)), paper_noise(1e-6));
-  add_shared_robot_error(rng, s.samples, 2e-3, 0.15 * M_PI / 180.0);
+  add_shared_robot_error(rng, s.samples, 2e-3, radians(0.15));
   s.samples.noise.reset();
   CalibrationSession session(session_settings(s.samples));
   session.replace(s.samples.samples, "benchmark");

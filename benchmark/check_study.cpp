@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/target_file.h"
 #include "handeye_covariance/simulation/check_study.h"
 #include "handeye_covariance/simulation/rendered_views.h"
@@ -133,7 +134,7 @@ int frontier(unsigned seed) {
     o.checks = 200;
     o.seed = seed;
     o.bound_draws = 0;
-    o.viewpoints.max_tilt = tilt * M_PI / 180.0, o.viewpoints.max_roll = roll * M_PI / 180.0;
+    o.viewpoints.max_tilt = radians(tilt), o.viewpoints.max_roll = radians(roll);
     std::printf("| %.0f deg | %.0f deg | %.2f |\n", tilt, roll, run_check_study(o).mean_x_y_cosine);
     std::fflush(stdout);
   }
@@ -211,7 +212,7 @@ int between_study(int checks, unsigned seed) {
   o.noise_given = true;
   o.checks = checks;
   o.seed = seed + 200;
-  o.viewpoints.max_tilt = 45.0 * M_PI / 180.0, o.viewpoints.max_roll = 90.0 * M_PI / 180.0;
+  o.viewpoints.max_tilt = radians(45.0), o.viewpoints.max_roll = radians(90.0);
   row("nothing", run_check_study(o), 0.0);
   for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
     for (double multiple : {5.0, 6.0}) {
@@ -283,7 +284,7 @@ int main(int argc, char** argv) {
     o.noise_given = true;
     o.checks = checks;
     o.seed = seed;
-    if (diverse) o.viewpoints.max_tilt = 60.0 * M_PI / 180.0, o.viewpoints.max_roll = M_PI;
+    if (diverse) o.viewpoints.max_tilt = radians(60.0), o.viewpoints.max_roll = M_PI;
     row("nothing", run_check_study(o), 0.0);
     for (PlantedChange change : {PlantedChange::XTranslation, PlantedChange::YTranslation}) {
       for (double multiple : {2.0, 3.0, 4.0, 5.0, 6.0, 7.0}) {

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/simulation/monte_carlo_study.h"
@@ -27,7 +28,7 @@ const std::pair<cv::HandEyeCalibrationMethod, const char*> kMethods[] = {
 /// tilt about x/y 3x the roll about the optical axis; a precise robot.
 MeasurementNoise anisotropic_noise() {
   MeasurementNoise noise;
-  const double mm = 1e-3, deg = M_PI / 180;
+  const double mm = kMetresPerMillimetre, deg = kRadiansPerDegree;
   noise.camera.translation = Eigen::Vector3d(0.3 * mm, 0.3 * mm, 1.5 * mm).cwiseAbs2().asDiagonal();
   noise.camera.rotation = Eigen::Vector3d(0.15 * deg, 0.15 * deg, 0.05 * deg).cwiseAbs2().asDiagonal();
   noise.robot.translation = Eigen::Vector3d::Constant(0.05 * mm).cwiseAbs2().asDiagonal();
@@ -146,8 +147,8 @@ int accuracy(int M) {
       }
     }
   }
-  const auto rms_rot = [&](int i) { return std::sqrt(rot[i] / std::max(1, ok[i])) * 180 / M_PI; };
-  const auto rms_trans = [&](int i) { return std::sqrt(trans[i] / std::max(1, ok[i])) * 1e3; };
+  const auto rms_rot = [&](int i) { return degrees(std::sqrt(rot[i] / std::max(1, ok[i]))); };
+  const auto rms_trans = [&](int i) { return millimetres(std::sqrt(trans[i] / std::max(1, ok[i]))); };
   std::printf("| method | RMS rotation error [deg] | RMS translation error [mm] | datasets failed |\n|---|---:|---:|---:|\n");
   double best_rot = 1e9, best_trans = 1e9;
   for (int i = 0; i < 7; ++i) {
@@ -156,7 +157,7 @@ int accuracy(int M) {
                 i == 0 ? "handeye_covariance joint (noise given)" : i == 1 ? "handeye_covariance pairs (noise given)" : kMethods[i - 2].second,
                 rms_rot(i), rms_trans(i), failed[i]);
   }
-  const double crb_rot = std::sqrt(bound_rot) * 180 / M_PI, crb_trans = std::sqrt(bound_trans) * 1e3;
+  const double crb_rot = degrees(std::sqrt(bound_rot)), crb_trans = millimetres(std::sqrt(bound_trans));
   std::printf("| Cramer-Rao bound (the true noise) | %.4f | %.3f | |\n", crb_rot, crb_trans);
   std::printf("\nJoint / best OpenCV: rotation %.2f, translation %.2f; pairs / best OpenCV: rotation %.2f, translation %.2f\n",
               rms_rot(0) / best_rot, rms_trans(0) / best_trans, rms_rot(1) / best_rot, rms_trans(1) / best_trans);

@@ -48,6 +48,7 @@
 #include <thread>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -350,7 +351,7 @@ int main(int argc, char** argv) {
       return usage();
     }
   }
-  const double deg = 180.0 / M_PI;
+  const double deg = kDegreesPerRadian;
   if (options.focal_error == 0.0) {
     std::printf("| target | sessions (images used) | X RMS poses [mm / deg] | X RMS corners [mm / deg] | corners / poses | "
                 "corner-model bound [mm / deg] | corners / bound | poses / bound | NEES X poses | NEES X corners | per-image sigma |\n");
@@ -368,8 +369,8 @@ int main(int argc, char** argv) {
     if (options.focal_error == 0.0) {
       std::printf("| %s | %d (%.1f) | %.3f / %.4f | %.3f / %.4f | %.2fx / %.2fx | %.3f / %.4f | %.2fx / %.2fx | %.2fx / %.2fx | %.2f | "
                   "%.2f | %.0f%% |\n",
-                  kind.c_str(), s.sessions, s.images, poses[0] * 1e3, poses[1] * deg, corners[0] * 1e3, corners[1] * deg,
-                  corners[0] / poses[0], corners[1] / poses[1], bound[0] * 1e3, bound[1] * deg, corners[0] / bound[0],
+                  kind.c_str(), s.sessions, s.images, millimetres(poses[0]), poses[1] * deg, millimetres(corners[0]), corners[1] * deg,
+                  corners[0] / poses[0], corners[1] / poses[1], millimetres(bound[0]), bound[1] * deg, corners[0] / bound[0],
                   corners[1] / bound[1], poses[0] / bound[0], poses[1] / bound[1], s.nees_poses, s.nees_corners, 100.0 * s.per_image);
     } else {
       std::printf("| %s | %d | %.0f%% | %.2f | %.2f | %.2f | %.2f |\n", kind.c_str(), s.sessions,
@@ -383,7 +384,7 @@ int main(int argc, char** argv) {
         std::printf("\n%s, robot noise %s: %d sessions, NEES of X %.2f, covariance / bound (trace) %.2f / %.2f, target "
                     "term's factor on sigma %.3f / %.3f, robot sigma %.4f mm / %.5f deg\n",
                     kind.c_str(), robot ? "estimated from the corners" : "as stated", g.sessions, g.nees, g.over_bound[0],
-                    g.over_bound[1], g.target[0], g.target[1], g.robot[0] * 1e3, g.robot[1] * deg);
+                    g.over_bound[1], g.target[0], g.target[1], millimetres(g.robot[0]), g.robot[1] * deg);
       }
       std::printf("\n");
     }

@@ -17,6 +17,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -114,7 +115,7 @@ LoadReport run_load(const LoadOptions& o) {
   const RigTrajectory trajectory = make_rig_trajectory(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), o.poses, o.pause, o.move);
   const double session_period = o.poses * (o.pause + o.move);
   PoseNoise noise;
-  noise.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.rotation = std::pow(radians(0.05), 2) * Eigen::Matrix3d::Identity();
   noise.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
 
   ros::Publisher tf_pub = nh.advertise<tf2_msgs::TFMessage>("/tf", 100);

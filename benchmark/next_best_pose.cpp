@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
@@ -35,7 +36,7 @@ const char* name(Strategy s) {
 Run run_session(Strategy strategy, Setup setup, unsigned seed, double target, int candidates, int max_samples) {
   Rng rng(seed);
   MeasurementNoise noise;  // the sim defaults: pattern 0.5 mm / 0.05 deg, robot 0.05 mm / 0.01 deg
-  const double deg = M_PI / 180.0;
+  const double deg = kRadiansPerDegree;
   noise.camera = {std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.5e-3, 2) * Eigen::Matrix3d::Identity()};
   noise.robot = {std::pow(0.01 * deg, 2) * Eigen::Matrix3d::Identity(), std::pow(0.05e-3, 2) * Eigen::Matrix3d::Identity()};
   const Eigen::Isometry3d X = typical_X(setup);
@@ -95,7 +96,7 @@ int main(int argc, char** argv) {
       std::vector<int> counts;
       double nees = 0.0;
       for (int s = 1; s <= seeds; ++s) {
-        const Run r = run_session(strategy, setup, static_cast<unsigned>(s), target_mm * 1e-3, candidates, max_samples);
+        const Run r = run_session(strategy, setup, static_cast<unsigned>(s), metres(target_mm), candidates, max_samples);
         counts.push_back(r.samples);
         nees += r.nees / seeds;
       }

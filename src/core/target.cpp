@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -55,9 +56,9 @@ std::string target_file_types() {
   return one_of(types);
 }
 
-std::string millimetres(double metres, int decimals) {
+std::string millimetres_text(double metres, int decimals) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.*f mm", decimals, metres * 1e3);
+  std::snprintf(text, sizeof text, "%.*f mm", decimals, millimetres(metres));
   return text;
 }
 

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 
 #include <ceres/autodiff_cost_function.h>
@@ -531,7 +532,7 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
     }
     robot_covariance = *options.robot_covariance;
   }
-  Eigen::Vector2d robot_variance(1e-6, std::pow(0.1 * M_PI / 180.0, 2));  // m^2, rad^2 (estimated)
+  Eigen::Vector2d robot_variance(1e-6, std::pow(radians(0.1), 2));  // m^2, rad^2 (estimated)
   if (options.estimate_robot_noise) {
     if (options.robot_covariance) {
       robot_variance << robot_covariance.diagonal().head<3>().mean(), robot_covariance.diagonal().tail<3>().mean();
@@ -874,7 +875,7 @@ std::string target_points_text(const CornerCalibration& f) {
   if (f.target_point_sigma == 0.0) {
     return f.target_point_sigma_estimated ? "exact (the corners show no error of theirs)" : "exact (as given)";
   }
-  return "1 sigma " + number_text(f.target_point_sigma * 1e3, 3) + " mm" +
+  return "1 sigma " + number_text(millimetres(f.target_point_sigma), 3) + " mm" +
          (f.target_point_sigma_estimated ? " estimated from the corners" : " given") + ": X's 1 sigma x" +
          number_text(f.target_inflation[0], 3) + " in translation, x" + number_text(f.target_inflation[1], 3) +
          " in rotation";
@@ -931,8 +932,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     robot = "free, their noise estimated from the corners";
   } else if (options.robot_covariance) {
     const Vector6d s = options.robot_covariance->diagonal().cwiseSqrt();
-    robot = "free, prior 1 sigma " + number_text(s.head<3>().maxCoeff() * 1e3, 3) + " mm / " +
-            number_text(s.tail<3>().maxCoeff() * 180.0 / M_PI, 3) + " deg (largest axis)";
+    robot = "free, prior 1 sigma " + number_text(millimetres(s.head<3>().maxCoeff()), 3) + " mm / " +
+            number_text(degrees(s.tail<3>().maxCoeff()), 3) + " deg (largest axis)";
   }
   CornerMethodResult out;
   out.fit = calibrate_corners(samples.rig, *camera, views, pose_level.T_parent_camera, pose_level.pattern->pose, options);
@@ -954,8 +955,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
   c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
   if (f.robot_noise_estimated) {
-    robot += ": 1 sigma " + number_text(f.robot_sigma[0] * 1e3, 3) + " mm / " +
-             number_text(f.robot_sigma[1] * 180.0 / M_PI, 3) + " deg per axis";
+    robot += ": 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) + " mm / " +
+             number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
   }
   c.noise_model = std::string("corners: pixel sigma ") + (f.per_image_sigma ? "per image, pooled " : "") +
                   number_text(f.pixel_sigma, 3) + " px" +

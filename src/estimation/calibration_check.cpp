@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 
 #include <algorithm>
@@ -227,8 +228,8 @@ std::string change_text(const EstimatedChange::Delta& d) {
                                    std::max(t.squaredNorm(), 1e-300));
   const double r_sigma = std::sqrt(std::max(0.0, r.dot(d.covariance.bottomRightCorner<3, 3>() * r)) /
                                    std::max(r.squaredNorm(), 1e-300));
-  return number_text(t.norm() * 1e3, 3) + " mm (1 sigma " + number_text(t_sigma * 1e3, 2) + " mm) and " +
-         number_text(r.norm() * 180.0 / M_PI, 3) + " deg (1 sigma " + number_text(r_sigma * 180.0 / M_PI, 2) + " deg)";
+  return number_text(millimetres(t.norm()), 3) + " mm (1 sigma " + number_text(millimetres(t_sigma), 2) + " mm) and " +
+         number_text(degrees(r.norm()), 3) + " deg (1 sigma " + number_text(degrees(r_sigma), 2) + " deg)";
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/estimator.h"
 
 #include <Eigen/Cholesky>

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 #include <Eigen/Cholesky>
@@ -1335,7 +1336,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   SolverOptions checks = options.checks;
   if (options.robust != JointOptions::Robust::Off) {
     checks.angle_mismatch_sigmas = std::max(checks.angle_mismatch_sigmas, 20.0);
-    checks.min_angle_mismatch_without_noise = std::max(checks.min_angle_mismatch_without_noise, 5.0 * M_PI / 180.0);
+    checks.min_angle_mismatch_without_noise = std::max(checks.min_angle_mismatch_without_noise, radians(5.0));
   }
   const Isometry3d X0 = checked_initial_guess(samples, checks);
   std::vector<Isometry3d> loops;
@@ -1517,7 +1518,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     for (std::size_t k = 0; k < result.noise_components.size(); ++k) {
       const Calibration::NoiseComponent& c = result.noise_components[k];
       if (free[k].kind == Kind::CameraPair) continue;  // in the result file; the text names the variances
-      const double unit = c.unit == "m" ? 1e3 : c.unit == "rad" ? 180.0 / M_PI : 1.0;
+      const double unit = c.unit == "m" ? 1e3 : c.unit == "rad" ? kDegreesPerRadian : 1.0;
       text += (k ? ", " : "") + c.name + " " + number_text(c.value * unit, 3) +
               (c.unit == "m" ? " mm" : c.unit == "rad" ? " deg" : "") +
               (c.at_bound ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));
@@ -1596,7 +1597,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   const double rotation_sigma = max_sigma(result.rotation_covariance);
   if (!(rotation_sigma <= options.checks.max_rotation_sigma)) {
     throw HandEyeError(ErrorCode::PoorlyConstrained,
-                       "the samples constrain the rotation only to " + number_text(rotation_sigma * 180.0 / M_PI) +
+                       "the samples constrain the rotation only to " + number_text(degrees(rotation_sigma)) +
                            " deg (1 sigma); a first-order covariance is not valid there",
                        "input", "add samples with larger rotations about different axes, or reduce the noise");
   }

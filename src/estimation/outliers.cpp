@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/outliers.h"
 
 #include <algorithm>
@@ -56,7 +57,7 @@ std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const Out
       rejected.push_back({s, "its motions to " + std::to_string(disagreements[s]) + " of " + std::to_string(checks[s]) +
                                  " other samples break A X = X B (robot and camera rotation angles or screw pitches "
                                  "differ beyond " + number_text(degrees(angle_gate), 2) + " deg / " +
-                                 number_text(pitch_gate * 1e3, 2) + " mm): a wrong detection or a mismatched stamp"});
+                                 number_text(millimetres(pitch_gate), 2) + " mm): a wrong detection or a mismatched stamp"});
     }
   }
   return rejected;

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 
 #include <Eigen/Cholesky>
@@ -515,8 +516,8 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   c.covariance_kind = "shared_robot_error";
   c.covariance_inflation = fit.covariance_inflation;
   c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
-  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(fit.best.translation_sigma * 1e3, 3) +
-                   " mm, " + number_text(fit.best.rotation_sigma * 180.0 / M_PI, 3) + " deg per axis over " +
+  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(millimetres(fit.best.translation_sigma), 3) +
+                   " mm, " + number_text(degrees(fit.best.rotation_sigma), 3) + " deg per axis over " +
                    number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
                    number_text(fit.best.view_noise_scale, 3) + ")" +
                    (fit.candidates.empty() ? ", given" : ", chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")");

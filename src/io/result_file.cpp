@@ -1,4 +1,5 @@
 // Result, report, check and pose files, stored calibrations (result_file.h).
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/result_file.h"
 
 #include <algorithm>
@@ -80,7 +81,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   // Humans read this file: mm and degrees, in ROS order (x, y, z, rx, ry, rz).
   const auto human = [](const Vector6d& sigma) {
     std::vector<double> v(6);
-    for (int k = 0; k < 6; ++k) v[static_cast<std::size_t>(k)] = sigma(k) * (k < 3 ? 1e3 : 180.0 / M_PI);
+    for (int k = 0; k < 6; ++k) v[static_cast<std::size_t>(k)] = sigma(k) * (k < 3 ? kMillimetresPerMetre : kDegreesPerRadian);
     return v;
   };
   const auto emit_list = [](YAML::Emitter& out, const std::vector<double>& v) { emit_numbers(out, v.data(), v.size()); };
@@ -93,8 +94,8 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
   out << YAML::Key << "method" << YAML::Value << to_string(report.calibration.method);
   out << YAML::Key << "advice_sigma" << YAML::Value << report.advice_sigma;
   out << YAML::Key << "object" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "working_distance_m"
-      << YAML::Value << report.working_distance << YAML::Key << "sigma_mm" << YAML::Value << report.object_sigma * 1e3
-      << YAML::Key << "target_mm" << YAML::Value << report.target_object_sigma * 1e3 << YAML::Key << "reached"
+      << YAML::Value << report.working_distance << YAML::Key << "sigma_mm" << YAML::Value << millimetres(report.object_sigma)
+      << YAML::Key << "target_mm" << YAML::Value << millimetres(report.target_object_sigma) << YAML::Key << "reached"
       << YAML::Value << report.target_reached << YAML::EndMap;
 
   out << YAML::Key << "samples" << YAML::Value << YAML::BeginSeq;
@@ -102,8 +103,8 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
     const SampleFit& f = report.fits[i];
     const Calibration::Rejected* rejected = rejection_of(report.calibration, static_cast<int>(i));
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << i << YAML::Key << "residual_mm"
-        << YAML::Value << f.translation * 1e3 << YAML::Key << "residual_deg" << YAML::Value
-        << f.rotation * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
+        << YAML::Value << millimetres(f.translation) << YAML::Key << "residual_deg" << YAML::Value
+        << degrees(f.rotation) << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
         << YAML::Value << (rejected != nullptr);
     if (rejected) out << YAML::Key << "reason" << YAML::Value << rejected->reason;
     out << YAML::EndMap;
@@ -147,7 +148,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
 
   out << YAML::Key << "rotation_axes" << YAML::Value << YAML::BeginSeq;  // camera frame: x, y, z, angle (deg)
   for (const MotionAxis& m : report.rotation_axes) {
-    emit_list(out, {m.axis.x(), m.axis.y(), m.axis.z(), m.angle * 180.0 / M_PI});
+    emit_list(out, {m.axis.x(), m.axis.y(), m.axis.z(), degrees(m.angle)});
   }
   out << YAML::EndSeq;
   out << YAML::Key << "turning" << YAML::Value << YAML::BeginMap;  // eigen-decomposition of sum theta^2 a a^T, ascending
@@ -439,10 +440,10 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   for (std::size_t i = 0; i < check.views.size(); ++i) {
     const CheckedView& v = check.views[i];
     const bool left_out = std::find(check.left_out.begin(), check.left_out.end(), static_cast<int>(i)) != check.left_out.end();
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "left_out" << YAML::Value << left_out << YAML::Key << "translation_mm" << YAML::Value << v.translation_error * 1e3
-        << YAML::Key << "predicted_translation_mm" << YAML::Value << v.predicted_translation_sigma * 1e3 << YAML::Key
-        << "rotation_deg" << YAML::Value << v.rotation_error * 180.0 / M_PI << YAML::Key << "predicted_rotation_deg"
-        << YAML::Value << v.predicted_rotation_sigma * 180.0 / M_PI << YAML::Key << "sigma" << YAML::Value << v.mahalanobis
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "left_out" << YAML::Value << left_out << YAML::Key << "translation_mm" << YAML::Value << millimetres(v.translation_error)
+        << YAML::Key << "predicted_translation_mm" << YAML::Value << millimetres(v.predicted_translation_sigma) << YAML::Key
+        << "rotation_deg" << YAML::Value << degrees(v.rotation_error) << YAML::Key << "predicted_rotation_deg"
+        << YAML::Value << degrees(v.predicted_rotation_sigma) << YAML::Key << "sigma" << YAML::Value << v.mahalanobis
         << YAML::EndMap;
   }
   out << YAML::EndSeq;

@@ -1,5 +1,6 @@
 // Samples and motions files, candidate poses, noise files, suggestions and noise
 // estimates (samples_file.h).
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/samples_file.h"
 
 #include <algorithm>
@@ -233,11 +234,11 @@ std::string format_suggestions(const Suggestion& suggestion, int count, const Pl
   new_emitter(out) << YAML::BeginMap;
   out << YAML::Key << "criterion" << YAML::Value << to_string(options.criterion);
   out << YAML::Key << "working_distance" << YAML::Value << options.working_distance;
-  out << YAML::Key << "current_object_sigma_mm" << YAML::Value << suggestion.current_object_sigma * 1e3;
+  out << YAML::Key << "current_object_sigma_mm" << YAML::Value << millimetres(suggestion.current_object_sigma);
   const auto emit_scored = [&](const ScoredPose& p) {
     out << YAML::BeginMap;
     emit_pose(out, p.T_base_effector);
-    out << YAML::Key << "object_sigma_mm" << YAML::Value << p.object_sigma * 1e3;
+    out << YAML::Key << "object_sigma_mm" << YAML::Value << millimetres(p.object_sigma);
     out << YAML::Key << "score" << YAML::Value << p.score;
     out << YAML::EndMap;
   };
@@ -245,7 +246,7 @@ std::string format_suggestions(const Suggestion& suggestion, int count, const Pl
   for (int i = 0; i < count && i < static_cast<int>(suggestion.ranked.size()); ++i) emit_scored(suggestion.ranked[i]);
   out << YAML::EndSeq;
   out << YAML::Key << "plan" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "target_object_sigma_mm" << YAML::Value << target_object_sigma * 1e3;
+  out << YAML::Key << "target_object_sigma_mm" << YAML::Value << millimetres(target_object_sigma);
   out << YAML::Key << "reached" << YAML::Value << plan.reached;
   out << YAML::Key << "poses" << YAML::Value << YAML::BeginSeq;
   for (const ScoredPose& p : plan.poses) emit_scored(p);
@@ -271,9 +272,9 @@ std::string format_noise_estimate(const NoiseEstimate& estimate) {
     emit_numbers(out, sigma.data(), 3);
   };
   sigmas("pattern_sigma_mm", estimate.noise.camera.translation, 1e3);
-  sigmas("pattern_sigma_deg", estimate.noise.camera.rotation, 180.0 / M_PI);
+  sigmas("pattern_sigma_deg", estimate.noise.camera.rotation, kDegreesPerRadian);
   sigmas("effector_sigma_mm", estimate.noise.robot.translation, 1e3);
-  sigmas("effector_sigma_deg", estimate.noise.robot.rotation, 180.0 / M_PI);
+  sigmas("effector_sigma_deg", estimate.noise.robot.rotation, kDegreesPerRadian);
   out << YAML::Key << "notes" << YAML::Value << estimate.notes;
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

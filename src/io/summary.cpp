@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/summary.h"
 
 #include <algorithm>
@@ -10,7 +11,6 @@ namespace io {
 
 namespace {
 
-constexpr double kDeg = 180.0 / M_PI;
 
 std::string line(const char* format, ...) __attribute__((format(printf, 1, 2)));
 std::string line(const char* format, ...) {
@@ -35,15 +35,15 @@ std::string pose_lines(const Eigen::Isometry3d& T, const Matrix6d& covariance, c
   const Eigen::Vector3d sigma_R = covariance.bottomRightCorner<3, 3>().diagonal().cwiseMax(0.0).cwiseSqrt();
   std::string out;
   out += line("  translation [m]       %+10.6f %+10.6f %+10.6f", t.x(), t.y(), t.z());
-  out += line("    1 sigma [mm]        %10.3f %10.3f %10.3f", sigma_t.x() * 1e3, sigma_t.y() * 1e3, sigma_t.z() * 1e3);
-  out += line("  rotation rpy [deg]    %+10.4f %+10.4f %+10.4f", ypr.z() * kDeg, ypr.y() * kDeg, ypr.x() * kDeg);
-  out += line("    1 sigma [deg]       %10.4f %10.4f %10.4f   (about %s x, y, z)", sigma_R.x() * kDeg,
-              sigma_R.y() * kDeg, sigma_R.z() * kDeg, parent.c_str());
+  out += line("    1 sigma [mm]        %10.3f %10.3f %10.3f", millimetres(sigma_t.x()), millimetres(sigma_t.y()), millimetres(sigma_t.z()));
+  out += line("  rotation rpy [deg]    %+10.4f %+10.4f %+10.4f", ypr.z() * kDegreesPerRadian, ypr.y() * kDegreesPerRadian, ypr.x() * kDegreesPerRadian);
+  out += line("    1 sigma [deg]       %10.4f %10.4f %10.4f   (about %s x, y, z)", sigma_R.x() * kDegreesPerRadian,
+              sigma_R.y() * kDegreesPerRadian, sigma_R.z() * kDegreesPerRadian, parent.c_str());
   Eigen::Quaterniond q(T.linear());
   if (q.w() < 0) q.coeffs() *= -1.0;
   out += line("  quaternion [x y z w]  %+.8f %+.8f %+.8f %+.8f", q.x(), q.y(), q.z(), q.w());
-  out += line("  worst axis 1 sigma    %.3f mm, %.4f deg", max_sigma(covariance.topLeftCorner<3, 3>()) * 1e3,
-              max_sigma(covariance.bottomRightCorner<3, 3>()) * kDeg);
+  out += line("  worst axis 1 sigma    %.3f mm, %.4f deg", millimetres(max_sigma(covariance.topLeftCorner<3, 3>())),
+              max_sigma(covariance.bottomRightCorner<3, 3>()) * kDegreesPerRadian);
   return out;
 }
 
@@ -68,7 +68,7 @@ std::string object_summary(const ObjectPose& object, const std::string& base, co
     const PointInBase point = point_in_base(object, p);
     out += line("  point [%g %g %g] m on the object: at [%+.6f %+.6f %+.6f] m in %s, worst axis 1 sigma %.3f mm",
                 p.x(), p.y(), p.z(), point.position.x(), point.position.y(), point.position.z(), base.c_str(),
-                max_sigma(point.covariance) * 1e3);
+                millimetres(max_sigma(point.covariance)));
     out += "    its variance        " + shares(point.from_robot.trace(), point.from_calibration.trace(),
                                                point.from_detection.trace());
   }
@@ -128,7 +128,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     std::string estimated = "  noise                 ESTIMATED from the residuals (no noise block given); camera 1 sigma x y z [mm] " +
                             sigmas(c.noise.camera.translation, 1e3);
     estimated.pop_back();
-    out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDeg);
+    out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDegreesPerRadian);
     if (!c.noise_model.empty()) out += "                        (" + c.noise_model + ")\n";
   } else if (!c.noise_components.empty()) {
     out += line("  noise                 given, too small for the residuals: the missing part ESTIMATED");
@@ -212,11 +212,11 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
     const Vector6d step = pose_error(e.T_parent_camera, e.per_view_T_parent_camera);
     std::string out = line("  shared robot error    used: the likelihood prefers an error shared by nearby poses (BIC gain "
                            "%.1f: %.2f mm and %.3f deg per axis over %.2f m)",
-                           e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale);
+                           e.bic_gain, millimetres(e.translation_sigma), degrees(e.rotation_sigma), e.length_scale);
     out += line("                        X and its covariance above are its generalised least squares (x%.3f for its "
                 "fitted numbers); the per-view model's X is [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg from it (step "
                 "NEES %.1f)",
-                e.covariance_inflation, -step(0) * 1e3, -step(1) * 1e3, -step(2) * 1e3, -degrees(step(3)),
+                e.covariance_inflation, -millimetres(step(0)), -millimetres(step(1)), -millimetres(step(2)), -degrees(step(3)),
                 -degrees(step(4)), -degrees(step(5)), e.step_nees);
     if (ratio > 1.0) {
       out += line("                        under it the per-view model's sigma_X is up to %.1fx too small", ratio);
@@ -230,12 +230,12 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
   const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);
   std::string out = line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: "
                          "%.2f mm and %.3f deg per axis over %.2f m)",
-                         e.bic_gain, e.translation_sigma * 1e3, degrees(e.rotation_sigma), e.length_scale);
+                         e.bic_gain, millimetres(e.translation_sigma), degrees(e.rotation_sigma), e.length_scale);
   out += ratio > 1.0 ? line("                        under it sigma_X above is up to %.1fx too small", ratio)
                      : line("                        under it sigma_X above covers it (at most %.2f of it on any axis)", ratio);
   out += line("                        and X would move by [%.3f %.3f %.3f] mm [%.4f %.4f %.4f] deg (step NEES %.1f); "
               "advice only: X and its covariance above are the per-view model's",
-              step(0) * 1e3, step(1) * 1e3, step(2) * 1e3, degrees(step(3)), degrees(step(4)), degrees(step(5)),
+              millimetres(step(0)), millimetres(step(1)), millimetres(step(2)), degrees(step(3)), degrees(step(4)), degrees(step(5)),
               e.step_nees);
   return out;
 }
@@ -243,9 +243,9 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
 std::string report_summary(const CalibrationReport& report) {
   const auto row = [](const char* name, const Vector6d& sigma, const std::string& note) {
     char line[200];
-    std::snprintf(line, sizeof line, "    %-15s %7.3f %7.3f %7.3f   %7.4f %7.4f %7.4f%s\n", name, sigma(0) * 1e3,
-                  sigma(1) * 1e3, sigma(2) * 1e3, sigma(3) * 180.0 / M_PI, sigma(4) * 180.0 / M_PI,
-                  sigma(5) * 180.0 / M_PI, note.c_str());
+    std::snprintf(line, sizeof line, "    %-15s %7.3f %7.3f %7.3f   %7.4f %7.4f %7.4f%s\n", name, millimetres(sigma(0)),
+                  millimetres(sigma(1)), millimetres(sigma(2)), degrees(sigma(3)), degrees(sigma(4)),
+                  degrees(sigma(5)), note.c_str());
     return std::string(line);
   };
   std::string out = "  1 sigma of X          x [mm]  y [mm]  z [mm]   rx [deg] ry [deg] rz [deg]\n";
@@ -280,9 +280,9 @@ std::string check_summary(const CalibrationCheck& check) {
   for (std::size_t i = 0; i < check.views.size(); ++i) {
     const CheckedView& v = check.views[i];
     const bool left_out = std::find(check.left_out.begin(), check.left_out.end(), static_cast<int>(i)) != check.left_out.end();
-    text += line("  %4zu   %8.3f  (%8.3f)     %8.4f  (%8.4f)      %5.2f%s", i, v.translation_error * 1e3,
-                 v.predicted_translation_sigma * 1e3, v.rotation_error * 180.0 / M_PI,
-                 v.predicted_rotation_sigma * 180.0 / M_PI, v.mahalanobis, left_out ? "  left out" : "");
+    text += line("  %4zu   %8.3f  (%8.3f)     %8.4f  (%8.4f)      %5.2f%s", i, millimetres(v.translation_error),
+                 millimetres(v.predicted_translation_sigma), degrees(v.rotation_error),
+                 degrees(v.predicted_rotation_sigma), v.mahalanobis, left_out ? "  left out" : "");
   }
   text += "  (1 sigma: the error's RMS the calibration predicts for that view, its own noise and X's and Y's "
           "uncertainty; sigma: the view's Mahalanobis length, about 2.3 on average when nothing changed)\n";

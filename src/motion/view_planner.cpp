@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/view_planner.h"
 
 #include <cmath>
@@ -8,7 +9,7 @@
 namespace handeye::motion {
 namespace {
 
-std::string degrees(double rad) { return number_text(rad * 180.0 / M_PI, 3) + " deg"; }
+std::string degrees_text(double rad) { return number_text(degrees(rad), 3) + " deg"; }
 
 }  // namespace
 
@@ -66,8 +67,8 @@ std::optional<std::string> limit_problem(const Arm& arm, const Eigen::VectorXd& 
   for (int j = 0; j < arm.joints(); ++j) {
     const JointLimit& limit = arm.limits()[j];
     if (q(j) < limit.lower + margin || q(j) > limit.upper - margin)
-      return limit.name + " at " + degrees(q(j)) + ", within " + degrees(margin) + " of its limits [" +
-             degrees(limit.lower) + ", " + degrees(limit.upper) + "]";
+      return limit.name + " at " + degrees_text(q(j)) + ", within " + degrees_text(margin) + " of its limits [" +
+             degrees_text(limit.lower) + ", " + degrees_text(limit.upper) + "]";
   }
   return std::nullopt;
 }
@@ -83,7 +84,7 @@ std::optional<std::string> view_problem(const Rig& rig, const std::optional<Came
   // The face's normal (z) points towards a camera that sees it.
   const double tilt = std::acos(std::clamp(T_camera_face.linear().col(2).dot(-centre / distance), -1.0, 1.0));
   if (tilt > options.max_tilt)
-    return "the camera would see the target " + degrees(tilt) + " off its normal, beyond " + degrees(options.max_tilt);
+    return "the camera would see the target " + degrees_text(tilt) + " off its normal, beyond " + degrees_text(options.max_tilt);
   std::vector<Eigen::Vector3d> points{Eigen::Vector3d::Zero()};
   const Eigen::Vector2d half = 0.5 * rig.face_size;
   for (const double sx : {-1.0, 1.0})
@@ -158,7 +159,7 @@ ViewPlan plan_view(const CollisionModel& collision, const Rig& rig, const std::o
       const double step = largest_joint_change(q, current);
       if (step > options.max_joint_step) {
         failed(Refusal::JointStepTooLarge,
-               "a joint would turn " + degrees(step) + ", more than " + degrees(options.max_joint_step));
+               "a joint would turn " + degrees_text(step) + ", more than " + degrees_text(options.max_joint_step));
         continue;
       }
       if (auto contact = collision.contact(q)) {

@@ -18,6 +18,8 @@
 #include <vector>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/target.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/vision/aruco.h"
 #include "handeye_covariance/vision/tag_detector.h"
@@ -36,11 +38,7 @@ constexpr double kFooterGap = 0.005;   // white between the board and the footer
 constexpr double kBarHeight = 0.007;   // the scale bar with its ticks and the gap below
 constexpr std::size_t kMaxFileLines = 12;
 
-std::string mm(double metres, int decimals = 1) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.*f mm", decimals, metres * 1e3);
-  return text;
-}
+std::string mm(double metres, int decimals = 1) { return millimetres_text(metres, decimals); }
 
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -295,7 +293,7 @@ Page parse_page(const std::string& text) {
   if ((n == 2 || (n == 3 && std::string(rest) == "mm")) && w > 0.0 && h > 0.0 && w < 10000.0 && h < 10000.0) {
     char label[64];
     std::snprintf(label, sizeof label, "%gx%g mm", w, h);
-    return Page{label, w * 1e-3, h * 1e-3};
+    return Page{label, metres(w), metres(h)};
   }
   throw HandEyeError(ErrorCode::MalformedFile, "unknown page `" + text + "`", "--page",
                      "use A4, Letter, or the paper's width x height in mm, e.g. 297x420");
@@ -333,7 +331,7 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     check_status(cairo_surface_status(surface.get()), output);
   } else if (extension == ".svg") {
     // Width and height in mm: the SVG's user unit is the millimetre.
-    Surface surface(cairo_svg_surface_create(partial.c_str(), p.page.width * 1e3, p.page.height * 1e3),
+    Surface surface(cairo_svg_surface_create(partial.c_str(), millimetres(p.page.width), millimetres(p.page.height)),
                     cairo_surface_destroy);
     check_status(cairo_surface_status(surface.get()), output);
     cairo_svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_MM);

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/arm_mover.h"
 
 #include <trajectory_msgs/JointTrajectory.h>
@@ -14,10 +15,10 @@ namespace handeye {
 namespace {
 
 double deg(const ros::NodeHandle& pn, const std::string& name, double fallback_deg) {
-  return param(pn, name, fallback_deg) * M_PI / 180.0;
+  return radians(param(pn, name, fallback_deg));
 }
 
-std::string mm(double m) { return number_text(m * 1e3, 3) + " mm"; }
+std::string mm(double m) { return number_text(millimetres(m), 3) + " mm"; }
 
 }  // namespace
 
@@ -52,8 +53,8 @@ ArmMover::ArmMover(ros::NodeHandle node, ros::NodeHandle pn, SessionAccess acces
                        "give [min x, min y, min z, max x, max y, max z] in the base frame, metres");
   options.planner.workspace = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[1], box[2]), Eigen::Vector3d(box[3], box[4], box[5]));
   const std::vector<double> fov = param(pn, "motion/field_of_view_deg", std::vector<double>{60.0, 45.0});
-  options.planner.field_of_view_x = fov.at(0) * M_PI / 180.0;
-  options.planner.field_of_view_y = fov.at(1) * M_PI / 180.0;
+  options.planner.field_of_view_x = radians(fov.at(0));
+  options.planner.field_of_view_y = radians(fov.at(1));
   automatic_ = std::make_unique<AutoCalibration>(*collision_, std::nullopt, options);
   limits_.arrival_allowance = param(pn, "motion/arrival_timeout", limits_.arrival_allowance);
   limits_.stall_time = param(pn, "motion/stall_time", limits_.stall_time);
@@ -151,7 +152,7 @@ void ArmMover::status(const std::string& state, const std::string& text, std::op
     AutoCalibrateFeedback feedback;
     feedback.samples = static_cast<int>(access_.samples());
     const auto progress = access_.progress(goal_target).second;
-    feedback.object_error_mm = progress ? progress->object_sigma * 1e3 : 0.0;
+    feedback.object_error_mm = progress ? millimetres(progress->object_sigma) : 0.0;
     feedback.state = state;
     feedback.text = msg.data;
     action_->publishFeedback(feedback);
@@ -271,7 +272,7 @@ void ArmMover::on_goal() {
     return;
   }
   action_goal_ = true;
-  goal_target_ = goal->target_mm > 0.0 ? goal->target_mm * 1e-3 : target_object_sigma_;
+  goal_target_ = goal->target_mm > 0.0 ? metres(goal->target_mm) : target_object_sigma_;
   goal_max_views_ = goal->max_views > 0 ? goal->max_views : max_views_;
 }
 
@@ -319,8 +320,8 @@ void ArmMover::publish_plan_markers(const std::optional<NextMove>& move) {
       }
     }
     const std::string label = move->bootstrap ? "planned: a first move"
-                                              : "planned: object " + number_text(move->object_sigma * 1e3, 3) + " -> " +
-                                                    number_text(move->predicted_object_sigma * 1e3, 3) + " mm (1 sigma)";
+                                              : "planned: object " + number_text(millimetres(move->object_sigma), 3) + " -> " +
+                                                    number_text(millimetres(move->predicted_object_sigma), 3) + " mm (1 sigma)";
     NextPoseMarkerOptions options;
     options.ns = "handeye_planned_move_view";
     const visualization_msgs::MarkerArray view =
@@ -527,7 +528,7 @@ void ArmMover::work() {
         result.reached = reached;
         result.samples = static_cast<int>(access_.samples());
         const auto last_progress = access_.progress(target).second;
-        result.object_error_mm = last_progress ? last_progress->object_sigma * 1e3 : 0.0;
+        result.object_error_mm = last_progress ? millimetres(last_progress->object_sigma) : 0.0;
         result.message = last;
         if (reached)
           action_->setSucceeded(result, "reached");

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/bag.h"
 
 #include <algorithm>
@@ -48,8 +49,8 @@ SimulatedBag write_simulated_bag(const std::string& path, const BagSimulationOpt
   }
 
   PoseNoise noise;  // in the camera frame (the parent of T_camera_pattern)
-  const double lateral = o.lateral_noise_mm * 1e-3, depth = o.depth_noise_mm * 1e-3;
-  const double tilt = o.tilt_noise_deg * M_PI / 180, roll = o.roll_noise_deg * M_PI / 180;
+  const double lateral = metres(o.lateral_noise_mm), depth = metres(o.depth_noise_mm);
+  const double tilt = radians(o.tilt_noise_deg), roll = radians(o.roll_noise_deg);
   noise.translation = Eigen::Vector3d(lateral * lateral, lateral * lateral, depth * depth).asDiagonal();
   noise.rotation = Eigen::Vector3d(tilt * tilt, tilt * tilt, roll * roll).asDiagonal();
 

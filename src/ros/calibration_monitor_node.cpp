@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/calibration_monitor_node.h"
 
 #include <filesystem>
@@ -121,8 +122,8 @@ void CalibrationMonitorNode::publish_diagnostics() {  // mutex_ held
       if (v.check->changed) {
         value("changed", v.check->change.what);
         const EstimatedChange::Delta& d = v.check->change.reported();
-        value("change_mm", number_text(d.value.head<3>().norm() * 1e3, 3));
-        value("change_deg", number_text(d.value.tail<3>().norm() * 180.0 / M_PI, 3));
+        value("change_mm", number_text(millimetres(d.value.head<3>().norm()), 3));
+        value("change_deg", number_text(degrees(d.value.tail<3>().norm()), 3));
       }
     }
   }

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/calibration_node.h"
 
 #include <sys/resource.h>
@@ -21,7 +22,6 @@ namespace handeye {
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr std::size_t kAgeWindow = 300;  // detections: 10 s at 30 Hz
 
 /// A saved calibration of another setup or other frames than this node's (what the
@@ -271,8 +271,8 @@ void CalibrationNode::publish_next_pose() {  // lock held
     X = analysis_->estimate->T_parent_camera;
     // ASCII: rviz's text markers draw no Greek letters or arrows.
     label = "next pose: object " +
-            number_text(object_sigma({X, analysis_->estimate->pose_covariance}, config_.working_distance) * 1e3, 3) +
-            " -> " + number_text(next->object_sigma * 1e3, 3) + " mm (1 sigma)";
+            number_text(millimetres(object_sigma({X, analysis_->estimate->pose_covariance}, config_.working_distance)), 3) +
+            " -> " + number_text(millimetres(next->object_sigma), 3) + " mm (1 sigma)";
   }
   next_pose_pub_.publish(next_pose_markers(config_.rig, pose, X, config_.working_distance, label,
                                            config_.rig.frames.base, ros::Time::now()));
@@ -291,9 +291,9 @@ void CalibrationNode::publish_status() {  // lock held
   status.target_tolerance_mm = config_.target_tolerance_mm;
   status.detections_received = detections_received_;
   const std::vector<double> ages(detection_ages_.begin(), detection_ages_.end());
-  status.detection_age_median_ms = linear_quantile(ages, 0.5) * 1e3;
-  status.detection_age_p99_ms = linear_quantile(ages, 0.99) * 1e3;
-  status.detection_age_max_ms = ages.empty() ? 0.0 : *std::max_element(ages.begin(), ages.end()) * 1e3;
+  status.detection_age_median_ms = milliseconds(linear_quantile(ages, 0.5));
+  status.detection_age_p99_ms = milliseconds(linear_quantile(ages, 0.99));
+  status.detection_age_max_ms = ages.empty() ? 0.0 : milliseconds(*std::max_element(ages.begin(), ages.end()));
   // The latest analysis: of the current samples, or of fewer while the worker
   // catches up with a new one (estimate_samples says which).
   const bool current = analysis_ && analysis_->generation == session_.generation();
@@ -305,12 +305,12 @@ void CalibrationNode::publish_status() {  // lock held
     status.has_estimate = true;
     status.estimate = conversions::to_msg(X);
     for (int i = 0; i < 3; ++i) {
-      status.sigma_translation_mm[i] = std::sqrt(std::max(0.0, X.covariance(i, i))) * 1e3;
-      status.sigma_rotation_deg[i] = std::sqrt(std::max(0.0, X.covariance(i + 3, i + 3))) / kDeg;
+      status.sigma_translation_mm[i] = millimetres(std::sqrt(std::max(0.0, X.covariance(i, i))));
+      status.sigma_rotation_deg[i] = degrees(std::sqrt(std::max(0.0, X.covariance(i + 3, i + 3))));
     }
     // An object on the optical axis at the working distance (the paper's 0.05 deg -> 0.6 mm at 70 cm).
-    const TargetProgress progress = target_progress(c, config_.target_tolerance_mm * 1e-3, config_.working_distance);
-    status.object_error_mm = progress.object_sigma * 1e3;
+    const TargetProgress progress = target_progress(c, metres(config_.target_tolerance_mm), config_.working_distance);
+    status.object_error_mm = millimetres(progress.object_sigma);
     status.target_reached = progress.reached;
     if (!progress.why_not.empty()) status.last_event += "; " + progress.why_not;
     for (const auto& r : c.rejected) {
@@ -320,8 +320,8 @@ void CalibrationNode::publish_status() {  // lock held
   }
   if (current) {
     for (const SampleFit& fit : analysis_->fits) {
-      status.sample_residual_mm.push_back(fit.translation * 1e3);
-      status.sample_residual_deg.push_back(fit.rotation / kDeg);
+      status.sample_residual_mm.push_back(millimetres(fit.translation));
+      status.sample_residual_deg.push_back(degrees(fit.rotation));
       status.sample_residual_sigma.push_back(fit.sigmas);
     }
   }
@@ -329,7 +329,7 @@ void CalibrationNode::publish_status() {  // lock held
     status.has_suggestion = true;
     status.next_pose = stamped(next->T_base_effector, config_.rig.frames.base);
     status.next_pose.header.stamp = status.header.stamp;
-    status.next_pose_object_error_mm = next->object_sigma * 1e3;
+    status.next_pose_object_error_mm = millimetres(next->object_sigma);
   }
   status_pub_.publish(status);
 }
@@ -452,12 +452,12 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   }
   res.message = "X = T_" + config_.rig.camera_parent_frame() + "_" + config_.rig.frames.camera + " from " +
                 std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
-                number_text(max_sigma(c.translation_covariance) * 1e3) + " mm, " +
-                number_text(max_sigma(c.rotation_covariance) / kDeg) + " deg";
+                number_text(millimetres(max_sigma(c.translation_covariance))) + " mm, " +
+                number_text(degrees(max_sigma(c.rotation_covariance))) + " deg";
   if (c.shared_robot_error && c.shared_robot_error->used) {
     res.message += "; with a robot error shared by nearby poses (" +
-                   number_text(c.shared_robot_error->translation_sigma * 1e3) + " mm, " +
-                   number_text(c.shared_robot_error->rotation_sigma / kDeg) + " deg over " +
+                   number_text(millimetres(c.shared_robot_error->translation_sigma)) + " mm, " +
+                   number_text(degrees(c.shared_robot_error->rotation_sigma)) + " deg over " +
                    number_text(c.shared_robot_error->length_scale, 2) + " m)";
   }
   if (c.honesty && c.honesty->verdict != "not run") res.message += "; " + c.honesty->text;
@@ -649,18 +649,18 @@ bool CalibrationNode::suggest_pose(SuggestPose::Request& req, SuggestPose::Respo
     SuggestRequest request;
     request.criterion = req.criterion;
     request.count = req.count;
-    request.target_object_sigma = req.target_mm * 1e-3;
+    request.target_object_sigma = metres(req.target_mm);
     const SuggestResult r = session_.suggest(snapshot, request);  // outside the lock: it may take a while
     const std::string& base = config_.rig.frames.base;
     for (int i = 0; i < r.count && i < static_cast<int>(r.suggestion.ranked.size()); ++i) {
       res.poses.push_back(stamped(r.suggestion.ranked[i].T_base_effector, base));
-      res.predicted_object_error_mm.push_back(r.suggestion.ranked[i].object_sigma * 1e3);
+      res.predicted_object_error_mm.push_back(millimetres(r.suggestion.ranked[i].object_sigma));
     }
     for (const ScoredPose& p : r.plan.poses) res.plan.push_back(stamped(p.T_base_effector, base));
-    res.current_object_error_mm = r.suggestion.current_object_sigma * 1e3;
+    res.current_object_error_mm = millimetres(r.suggestion.current_object_sigma);
     res.poses_to_target = r.plan.reached ? static_cast<int>(r.plan.poses.size()) : -1;
     res.success = true;
-    const std::string target = number_text(r.target_object_sigma * 1e3);
+    const std::string target = number_text(millimetres(r.target_object_sigma));
     res.message = r.plan.reached ? std::to_string(r.plan.poses.size()) + " more pose(s) reach " + target + " mm (predicted)"
                                  : "the target " + target + " mm is not reached within " +
                                        std::to_string(session_.settings().max_plan_poses) + " more poses";

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 
 #include "handeye_covariance/core/errors.h"
@@ -24,8 +25,8 @@ visualization_msgs::Marker ellipsoid_marker(const Ellipsoid& e, const Eigen::Vec
 }  // namespace
 
 std::string sigma_label(const PoseWithCovariance& X) {
-  return "1\u03c3 " + number_text(max_sigma(X.covariance.topLeftCorner<3, 3>()) * 1e3, 3) + " mm, " +
-         number_text(max_sigma(X.covariance.bottomRightCorner<3, 3>()) * 180.0 / M_PI, 3) + "\u00b0";
+  return "1\u03c3 " + number_text(millimetres(max_sigma(X.covariance.topLeftCorner<3, 3>())), 3) + " mm, " +
+         number_text(degrees(max_sigma(X.covariance.bottomRightCorner<3, 3>())), 3) + "\u00b0";
 }
 
 visualization_msgs::MarkerArray covariance_markers(const PoseWithCovariance& X, const std::string& frame,

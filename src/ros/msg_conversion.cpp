@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 
 #include "handeye_covariance/core/errors.h"
@@ -216,10 +217,10 @@ CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp
     std::copy(c.begin(), c.end(), msg.change_covariance.begin());
   }
   for (const CheckedView& v : check.views) {
-    msg.view_error_mm.push_back(v.translation_error * 1e3);
-    msg.view_sigma_mm.push_back(v.predicted_translation_sigma * 1e3);
-    msg.view_error_deg.push_back(v.rotation_error * 180.0 / M_PI);
-    msg.view_sigma_deg.push_back(v.predicted_rotation_sigma * 180.0 / M_PI);
+    msg.view_error_mm.push_back(millimetres(v.translation_error));
+    msg.view_sigma_mm.push_back(millimetres(v.predicted_translation_sigma));
+    msg.view_error_deg.push_back(degrees(v.rotation_error));
+    msg.view_sigma_deg.push_back(degrees(v.predicted_rotation_sigma));
     msg.view_mahalanobis.push_back(v.mahalanobis);
   }
   msg.left_out = check.left_out;

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/object_localizer.h"
 
 #include <std_msgs/String.h>
@@ -40,12 +41,12 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
 
   // Stated 1 sigmas; which covariance each pose gets is choose_covariance's rule.
   if (private_node_.hasParam("robot_sigma_mm") || private_node_.hasParam("robot_sigma_deg")) {
-    stated_robot_ = isotropic_covariance(param(private_node_, "robot_sigma_mm", 0.0) * 1e-3,
-                                         param(private_node_, "robot_sigma_deg", 0.0) * M_PI / 180.0);
+    stated_robot_ = isotropic_covariance(metres(param(private_node_, "robot_sigma_mm", 0.0)),
+                                         radians(param(private_node_, "robot_sigma_deg", 0.0)));
   }
   if (private_node_.hasParam("object_sigma_mm") || private_node_.hasParam("object_sigma_deg")) {
-    stated_object_ = isotropic_covariance(param(private_node_, "object_sigma_mm", 0.0) * 1e-3,
-                                          param(private_node_, "object_sigma_deg", 0.0) * M_PI / 180.0);
+    stated_object_ = isotropic_covariance(metres(param(private_node_, "object_sigma_mm", 0.0)),
+                                          radians(param(private_node_, "object_sigma_deg", 0.0)));
   }
   if (rig_.eye_in_hand() && robot_covariance().origin == CovarianceOrigin::None) {
     ROS_WARN("no ~robot_sigma_mm/~robot_sigma_deg and no noise model in the calibration: the robot pose is "

@@ -35,6 +35,7 @@
 
 #include <optional>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/view_planner.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -59,9 +60,9 @@ class RigSimulator {
     detection_covariance_ = param(pn, "detection_covariance", false);
     latency_ = param(pn, "latency", 0.05);
     tag_ids_ = param(pn, "tag_ids", std::vector<int>{0});
-    const double rotation_sigma = param(pn, "pattern_rotation_noise_deg", 0.05) * M_PI / 180.0;
-    const double translation_sigma = param(pn, "pattern_translation_noise_mm", 0.3) * 1e-3;
-    const double depth_sigma = param(pn, "pattern_depth_noise_mm", translation_sigma * 1e3) * 1e-3;
+    const double rotation_sigma = radians(param(pn, "pattern_rotation_noise_deg", 0.05));
+    const double translation_sigma = metres(param(pn, "pattern_translation_noise_mm", 0.3));
+    const double depth_sigma = metres(param(pn, "pattern_depth_noise_mm", millimetres(translation_sigma)));
     noise_.rotation = rotation_sigma * rotation_sigma * Eigen::Matrix3d::Identity();
     noise_.translation = Eigen::Vector3d(translation_sigma, translation_sigma, depth_sigma).cwiseAbs2().asDiagonal();
     camera_link_ = param<std::string>(pn, "camera_link", "");
@@ -180,7 +181,7 @@ class RigSimulator {
     std::lock_guard<std::mutex> lock(bump_mutex_);
     if (bumped_at_.isZero() || capture < bumped_at_) return trajectory_.X;
     Eigen::Isometry3d X = trajectory_.X;
-    X.translation() += X.linear() * Eigen::Vector3d(bump_mm_ * 1e-3, 0.0, 0.0);
+    X.translation() += X.linear() * Eigen::Vector3d(metres(bump_mm_), 0.0, 0.0);
     return X;
   }
 

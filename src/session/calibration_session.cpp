@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
@@ -50,7 +51,7 @@ SessionSettings session_settings(const SessionConfig& config) {
   if (!config.candidate_poses_file.empty()) {
     s.candidate_poses = io::read_candidate_poses(expand_home(config.candidate_poses_file));
   }
-  s.target_object_sigma = config.target_tolerance_mm * 1e-3;
+  s.target_object_sigma = metres(config.target_tolerance_mm);
   s.session_file = expand_home(config.session_file);
   return s;
 }

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/session/report.h"
 
 #include <Eigen/Eigenvalues>
@@ -18,7 +19,7 @@ const char* const kAxisNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
 
 /// "1.8 mm" or "0.12 deg" for ROS axis k's value (m or rad).
 std::string axis_value(int k, double value) {
-  return k < 3 ? number_text(value * 1e3, 2) + " mm" : number_text(value * 180.0 / M_PI, 2) + " deg";
+  return k < 3 ? number_text(millimetres(value), 2) + " mm" : number_text(degrees(value), 2) + " deg";
 }
 
 /// "1009", "12", "4.9", "0.31": whole numbers from 10 on (no "1e+03" for people).
@@ -122,7 +123,7 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
     const SampleFit& f = r.fits[static_cast<std::size_t>(i)];
     const Calibration::Rejected* rejected = rejection_of(r.calibration, i);
     std::string text = "sample " + std::to_string(i) + " is " + readable(f.sigmas) + " sigma off (" +
-                       readable(f.translation * 1e3) + " mm, " + readable(f.rotation * 180.0 / M_PI) + " deg): remove it";
+                       readable(millimetres(f.translation)) + " mm, " + readable(degrees(f.rotation)) + " deg): remove it";
     text += rejected
                 ? " (X already leaves it out: " + rejected->reason + ")"
                 : " (X still uses it; the panel's Remove selected or /remove_sample " + std::to_string(i) + ")";
@@ -168,8 +169,8 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
   }
   if (r.target_object_sigma > 0.0 && r.object_sigma > r.target_object_sigma) {
     advice.push_back("an object at " + number_text(r.working_distance, 2) + " m is known to " +
-                     number_text(r.object_sigma * 1e3, 2) + " mm (1 sigma, worst axis), the target is " +
-                     number_text(r.target_object_sigma * 1e3, 2) +
+                     number_text(millimetres(r.object_sigma), 2) + " mm (1 sigma, worst axis), the target is " +
+                     number_text(millimetres(r.target_object_sigma), 2) +
                      " mm: take more samples at the suggested poses (the panel's Suggest pose, or handeye suggest)");
   } else if (!r.target_not_reached.empty()) {
     advice.push_back(r.target_not_reached);

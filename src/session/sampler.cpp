@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/session/sampler.h"
 
 #include "handeye_covariance/core/errors.h"
@@ -80,9 +81,9 @@ SampleOutcome Sampler::try_add(const Observation& observation) {
     const double dt = translation_between(observation.T_base_effector, samples_[i].T_base_effector);
     const double dR = rotation_between(observation.T_base_effector, samples_[i].T_base_effector);
     if (dt < options_.min_translation && dR < options_.min_rotation) {
-      return {false, "refused: too close to sample " + std::to_string(i) + " (" + number_text(dt * 1e3) + " mm, " +
-                         number_text(dR * 180.0 / M_PI) + " deg apart; need " + number_text(options_.min_translation * 1e3) +
-                         " mm or " + number_text(options_.min_rotation * 180.0 / M_PI) +
+      return {false, "refused: too close to sample " + std::to_string(i) + " (" + number_text(millimetres(dt)) + " mm, " +
+                         number_text(degrees(dR)) + " deg apart; need " + number_text(millimetres(options_.min_translation)) +
+                         " mm or " + number_text(degrees(options_.min_rotation)) +
                          " deg); move the robot to a new pose"};
     }
   }

@@ -1,3 +1,4 @@
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/check_study.h"
 
 #include <algorithm>
@@ -65,7 +66,7 @@ double upper_quantile(std::vector<double>& draws, double alpha) {
 }  // namespace
 
 MeasurementNoise check_study_noise() {
-  const double deg = M_PI / 180.0, mm = 1e-3;
+  const double deg = kRadiansPerDegree, mm = kMetresPerMillimetre;
   MeasurementNoise noise;
   noise.camera.rotation = std::pow(0.05 * deg, 2) * Eigen::Matrix3d::Identity();
   noise.camera.translation = std::pow(0.5 * mm, 2) * Eigen::Matrix3d::Identity();

@@ -15,6 +15,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/python_script.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/monte_carlo_study.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
@@ -213,7 +214,7 @@ int sim_command(const Args& args, std::ostream& out, std::ostream& err) {
   vm.clear();
   if (!parse("sim", "--output FILE [options]", options, args, vm, out)) return kOk;
   const Setup setup = a.checked_setup();
-  const double deg = M_PI / 180.0, mm = 1e-3;
+  const double deg = kRadiansPerDegree, mm = kMetresPerMillimetre;
   MeasurementNoise noise;
   noise.robot.rotation = std::pow(a.robot_rotation_deg * deg, 2) * Eigen::Matrix3d::Identity();
   noise.robot.translation = std::pow(a.robot_translation_mm * mm, 2) * Eigen::Matrix3d::Identity();
@@ -323,7 +324,7 @@ int validate_command(const std::vector<std::string>& args, std::ostream& out, st
                       "       %6d  %8.1f\n",
                       lambda, s.rotation.nees_mean, s.translation.nees_mean, s.pose.nees_mean, s.translation.epsilon,
                       s.translation.floor, y.rotation.nees_mean, y.translation.nees_mean, y.pose.nees_mean,
-                      r.pairs.pose.nees_mean, r.rms_translation * 1e3, r.pairs_rms_translation * 1e3, r.not_converged,
+                      r.pairs.pose.nees_mean, millimetres(r.rms_translation), millimetres(r.pairs_rms_translation), r.not_converged,
                       r.seconds_per_solve * 1e6);
       } else {
         std::snprintf(line, sizeof line,
@@ -374,7 +375,7 @@ std::optional<Matrix6d> stated_covariance(const po::variables_map& vm, const std
     throw HandEyeError(ErrorCode::MissingKey, "give both --" + mm + " and --" + deg, "--" + prefix,
                        "state the translation and the rotation 1 sigma (0 for exact)");
   }
-  const double sigma_t = vm[mm].as<double>() * 1e-3, sigma_R = vm[deg].as<double>() * M_PI / 180.0;
+  const double sigma_t = metres(vm[mm].as<double>()), sigma_R = radians(vm[deg].as<double>());
   if (!(sigma_t >= 0.0) || !(sigma_R >= 0.0)) {
     throw HandEyeError(ErrorCode::InvalidNoise, "a 1 sigma must be a number >= 0", "--" + mm + "/--" + deg,
                        "give the standard deviation per axis, e.g. 0.3 (mm) and 0.05 (deg)");
@@ -485,7 +486,7 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
 int noise_command(const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
   std::string input, calibration_path, source = "auto", output;
   RepeatedObservationOptions grouping;
-  double group_mm = grouping.group_translation * 1e3, group_deg = grouping.group_rotation * 180.0 / M_PI;
+  double group_mm = millimetres(grouping.group_translation), group_deg = degrees(grouping.group_rotation);
   po::options_description options("noise: measure the pose noise (paper eq. 64-67) and write a `noise` block");
   options.add_options()("help,h", "show this help")(
       "input,i", po::value(&input)->required(), "samples file (YAML)")(
@@ -509,8 +510,8 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
                        "use auto, repeated or residuals");
   }
   if (output.empty()) output = std::filesystem::path(input).stem().string() + "_noise.yaml";
-  grouping.group_translation = group_mm * 1e-3;
-  grouping.group_rotation = group_deg * M_PI / 180.0;
+  grouping.group_translation = metres(group_mm);
+  grouping.group_rotation = radians(group_deg);
   const SampleSet samples = io::read_samples(input);
 
   std::optional<NoiseEstimate> estimate;
@@ -556,10 +557,10 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
       << ", " << number_text(e.dof) << " dof (each variance +-" << number_text(100.0 * std::sqrt(2.0 / e.dof), 2)
       << "% at 1 sigma)\n";
   out << "  pattern 1 sigma [mm]   " << per_axis(e.noise.camera.translation, 1e3) << "   (camera x, y, z)\n";
-  out << "  pattern 1 sigma [deg]  " << per_axis(e.noise.camera.rotation, 180.0 / M_PI) << "\n";
+  out << "  pattern 1 sigma [deg]  " << per_axis(e.noise.camera.rotation, kDegreesPerRadian) << "\n";
   out << "  robot 1 sigma [mm]     " << per_axis(e.noise.robot.translation, 1e3)
       << (e.robot_identified ? "" : "   (not identifiable from residuals: as given, else 0)") << "\n";
-  out << "  robot 1 sigma [deg]    " << per_axis(e.noise.robot.rotation, 180.0 / M_PI) << "\n";
+  out << "  robot 1 sigma [deg]    " << per_axis(e.noise.robot.rotation, kDegreesPerRadian) << "\n";
   for (const std::string& note : e.notes) out << "  note: " << note << "\n";
   io::write_file_atomically(output, io::format_noise_estimate(e));
   out << "  written to             " << output << "\n"
@@ -574,8 +575,8 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   const SessionSettings defaults;
   std::string input, output, config_path;
   int count = 5, max_poses = defaults.max_plan_poses;
-  double target_mm = config.target_tolerance_mm, reach_mm = config.reach_translation * 1e3,
-         reach_deg = config.reach_rotation * 180.0 / M_PI, working_distance = config.working_distance;
+  double target_mm = config.target_tolerance_mm, reach_mm = millimetres(config.reach_translation),
+         reach_deg = degrees(config.reach_rotation), working_distance = config.working_distance;
   unsigned seed = defaults.suggest.seed;
   po::options_description description(
       "suggest: which poses to add next, and how many more reach the target (ranked by the predicted covariance)");
@@ -606,8 +607,8 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
     if (vm.count("criterion")) config.suggest_criterion = command_line.suggest_criterion;
     if (!vm.count("working-distance")) working_distance = config.working_distance;
     if (!vm.count("target-mm")) target_mm = config.target_tolerance_mm;
-    if (!vm.count("reach-mm")) reach_mm = config.reach_translation * 1e3;
-    if (!vm.count("reach-deg")) reach_deg = config.reach_rotation * 180.0 / M_PI;
+    if (!vm.count("reach-mm")) reach_mm = millimetres(config.reach_translation);
+    if (!vm.count("reach-deg")) reach_deg = degrees(config.reach_rotation);
   }
   if (!(working_distance > 0.0) || !(target_mm > 0.0) || count < 1 || max_poses < 0) {
     throw HandEyeError(ErrorCode::MalformedFile, "--working-distance and --target-mm must be > 0, --count >= 1",
@@ -615,8 +616,8 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   }
   config.working_distance = working_distance;
   config.target_tolerance_mm = target_mm;
-  config.reach_translation = reach_mm * 1e-3;
-  config.reach_rotation = reach_deg * M_PI / 180.0;
+  config.reach_translation = metres(reach_mm);
+  config.reach_rotation = radians(reach_deg);
   const SampleSet all = io::read_samples(input);
   SessionSettings settings = session_settings(all, config);
   settings.max_plan_poses = max_poses;
@@ -633,7 +634,7 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   const bool sampled = settings.candidate_poses.empty();
 
   char line[320];
-  out << "Now: " << samples.samples.size() << " samples, object 1 sigma " << number_text(suggestion.current_object_sigma * 1e3)
+  out << "Now: " << samples.samples.size() << " samples, object 1 sigma " << number_text(millimetres(suggestion.current_object_sigma))
       << " mm at " << number_text(options.working_distance) << " m (worst axis); criterion " << to_string(options.criterion)
       << ", " << suggestion.considered << " candidates" << (sampled ? " (sampled views)" : "")
       << (suggestion.refused ? ", " + std::to_string(suggestion.refused) + " refused" : "") << "\n";
@@ -645,21 +646,21 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
     if (q.w() < 0) q.coeffs() *= -1.0;
     const Eigen::Vector3d t = p.T_base_effector.translation();
     std::snprintf(line, sizeof line, "  %2d  %+.4f %+.4f %+.4f   %+.5f %+.5f %+.5f %+.5f   %.3f\n", i + 1, t.x(), t.y(),
-                  t.z(), q.x(), q.y(), q.z(), q.w(), p.object_sigma * 1e3);
+                  t.z(), q.x(), q.y(), q.z(), q.w(), millimetres(p.object_sigma));
     out << line;
   }
   if (plan.reached) {
     out << "To reach " << number_text(target_mm) << " mm: " << plan.poses.size() << " more pose(s)"
-        << (plan.poses.empty() ? " (already there)" : ", predicted " + number_text(plan.poses.empty() ? 0.0 : plan.poses.back().object_sigma * 1e3) + " mm after them")
+        << (plan.poses.empty() ? " (already there)" : ", predicted " + number_text(plan.poses.empty() ? 0.0 : millimetres(plan.poses.back().object_sigma)) + " mm after them")
         << poses_for_the_noise_text(plan) << "\n";
   } else {
     out << "To reach " << number_text(target_mm) << " mm: not within " << plan.poses.size() << " more pose(s) (predicted "
-        << number_text(plan.poses.empty() ? suggestion.current_object_sigma * 1e3 : plan.poses.back().object_sigma * 1e3)
+        << number_text(plan.poses.empty() ? millimetres(suggestion.current_object_sigma) : millimetres(plan.poses.back().object_sigma))
         << " mm after them); lower the noise, widen the reach, or relax the target\n";
   }
   out << "  (first-order prediction at the current estimate; the node's /suggest_pose gives the same live)\n";
   if (!output.empty()) {
-    io::write_file_atomically(output, io::format_suggestions(suggestion, count, plan, target_mm * 1e-3, options));
+    io::write_file_atomically(output, io::format_suggestions(suggestion, count, plan, metres(target_mm), options));
     out << "  written to " << output << "\n";
   }
   return kOk;

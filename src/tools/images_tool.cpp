@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli_common.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/images/image_folder.h"
@@ -99,7 +100,7 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
   double target_point_sigma = -1.0;  // estimated
   if (target_error != "estimate") {
     char* end = nullptr;
-    target_point_sigma = std::strtod(target_error.c_str(), &end) * 1e-3;
+    target_point_sigma = metres(std::strtod(target_error.c_str(), &end));
     if (end == target_error.c_str() || *end != '\0' || !(target_point_sigma >= 0.0) || !std::isfinite(target_point_sigma)) {
       throw HandEyeError(ErrorCode::MalformedFile, "`" + target_error + "` is not a length", "--target-error-mm",
                          "give the target points' 1 sigma in mm (0 for an exact target), or `estimate`");

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/print/target_printer.h"
@@ -16,7 +17,7 @@ namespace handeye {
 namespace cli {
 namespace {
 
-std::string mm(double metres) { return number_text(metres * 1e3, 4) + " mm"; }
+std::string mm(double metres) { return number_text(millimetres(metres), 4) + " mm"; }
 
 bool is_yaml(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
@@ -27,7 +28,7 @@ bool is_yaml(const std::string& path) {
 int write_measured(const std::string& target_path, const std::string& text, const Target& target,
                    const std::string& measured_text, const std::string& output, std::ostream& out) {
   char* end = nullptr;
-  const double measured = std::strtod(measured_text.c_str(), &end) * 1e-3;
+  const double measured = metres(std::strtod(measured_text.c_str(), &end));
   if (end == measured_text.c_str() || *end != '\0' || !(measured > 0.0) || !std::isfinite(measured)) {
     throw HandEyeError(ErrorCode::MalformedFile, "`" + measured_text + "` is not a length", "--measured-square",
                        "give the printed square (marker) as measured, in mm, e.g. 20.1");

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "handeye_covariance/core/units.h"  // messages give mm and degrees
+
 namespace handeye {
 
 enum class ErrorCode {
@@ -32,8 +34,6 @@ enum class ErrorCode {
 /// A number for a message, with `significant_digits` digits ("0.0484", "1.2e-05").
 std::string number_text(double value, int significant_digits = 3);
 
-/// An angle for a message: SI (rad) inside, degrees where a person reads it.
-inline double degrees(double radians) { return radians * 180.0 / 3.14159265358979323846; }
 
 /// Stable name used in messages and in tests, e.g. "ParallelRotationAxes".
 const char* to_string(ErrorCode code);

@@ -129,7 +129,7 @@ std::string target_file_types();
 std::string one_of(const std::vector<std::string>& names);
 
 /// "23.6 mm".
-std::string millimetres(double metres, int decimals = 1);
+std::string millimetres_text(double metres, int decimals = 1);
 
 /// OpenCV's board frames (y down, z into the board) seen as a printed face or a
 /// marker's frame (y up, z out of it): the same plane turned by 180 degrees about x.

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -15,8 +16,8 @@ using Rng = std::mt19937_64;  // every random draw in the package is seeded
 struct ViewpointOptions {
   double min_distance = 0.4;        // m, camera to pattern
   double max_distance = 0.8;        // m
-  double max_tilt = 35.0 * M_PI / 180.0;  // viewing angle off the pattern normal
-  double max_roll = 60.0 * M_PI / 180.0;  // about the optical axis
+  double max_tilt = radians(35.0);  // viewing angle off the pattern normal
+  double max_roll = radians(60.0);  // about the optical axis
   double max_offset = 0.05;         // m, pattern centre off the optical axis
 };
 

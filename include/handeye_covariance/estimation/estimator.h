@@ -26,6 +26,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/measurements.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -38,18 +39,18 @@ struct SolverOptions {
   /// ... or when the relative change of the weighted cost falls below this.
   double cost_tolerance = 1e-14;
   /// A motion counts as rotating when both its angles exceed this ...
-  double min_rotation_angle = 0.5 * M_PI / 180.0;
+  double min_rotation_angle = radians(0.5);
   /// ... and this many sigma of its rotation-angle noise.
   double min_rotation_sigmas = 3.0;
   /// Two rotation axes count as different beyond this angle.
-  double min_axis_angle = 1.0 * M_PI / 180.0;
+  double min_axis_angle = radians(1.0);
   /// |angle(A) - angle(B)| beyond this many sigma refuses the input.
   double angle_mismatch_sigmas = 8.0;
   /// With no noise given the spread is the motions' own, which anisotropic
   /// detector noise makes uneven (axes along the optical axis are better known):
   /// a mismatch is then refused only beyond this too. Smaller ones are left to
   /// the outlier stage (outliers.h) and the residuals.
-  double min_angle_mismatch_without_noise = 1.0 * M_PI / 180.0;
+  double min_angle_mismatch_without_noise = radians(1.0);
   /// Refuse a result whose rotation 1-sigma exceeds this (rad): the first-order
   /// covariance is meaningless there.
   double max_rotation_sigma = 0.1;

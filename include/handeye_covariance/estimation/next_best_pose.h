@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/core/viewpoints.h"
@@ -37,10 +38,10 @@ struct SuggestOptions {
   ViewpointOptions views;
   /// ... reachable from the current effector pose in one move ...
   double max_step_translation = 0.5;            // m
-  double max_step_rotation = 90.0 * M_PI / 180.0;  // rad
+  double max_step_rotation = radians(90.0);  // rad
   /// ... and distinct from every sample (as the sampler requires).
   double min_translation = 0.01;                // m
-  double min_rotation = 2.0 * M_PI / 180.0;     // rad
+  double min_rotation = radians(2.0);     // rad
   unsigned seed = 1;
 };
 

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/measurements.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -43,7 +44,7 @@ struct RepeatedObservationOptions {
   /// Samples whose effector poses are this close to a group's first sample
   /// belong to the group (the robot held the pose).
   double group_translation = 1e-3;              // m
-  double group_rotation = 0.1 * M_PI / 180.0;   // rad
+  double group_rotation = radians(0.1);   // rad
 };
 
 /// Throws NoiseUnidentifiable when no pose was seen at least twice, or fewer

@@ -22,15 +22,16 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
 
 struct OutlierOptions {
   double consensus_sigmas = 6.0;            // a pair disagrees beyond this many robust sigmas
-  double min_angle_gate = 0.1 * M_PI / 180.0;  // rad: floors of the gates (noise-free input)
+  double min_angle_gate = radians(0.1);  // rad: floors of the gates (noise-free input)
   double min_pitch_gate = 0.2e-3;           // m
-  double min_pitch_angle = 5.0 * M_PI / 180.0;  // pitch is compared only for rotations beyond this
+  double min_pitch_angle = radians(5.0);  // pitch is compared only for rotations beyond this
   double disagreeing_share = 0.5;           // a sample disagreeing with more than this share of others is rejected
   double residual_gate = 27.86;             // chi2(6) 0.9999 quantile
   double max_rejected_fraction = 0.3;

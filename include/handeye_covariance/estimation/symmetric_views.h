@@ -62,6 +62,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
@@ -77,7 +78,7 @@ struct HalfTurnOptions {
   double min_angle_sigma = 1e-5;  // rad
   double min_pitch_sigma = 1e-6;  // m
   /// ... and pitch is compared only for rotations beyond this (its axis is noise below).
-  double min_pitch_angle = 5.0 * M_PI / 180.0;
+  double min_pitch_angle = radians(5.0);
   /// A view whose informative pairs disagree with its label beyond this share is
   /// left out of the first solve.
   double disagreeing_share = 0.5;

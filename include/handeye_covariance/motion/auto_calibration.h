@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/view_planner.h"
 #include "handeye_covariance/session/calibration_session.h"
 
@@ -29,7 +30,7 @@ struct AutoCalibrationOptions {
   motion::PlannerOptions planner;
   motion::MoveTiming timing;                     // speed fraction of the URDF's limits, acceleration bound
   double bootstrap_translation = 0.05;           // m, the first moves' shifts
-  double bootstrap_angle = 20.0 * M_PI / 180.0;  // rad, the first turns
+  double bootstrap_angle = radians(20.0);  // rad, the first turns
 };
 
 struct NextMove {

@@ -24,6 +24,7 @@
 
 #include "handeye_covariance/core/camera.h"
 #include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/collision.h"
 #include "handeye_covariance/motion/trajectory.h"
 
@@ -44,8 +45,8 @@ constexpr int kRefusals = 7;
 const char* to_string(Refusal refusal);
 
 struct PlannerOptions {
-  double joint_margin = 5.0 * M_PI / 180.0;     // rad, inside each URDF limit
-  double max_joint_step = 90.0 * M_PI / 180.0;  // rad, any joint, one move
+  double joint_margin = radians(5.0);     // rad, inside each URDF limit
+  double max_joint_step = radians(90.0);  // rad, any joint, one move
   Eigen::AlignedBox3d workspace{Eigen::Vector3d(-1.0, -1.0, 0.05), Eigen::Vector3d(1.0, 1.0, 1.2)};  // m, base frame
   int ik_seeds = 6;    // random starts besides the current joints
   /// Check every candidate (a verdict for each, e.g. for a report), not only up
@@ -54,10 +55,10 @@ struct PlannerOptions {
   unsigned seed = 1;
   /// The target in view at the goal.
   double min_distance = 0.2, max_distance = 1.5;  // m, camera to the face's centre
-  double max_tilt = 60.0 * M_PI / 180.0;          // rad, line of sight off the face's normal
+  double max_tilt = radians(60.0);          // rad, line of sight off the face's normal
   double image_margin = 0.05;                     // of the image's width and height, each side
   /// Without a camera model: the full field of view.
-  double field_of_view_x = 60.0 * M_PI / 180.0, field_of_view_y = 45.0 * M_PI / 180.0;
+  double field_of_view_x = radians(60.0), field_of_view_y = radians(45.0);
 };
 
 struct ViewCandidate {

@@ -9,6 +9,7 @@
 
 #include "handeye_covariance/core/ellipsoid.h"
 #include "handeye_covariance/core/rig.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -28,7 +29,7 @@ struct NextPoseMarkerOptions {
   double axis_length = 0.1;  // m, the ghost effector frame's axes
   /// The frustum's full opening angles (rad): a common RGB-D camera's colour stream
   /// (the node does not know the camera's intrinsics).
-  double horizontal_fov = 69.0 * M_PI / 180.0, vertical_fov = 42.0 * M_PI / 180.0;
+  double horizontal_fov = radians(69.0), vertical_fov = radians(42.0);
   std::string ns = "handeye_next_pose";
 };
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/measurements.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 
@@ -21,14 +22,14 @@ struct SamplerOptions {
   bool auto_sample = true;             // take a sample by itself once still
   double still_window = 1.0;           // s of stillness required
   double still_translation = 0.0005;   // m: the robot moves less than this in the window
-  double still_rotation = 0.1 * M_PI / 180.0;  // rad, likewise
+  double still_rotation = radians(0.1);  // rad, likewise
   // The pattern pose carries the detector's noise, so its limits are looser;
   // they still catch a pattern (or camera) that moves while the robot stands.
   double pattern_still_translation = 0.005;  // m
-  double pattern_still_rotation = 1.0 * M_PI / 180.0;  // rad
+  double pattern_still_rotation = radians(1.0);  // rad
   double max_gap = 0.5;                // s: larger gaps between observations break stillness
   double min_translation = 0.01;       // m: a new sample must differ from every other by this ...
-  double min_rotation = 2.0 * M_PI / 180.0;  // rad ... or by this
+  double min_rotation = radians(2.0);  // rad ... or by this
   double max_age = 1.0;                // s: take_sample() refuses an older latest observation
 };
 

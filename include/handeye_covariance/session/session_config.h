@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/session/sampler.h"
 
 namespace handeye {
@@ -46,7 +47,7 @@ struct SessionConfig {
   std::string suggest_criterion = "object_sigma";  // object_sigma | determinant
   int suggest_candidates = 150;
   double reach_translation = 0.5;                  // m
-  double reach_rotation = 90.0 * M_PI / 180.0;     // rad
+  double reach_rotation = radians(90.0);     // rad
   std::string candidate_poses_file;                // empty: sampled
   SamplerOptions sampler;
 
@@ -60,7 +61,7 @@ struct SessionConfig {
 /// Setup, which is read as easy_handeye's bool `eye_on_hand` (setup_from_eye_on_hand).
 template <typename Visitor>
 void for_each_setting(SessionConfig& c, Visitor&& visit) {
-  constexpr double mm = 1e-3, deg = M_PI / 180.0;
+  constexpr double mm = kMetresPerMillimetre, deg = kRadiansPerDegree;
   visit("eye_on_hand", c.rig.setup, 1.0);
   visit("robot_base_frame", c.rig.frames.base, 1.0);
   visit("robot_effector_frame", c.rig.frames.effector, 1.0);

@@ -25,11 +25,11 @@ class CharucoKind : public TargetKind {
   std::string describe(const Target& target) const override {
     const CharucoTarget& t = charuco_of(target);
     return "ChArUco " + std::to_string(t.columns) + " x " + std::to_string(t.rows) + " squares of " +
-           millimetres(t.square) + ", " + millimetres(t.marker) + " markers, " + t.dictionary;
+           millimetres_text(t.square) + ", " + millimetres_text(t.marker) + " markers, " + t.dictionary;
   }
   std::string sizes_text(const Target& target) const override {
     const CharucoTarget& t = charuco_of(target);
-    return "square " + millimetres(t.square, 3) + ", marker " + millimetres(t.marker, 3) + " (black border included), " +
+    return "square " + millimetres_text(t.square, 3) + ", marker " + millimetres_text(t.marker, 3) + " (black border included), " +
            t.dictionary;
   }
   std::string frame_text(const Target&) const override {

@@ -24,9 +24,9 @@ class ChessboardKind : public TargetKind {
   std::string describe(const Target& target) const override {
     const ChessboardTarget& t = chessboard_of(target);
     return "chessboard " + std::to_string(t.columns) + " x " + std::to_string(t.rows) + " inner corners, " +
-           millimetres(t.square) + " squares";
+           millimetres_text(t.square) + " squares";
   }
-  std::string sizes_text(const Target& target) const override { return "square " + millimetres(chessboard_of(target).square, 3); }
+  std::string sizes_text(const Target& target) const override { return "square " + millimetres_text(chessboard_of(target).square, 3); }
   std::string frame_text(const Target&) const override {
     return "frame (OpenCV's): origin at the top-left inner corner, x along a row (right), y down, z into the board";
   }

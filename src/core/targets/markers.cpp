@@ -55,7 +55,7 @@ class MarkersKind : public TargetKind {
     const std::string what = aruco_ ? "ArUco" : "AprilTag";
     if (markers.tags.size() == 1) {
       return what + " " + markers.family + " id " + std::to_string(markers.tags[0].id) + ", " +
-             millimetres(markers.tags[0].size);
+             millimetres_text(markers.tags[0].size);
     }
     return what + " board of " + std::to_string(markers.tags.size()) + " " + markers.family + " markers";
   }
@@ -66,7 +66,7 @@ class MarkersKind : public TargetKind {
     std::string text = markers.family + " ids";
     for (int id : markers.ids()) text += " " + std::to_string(id);
     text += ", black square";
-    for (double s : sizes) text += " " + millimetres(s, 3);
+    for (double s : sizes) text += " " + millimetres_text(s, 3);
     return text;
   }
   std::string frame_text(const Target& target) const override {
