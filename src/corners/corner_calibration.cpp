@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 
 #include <ceres/autodiff_cost_function.h>
@@ -23,6 +22,7 @@
 #include <memory>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 namespace {

@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <boost/math/distributions/chi_squared.hpp>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"

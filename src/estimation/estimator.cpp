@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/estimator.h"
 
 #include <Eigen/Cholesky>
@@ -8,6 +7,7 @@
 #include <cmath>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/outliers.h"
 

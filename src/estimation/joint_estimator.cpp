@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 #include <Eigen/Cholesky>
@@ -8,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/view_noise.h"
 #include "handeye_covariance/estimation/noise_estimation.h"

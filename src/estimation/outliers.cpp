@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/outliers.h"
 
 #include <algorithm>
@@ -6,6 +5,7 @@
 #include <utility>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 
 namespace handeye {

@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 
 #include <Eigen/Cholesky>
@@ -11,6 +10,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/split_check.h"
 

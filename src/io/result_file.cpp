@@ -1,10 +1,10 @@
 // Result, report, check and pose files, stored calibrations (result_file.h).
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/result_file.h"
 
 #include <algorithm>
 #include <cmath>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/files.h"

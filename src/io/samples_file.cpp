@@ -1,12 +1,12 @@
 // Samples and motions files, candidate poses, noise files, suggestions and noise
 // estimates (samples_file.h).
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/samples_file.h"
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/files.h"
 #include "yaml_primitives.h"
 

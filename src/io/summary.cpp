@@ -1,10 +1,11 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/summary.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+
+#include "handeye_covariance/core/units.h"
 
 namespace handeye {
 namespace io {

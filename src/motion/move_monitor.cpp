@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/move_monitor.h"
 
 #include <algorithm>
@@ -6,6 +5,7 @@
 #include <limits>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye::motion {
 

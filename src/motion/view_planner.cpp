@@ -1,10 +1,10 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/motion/view_planner.h"
 
 #include <cmath>
 #include <sstream>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 
 namespace handeye::motion {
 namespace {

@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/arm_mover.h"
 
 #include <trajectory_msgs/JointTrajectory.h>
@@ -7,6 +6,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"

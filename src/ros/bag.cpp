@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/bag.h"
 
 #include <algorithm>
@@ -20,6 +19,7 @@
 #include <set>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/images/pooled_detector.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/corners/corner_calibration.h"

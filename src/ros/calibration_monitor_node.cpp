@@ -1,9 +1,9 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/calibration_monitor_node.h"
 
 #include <filesystem>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 #include "handeye_covariance/ros/params.h"

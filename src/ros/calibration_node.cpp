@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/calibration_node.h"
 
 #include <sys/resource.h>
@@ -10,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/yaml_io.h"

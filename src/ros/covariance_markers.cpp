@@ -1,7 +1,7 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 
 namespace handeye {

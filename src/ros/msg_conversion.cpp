@@ -1,7 +1,7 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/msg_conversion.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 
 #include <cmath>
 

@@ -1,9 +1,9 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/ros/object_localizer.h"
 
 #include <std_msgs/String.h>
 #include <tf2/exceptions.h>
 
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"

@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/session/report.h"
 
 #include <Eigen/Eigenvalues>
@@ -8,6 +7,7 @@
 
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/core/python_script.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 

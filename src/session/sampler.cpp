@@ -1,7 +1,7 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/session/sampler.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/units.h"
 
 #include <cmath>
 

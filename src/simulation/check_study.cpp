@@ -1,4 +1,3 @@
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/check_study.h"
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include <boost/math/special_functions/bessel.hpp>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 
 namespace handeye {
