@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/motion/auto_calibration.h"

@@ -17,6 +17,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/ros/messages.h"
@@ -101,11 +102,7 @@ std::thread periodic(double rate, const std::atomic<bool>& stop, F f) {
   });
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+double median_or_zero(const std::vector<double>& v) { return v.empty() ? 0.0 : handeye::median(v); }
 
 }  // namespace
 
@@ -261,7 +258,7 @@ LoadReport run_load(const LoadOptions& o) {
       sx += x, sy += r.node_rss_mb, sxx += x * x, sxy += x * r.node_rss_mb, m += 1;
     }
   }
-  report.age_median_ms = median(medians);
+  report.age_median_ms = median_or_zero(medians);
   constexpr int kBin = 10;
   int largest = 0;
   for (const LoadRow& r : report.rows) largest = std::max(largest, r.samples);
@@ -277,7 +274,7 @@ LoadReport run_load(const LoadOptions& o) {
       bin.p99_worst_ms = std::max(bin.p99_worst_ms, r.age_p99_ms);
       bin.max_ms = std::max(bin.max_ms, r.age_max_ms);
     }
-    bin.median_ms = median(bin_medians);
+    bin.median_ms = median_or_zero(bin_medians);
     if (bin.rows > 0) report.age_by_samples.push_back(bin);
   }
   if (m >= 2 && m * sxx - sx * sx > 0) report.rss_slope_mb_per_min = (m * sxy - sx * sy) / (m * sxx - sx * sx);

@@ -3,6 +3,9 @@
 // beyond 3 sigma, and clean sessions must keep their samples.
 #include "handeye_covariance/estimation/outliers.h"
 
+#include <boost/math/distributions/normal.hpp>
+
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "test_helpers.h"
 
@@ -37,6 +40,37 @@ Injected with_outliers(Rng& rng, handeye::Setup setup, int n, bool estimated_noi
   }
   if (estimated_noise) out.samples.noise.reset();
   return out;
+}
+
+/// The robust scales' constants are their distributions' own, to the digits written.
+TEST(Statistics, ConstantsAreTheirDistributionsOwn) {
+  const boost::math::normal normal;
+  EXPECT_NEAR(kChi2SixDofMedian, chi2_quantile(6, 0.5), 5e-4);
+  EXPECT_NEAR(kHalfNormalLowerQuartile, boost::math::quantile(normal, 0.625), 5e-5);
+  EXPECT_NEAR(kNormalSigmaPerMad, 1.0 / boost::math::quantile(normal, 0.75), 5e-5);
+  EXPECT_NEAR(chi2_quantile(3, 0.95), 7.814727903251178, 1e-12);
+  EXPECT_NEAR(chi2_quantile(6, 0.95), 12.591587243743977, 1e-12);
+  EXPECT_NEAR(chi2_upper_tail(6, chi2_quantile(6, 0.95)), 0.05, 1e-12);
+  EXPECT_EQ(chi2_upper_tail(6, -1.0), 1.0);
+}
+
+/// median, robust_sigma and linear_quantile on values whose answers are known.
+TEST(Statistics, OrderStatistics) {
+  EXPECT_EQ(median({3.0, 1.0, 2.0}), 2.0);
+  EXPECT_EQ(median({4.0, 1.0, 3.0, 2.0}), 3.0);  // the upper one of an even count
+  EXPECT_EQ(linear_quantile({}, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(linear_quantile({0.0, 10.0, 20.0}, 0.25), 5.0);
+  EXPECT_DOUBLE_EQ(linear_quantile({5.0, 0.0, 10.0}, 1.0), 10.0);
+  EXPECT_EQ(robust_sigma({}), 0.0);
+  // |N(0, 2^2)|: its lower quartile gives sigma 2; a third of the values bad (1e3) moves it to
+  // the half-normal's 37.5% point, 2 x 0.4888 / 0.3186 = 3.07, not towards 1e3.
+  Rng rng(7);
+  std::normal_distribution<double> n(0.0, 2.0);
+  std::vector<double> values;
+  for (int i = 0; i < 20000; ++i) values.push_back(std::abs(n(rng)));
+  EXPECT_NEAR(robust_sigma(values), 2.0, 0.05);
+  values.insert(values.end(), 10000, 1e3);
+  EXPECT_NEAR(robust_sigma(values), 3.07, 0.08);
 }
 
 TEST(Outliers, TenPercentGrossOutliersAreRejectedAndXStaysWithin3Sigma) {

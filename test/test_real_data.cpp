@@ -24,6 +24,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/targets/markers.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"

@@ -8,9 +8,8 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 
-#include <boost/math/distributions/chi_squared.hpp>
-
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
@@ -20,12 +19,15 @@ namespace handeye {
 
 namespace {
 
-double chi2_upper(double statistic, int dof) {
-  if (dof <= 0) return 1.0;
-  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), std::max(statistic, 0.0)));
-}
+/// Odds at which the check names X or Y without "or the other": 19 : 1 (95%).
+constexpr double kNamingOddsBar = 19.0;
+/// The largest canonical cosine between X's and Y's change directions above which
+/// the views are said to barely tell the two apart.
+constexpr double kAlikeOverlap = 0.95;
+/// exp's argument cap for the naming odds (exp(709.8) is the largest double).
+constexpr double kLargestOddsExponent = 690.0;
 
-double chi2_quantile(int dof, double level) { return boost::math::quantile(boost::math::chi_squared(dof), level); }
+double chi2_upper(double statistic, int dof) { return dof <= 0 ? 1.0 : chi2_upper_tail(dof, statistic); }
 
 /// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters)
 /// to the whitened residual z: the estimate, its covariance and the chi2 drop.
@@ -474,7 +476,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   check.p_value = NullDistribution(Qx, Qy, known_white, whitened_parts).p_value(check.statistic, options);
   check.changed = check.p_value < options.alpha;
   const EstimatedChange& single = x_larger ? check.X_alone : check.Y_alone;
-  check.naming_odds = std::exp(std::min(0.5 * std::abs(fx.drop - fy.drop), 690.0));
+  check.naming_odds = std::exp(std::min(0.5 * std::abs(fx.drop - fy.drop), kLargestOddsExponent));
   const bool second_explains = both_identified && check.both.chi2_drop - single.chi2_drop > chi2_quantile(6, 1.0 - options.alpha);
   check.change = second_explains ? check.both : single;
 
@@ -492,7 +494,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   } else {
     check.verdict = "Y changed (" + p + "): the target moved by " + change_text(*check.change.Y_change);
   }
-  const bool uncertain_name = check.changed && check.change.what != "both" && check.naming_odds < 19.0;
+  const bool uncertain_name = check.changed && check.change.what != "both" && check.naming_odds < kNamingOddsBar;
   if (uncertain_name) {
     check.verdict += std::string("; or ") + (check.change.what == "X" ? "Y" : "X") +
                      " changed instead: these views barely tell which (odds " + number_text(check.naming_odds, 2) + " : 1)";
@@ -512,7 +514,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
                            std::to_string(n) + " dof, p = " + p_text(check.chi2_p_value) +
                            ") but not as a moved X or Y would: look at the view with the largest sigma");
   }
-  if (uncertain_name || (check.changed && check.x_y_overlap > 0.95)) {
+  if (uncertain_name || (check.changed && check.x_y_overlap > kAlikeOverlap)) {
     check.advice.push_back("to tell a moved camera from a moved target, take the views turned about different axes "
                            "(rolled about the optical axis and tilted both ways): at these views the two look alike "
                            "(overlap " + number_text(check.x_y_overlap, 3) + ")");

@@ -7,9 +7,9 @@
 #include <cmath>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
-#include "handeye_covariance/estimation/outliers.h"
 
 namespace handeye {
 
@@ -545,7 +545,7 @@ void check_motion_rotations(const MotionRotations& m, const SolverOptions& optio
   // understated noise is therefore not blamed on one motion; the chi^2 warning
   // reports it instead.
   double spread = noise_given ? 1.0 : INFINITY;
-  if (k >= 6) spread = 1.4826 * median(normalized);
+  if (k >= 6) spread = kNormalSigmaPerMad * median(normalized);
   if (noise_given) spread = std::max(spread, 1.0);
   for (std::size_t i = 0; i < k; ++i) {
     const double scale = noise_given ? sigma[i] : 1.0;

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/view_noise.h"
@@ -1563,7 +1564,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     result.residual_checks.push_back({"kurtosis z of the Mahalanobis residuals", z, options.kurtosis_test_z, passed});
     robust = robust || !passed;
     if (robust && n > 12) {
-      const double scale = std::sqrt(std::max(median(d2) / 5.348, 1e-12));
+      const double scale = std::sqrt(std::max(median(d2) / kChi2SixDofMedian, 1e-12));
       const double k_scaled = std::sqrt(options.huber_threshold_squared) * scale;
       for (int round = 0; round < options.max_robust_rounds; ++round) {
         const std::vector<double> before = s.weight;

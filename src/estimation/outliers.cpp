@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 
@@ -133,21 +134,9 @@ const Calibration::Rejected* rejection_of(const Calibration& calibration, int in
   return nullptr;
 }
 
-double robust_sigma(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 4), values.end());
-  return values[values.size() / 4] / 0.3186;
-}
-
-double median(std::vector<double> values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
 double residual_scale(std::vector<double> squared_distances) {
   if (squared_distances.empty()) return 1.0;
-  return std::max(1.0, median(std::move(squared_distances)) / 5.348);
+  return std::max(1.0, median(std::move(squared_distances)) / kChi2SixDofMedian);
 }
 
 std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& calibration) {

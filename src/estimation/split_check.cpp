@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 
@@ -154,15 +155,6 @@ SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, con
     s.corners.reset();
   }
   return out;
-}
-
-double linear_quantile(std::vector<double> values, double p) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const double at = p * static_cast<double>(values.size() - 1);
-  const std::size_t below = static_cast<std::size_t>(std::floor(at));
-  const std::size_t above = std::min(below + 1, values.size() - 1);
-  return values[below] + (at - static_cast<double>(below)) * (values[above] - values[below]);
 }
 
 namespace {

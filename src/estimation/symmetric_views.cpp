@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/estimation/outliers.h"
 

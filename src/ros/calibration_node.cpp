@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/split_check.h"

@@ -1,4 +1,5 @@
 #include "handeye_covariance/simulation/monte_carlo.h"
+#include "handeye_covariance/core/statistics.h"
 
 #include <Eigen/Cholesky>
 
@@ -19,9 +20,6 @@ void MonteCarloAccumulator::add(const Vector6d& error, const Matrix6d& predicted
 
 namespace {
 
-// 95% quantiles of chi-square with 3 and 6 degrees of freedom.
-double chi2_95(int dof) { return dof == 3 ? 7.814727903251178 : 12.591587243743977; }
-
 template <int N>
 BlockAgreement agreement(const std::vector<Eigen::Matrix<double, N, 1>>& errors,
                          const std::vector<Eigen::Matrix<double, N, N>>& predicted) {
@@ -35,7 +33,7 @@ BlockAgreement agreement(const std::vector<Eigen::Matrix<double, N, 1>>& errors,
     mean_predicted += predicted[m];
     const double nees = errors[m].dot(predicted[m].ldlt().solve(errors[m]));
     a.nees_mean += nees;
-    inside += nees <= chi2_95(N) ? 1 : 0;
+    inside += nees <= chi2_quantile(N, 0.95) ? 1 : 0;
   }
   monte_carlo /= M;
   mean_predicted /= M;

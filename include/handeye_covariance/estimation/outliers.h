@@ -65,19 +65,10 @@ std::vector<SampleFit> sample_fits(const SampleSet& samples, const Calibration& 
 const Calibration::Rejected* rejection_of(const Calibration& calibration, int index);
 
 /// The factor on chi2(6) thresholds for samples whose squared Mahalanobis
-/// distances are `squared_distances`: their median over chi2(6)'s median (5.348),
+/// distances are `squared_distances`: their median over chi2(6)'s median,
 /// at least 1 (1 for none). A detector's decoupled covariance can understate a
 /// correlated truth; scaled so, samples are judged against each other (stage 2).
 double residual_scale(std::vector<double> squared_distances);
-
-/// Robust sigma of |differences| (half-normal) from their lower quartile,
-/// q25 = 0.3186 sigma: it holds while fewer than 75% of the values are bad (the
-/// median breaks at 50%, which 30% bad samples already reach in pairs: 1 - 0.7^2 =
-/// 51%). 0 for none. The pair screen here and the symmetric views' turn decision.
-double robust_sigma(std::vector<double> values);
-
-/// The median (the upper one of an even count); values must not be empty.
-double median(std::vector<double> values);
 
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);

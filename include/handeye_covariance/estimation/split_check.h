@@ -63,10 +63,6 @@ class HalfSplitter {
   std::vector<int> order_;
 };
 
-/// The p-quantile of `values`, linear between order statistics (0 for none): the
-/// reference's band.
-double linear_quantile(std::vector<double> values, double p);
-
 using SolveSamples = std::function<Calibration(const SampleSet&)>;
 
 /// `splits` random halves (seeded) of `samples`, each solved by `solve`; with
