@@ -1,5 +1,5 @@
-// Issue 40's figure: on the simulated arm, from the same start poses, how many
-// samples the robot moving itself (motion/auto_calibration.h: the session's
+// On the simulated arm, from the same start poses, how many
+// samples the robot moving itself (auto/auto_calibration.h: the session's
 // ranking filtered by the planner) needs to reach an object 1 sigma at 0.7 m,
 // against easy_handeye's fixed star of 17 poses around the start (rotations of
 // +-25 and +-12.5 deg about the effector's x, y and z; +-5 cm in x, +-10 cm in y,
@@ -28,7 +28,7 @@
 #include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/split_check.h"
-#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/auto/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 #include "handeye_covariance/simulation/trajectory_controller.h"
 

@@ -62,7 +62,7 @@ void BM_RankCandidates(benchmark::State& state) {
 }
 
 // check_all = false: up to the first candidate that passes (what a move costs);
-// true: a verdict for every one of the 150 (the bound of issue 40: <= 200 ms).
+// true: a verdict for every one of the 150 (the goal: <= 200 ms).
 void BM_PlanView(benchmark::State& state) {
   Step& s = step();
   motion::PlannerOptions options;

@@ -8,6 +8,7 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/simulation.h"
 

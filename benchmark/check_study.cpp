@@ -1,4 +1,4 @@
-// Issue 41's figure: the check of a saved calibration (estimation/calibration_check.h)
+// The check of a saved calibration (estimation/calibration_check.h)
 // on simulated sessions: how often it says "changed" as X's or Y's translation is moved
 // by 0 to 8 times its own 1 sigma of the change along the move, beside the bound for a
 // 6-dof test that knows which one moved (noncentral chi2) and the bound for any test
@@ -168,10 +168,10 @@ int estimated_scale(unsigned seed) {
 
 /// The study at the session's usual views with the move's direction uniform in X's or Y's 6
 /// dof as the check weighs them (the family the "bound for X or Y" is for), beside the
-/// translations issue 41's figure moves, at 5 and 6 sigma.
+/// translations the first study moves, at 5 and 6 sigma.
 int any_direction_study(int checks, unsigned seed) {
   std::printf("The session's usual views, %d checks a row: the move along a direction uniform in 6 dof as the check "
-              "weighs them, and along a translation (issue 41's figure):\n\n", checks);
+              "weighs them, and along a translation (the first study's move):\n\n", checks);
   header(" the moved one's chi2 drop (6 + sigma^2) | left a view out |");
   CheckStudyOptions o;
   o.noise_given = true;

@@ -1,5 +1,5 @@
 // Rendered sessions with known truth: `--method corners` against the pose-level
-// estimator on the same images, for BENCHMARKS.md (issue 18's figures).
+// estimator on the same images, for BENCHMARKS.md.
 //
 // Each session: 30 eye-in-hand views at 0.4-1.0 m of a target (a 2 x 2 AprilTag
 // board, a 6 x 5 ChArUco board, a 9 x 6 chessboard; one 48 mm AprilTag on request),

@@ -36,7 +36,7 @@
 #include "handeye_covariance/estimation/next_best_pose.h"
 #include "handeye_covariance/io/files.h"
 #include "handeye_covariance/io/yaml_io.h"
-#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/auto/auto_calibration.h"
 #include "handeye_covariance/motion/collision.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/arm_rig.h"
@@ -105,7 +105,7 @@ Study run_study() {
   set_target(setup.rig, target);  // rig_simulator sees the target when its face is whole in view
 
   SessionConfig config;  // the calibration node's
-  io::read_session_config(kSource + "/config/calibration_defaults.yaml", config);
+  read_session_config(kSource + "/config/calibration_defaults.yaml", config);
   config.rig.frames = setup.rig.frames;
   config.target_file = target_file;
   const SessionSettings settings = session_settings(config);

@@ -281,7 +281,7 @@ TEST(CalibrationCheck, AnEstimatedNoiseScaleCostsEveryTestPower) {
 // (two_hypothesis_power_bound_estimated_scale): with identical subspaces it is the F test
 // (one 6-dof hypothesis), with the scale known to a million dof it is the known-noise
 // bound, and at a rendered session's views (cosines 0.82) and its 20 views' 120 dof it
-// falls below the 90% issue 41 asks at 5 sigma.
+// falls below the goal of 90% at 5 sigma.
 TEST(CalibrationCheck, AnEstimatedNoiseScaleCostsTheTestForXOrY) {
   constexpr int kDraws = 10000;  // a power's 1 sigma 0.3 points, the threshold's error about as much
   const double f = f_test_power(6, 120.0, 25.0, 0.01);
@@ -303,7 +303,7 @@ TEST(CalibrationCheck, AnEstimatedNoiseScaleCostsTheTestForXOrY) {
 // uniform in 6 dof. The check's statistic, the larger of the two chi2 drops, comes within
 // Monte-Carlo error of the Neyman-Pearson bound at any overlap (and never beyond it), and
 // its naming falls from all but certain at orthogonal subspaces toward a coin's toss at
-// identical ones. Issue 41's 90% detected and 95% of them named right need the bound
+// identical ones. The goal of 90% detected and 95% of them named right needs the bound
 // >= 90% and detected-and-named-right >= 85.5%: not at c <= 0.5 (bound below 90%) nor at
 // c >= 0.9 (too few named right), but at c = 0.7 (table in BENCHMARKS.md).
 TEST(CalibrationCheck, TheFrontierBetweenDetectingAndNaming) {

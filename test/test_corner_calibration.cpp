@@ -15,6 +15,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/pattern_renderer.h"
 #include "test_helpers.h"

@@ -21,7 +21,7 @@
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/motion/move_monitor.h"
-#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/auto/auto_calibration.h"
 #include "handeye_covariance/simulation/arm_rig.h"
 #include "handeye_covariance/simulation/trajectory_controller.h"
 
@@ -756,7 +756,7 @@ TEST(SimulatedController, HoldDeceleratesOverTheStopTrajectoryDuration) {
   }
 }
 
-// The robot moving itself on the simulated arm (motion/auto_calibration.h): the
+// The robot moving itself on the simulated arm (auto/auto_calibration.h): the
 // first moves keep the board in view without knowing X, then the session's
 // ranking through the planner, until target_progress says the target is reached.
 namespace {

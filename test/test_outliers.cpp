@@ -2,6 +2,7 @@
 // tag pose, a detection paired with the wrong robot pose) must not move X
 // beyond 3 sigma, and clean sessions must keep their samples.
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/solve.h"
 
 #include <boost/math/distributions/normal.hpp>
 

@@ -19,6 +19,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/images/image_folder.h"
 #include "handeye_covariance/images/pooled_detector.h"

@@ -18,6 +18,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/systematic.h"

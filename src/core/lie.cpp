@@ -1,6 +1,7 @@
 #include "handeye_covariance/core/lie.h"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace handeye {
 namespace so3 {
@@ -120,4 +121,20 @@ Vector6d log(const Eigen::Isometry3d& T) {
 }
 
 }  // namespace se3
+
+Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses, int max_iterations) {
+  if (poses.empty()) throw std::invalid_argument("mean_pose of no poses");
+  Eigen::Matrix3d R = poses.front().linear();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (const Eigen::Isometry3d& p : poses) t += p.translation();
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    Eigen::Vector3d step = Eigen::Vector3d::Zero();
+    for (const Eigen::Isometry3d& p : poses) step += so3::log(p.linear() * R.transpose());
+    step /= static_cast<double>(poses.size());
+    R = so3::exp(step) * R;  // eq. (66), re-centred on the current mean
+    if (step.norm() < 1e-13) break;
+  }
+  return se3::make_pose(R, t / static_cast<double>(poses.size()));
+}
+
 }  // namespace handeye

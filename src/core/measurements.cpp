@@ -1,5 +1,7 @@
 #include "handeye_covariance/core/measurements.h"
 
+#include "handeye_covariance/core/lie.h"
+
 namespace handeye {
 
 SampleSet with_default_noise(SampleSet samples) {
@@ -24,6 +26,13 @@ MotionPair motion_between(const Rig& rig, const PoseSample& from, const PoseSamp
   motion.A = rig.robot_motion(from.T_base_effector, to.T_base_effector);
   motion.B = to.T_camera_pattern * from.T_camera_pattern.inverse();
   return motion;
+}
+
+Eigen::Isometry3d pattern_pose(const SampleSet& samples, const Eigen::Isometry3d& X) {
+  std::vector<Eigen::Isometry3d> Y;
+  Y.reserve(samples.samples.size());
+  for (const PoseSample& s : samples.samples) Y.push_back(samples.rig.pattern_pose(s.T_base_effector, X, s.T_camera_pattern));
+  return mean_pose(Y);
 }
 
 }  // namespace handeye

@@ -290,18 +290,6 @@ IntrinsicsVector intrinsics_of(const CameraModel& camera) {
   return k;
 }
 
-CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k) {
-  CameraModel out = camera;
-  out.K(0, 0) = k[0];
-  out.K(1, 1) = k[1];
-  out.K(0, 2) = k[2];
-  out.K(1, 2) = k[3];
-  if (out.distortion.size() < 5) out.distortion.resize(5, 0.0);
-  out.distortion[0] = k[4];
-  out.distortion[1] = k[5];
-  return out;
-}
-
 namespace {
 
 // Bartlett's test of equal variances over the groups the per-image weighting

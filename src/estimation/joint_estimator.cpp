@@ -11,8 +11,6 @@
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/core/view_noise.h"
-#include "handeye_covariance/estimation/noise_estimation.h"
-#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/variance_components.h"
 
 namespace handeye {
@@ -1092,11 +1090,6 @@ JointResidual joint_residual(const Rig& rig, const PoseSample& sample, const Iso
   r.jacobian = l.J;
   r.d_effector = l.D;
   return r;
-}
-
-Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options) {
-  if (method == Method::Corners) throw corners_need_images();
-  return method == Method::Joint ? solve_joint(samples, options) : solve(samples);
 }
 
 /// The restricted log-likelihood of s under the S_i it was whitened with (REML, up

@@ -17,28 +17,6 @@ const char* to_string(NoiseSource source) {
   return source == NoiseSource::RepeatedObservations ? "repeated_observations" : "residuals";
 }
 
-Isometry3d mean_pose(const std::vector<Isometry3d>& poses, int max_iterations) {
-  if (poses.empty()) throw std::invalid_argument("mean_pose of no poses");
-  Matrix3d R = poses.front().linear();
-  Vector3d t = Vector3d::Zero();
-  for (const Isometry3d& p : poses) t += p.translation();
-  for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    Vector3d step = Vector3d::Zero();
-    for (const Isometry3d& p : poses) step += so3::log(p.linear() * R.transpose());
-    step /= static_cast<double>(poses.size());
-    R = so3::exp(step) * R;  // eq. (66), re-centred on the current mean
-    if (step.norm() < 1e-13) break;
-  }
-  return se3::make_pose(R, t / static_cast<double>(poses.size()));
-}
-
-Isometry3d pattern_pose(const SampleSet& samples, const Isometry3d& X) {
-  std::vector<Isometry3d> Y;
-  Y.reserve(samples.samples.size());
-  for (const PoseSample& s : samples.samples) Y.push_back(samples.rig.pattern_pose(s.T_base_effector, X, s.T_camera_pattern));
-  return mean_pose(Y);
-}
-
 namespace {
 
 /// The nearest PSD matrix (negative eigenvalues set to 0); notes when it clipped.

@@ -1,3 +1,4 @@
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Reading and writing whole files, and the session settings file (files.h).
+// Reading and writing whole files, and settings files (files.h).
 #include "handeye_covariance/io/files.h"
 
 #include <atomic>
@@ -21,43 +21,71 @@ namespace io {
 
 using namespace detail;  // the shared readers and writers (yaml_primitives.h)
 
-// ---------------------------------------------------------------- session config
+// ---------------------------------------------------------------- settings file
 
-void read_session_config(const std::string& path, SessionConfig& config) {
-  const YAML::Node root = load(read_file(path), path);
-  const Location top{path, ""};
-  if (!root.IsNull() && !root.IsMap()) {
+struct SettingsFile::Yaml {
+  YAML::Node root;
+};
+
+SettingsFile::SettingsFile(const std::string& path) : yaml_(std::make_unique<Yaml>()), path_(path) {
+  yaml_->root = load(read_file(path), path);
+  if (!yaml_->root.IsNull() && !yaml_->root.IsMap()) {
     throw HandEyeError(ErrorCode::MalformedFile, "expected `setting: value` lines", path,
                        "see config/calibration_defaults.yaml for the settings and their form");
   }
-  std::set<std::string> known;
-  for_each_setting(config, [&](const char* key, auto& member, double scale) {
-    known.insert(key);
-    const YAML::Node node = root[key];
-    if (!node || node.IsNull()) return;
-    using T = std::decay_t<decltype(member)>;
-    try {
-      if constexpr (std::is_same_v<T, double>) {
-        member = as_double(node, top / key) * scale;
-      } else if constexpr (std::is_same_v<T, Setup>) {
-        member = setup_from_eye_on_hand(node.as<bool>());
-      } else {
-        member = node.as<T>();
-      }
-    } catch (const YAML::Exception&) {
-      throw HandEyeError(ErrorCode::MalformedFile, std::string("`") + key + "` has the wrong type", (top / key).str(),
-                         "see config/calibration_defaults.yaml for the expected value");
+}
+
+SettingsFile::~SettingsFile() = default;
+
+namespace {
+
+/// `key`'s value as T (yaml-cpp's conversion), nothing when absent or null.
+template <typename T>
+std::optional<T> setting(const YAML::Node& root, const std::string& path, const std::string& key) {
+  const YAML::Node node = root[key];
+  if (!node || node.IsNull()) return std::nullopt;
+  const Location at = Location{path, ""} / key;
+  try {
+    if constexpr (std::is_same_v<T, double>) {
+      return as_double(node, at);
+    } else {
+      return node.as<T>();
     }
-  });
-  for (const auto& entry : root) {
-    const std::string key = as_text(entry.first, top);
-    if (!known.count(key)) {
-      throw HandEyeError(ErrorCode::MalformedFile, "unknown setting `" + key + "`", path,
-                         "use the node's parameter names (config/calibration_defaults.yaml, launch/calibrate.launch)");
-    }
+  } catch (const YAML::Exception&) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`" + key + "` has the wrong type", at.str(),
+                       "see config/calibration_defaults.yaml for the expected value");
   }
 }
 
+}  // namespace
+
+std::optional<double> SettingsFile::number(const std::string& key) {
+  asked_.insert(key);
+  return setting<double>(yaml_->root, path_, key);
+}
+std::optional<bool> SettingsFile::flag(const std::string& key) {
+  asked_.insert(key);
+  return setting<bool>(yaml_->root, path_, key);
+}
+std::optional<int> SettingsFile::whole_number(const std::string& key) {
+  asked_.insert(key);
+  return setting<int>(yaml_->root, path_, key);
+}
+std::optional<std::string> SettingsFile::text(const std::string& key) {
+  asked_.insert(key);
+  return setting<std::string>(yaml_->root, path_, key);
+}
+std::optional<std::vector<int>> SettingsFile::whole_numbers(const std::string& key) {
+  asked_.insert(key);
+  return setting<std::vector<int>>(yaml_->root, path_, key);
+}
+
+void SettingsFile::refuse_unknown(const std::string& fix) const {
+  for (const auto& entry : yaml_->root) {
+    const std::string key = as_text(entry.first, Location{path_, ""});
+    if (!asked_.count(key)) throw HandEyeError(ErrorCode::MalformedFile, "unknown setting `" + key + "`", path_, fix);
+  }
+}
 
 // ---------------------------------------------------------------- files
 

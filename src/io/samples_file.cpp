@@ -298,7 +298,6 @@ MotionSet parse_motions(const std::string& text, const std::string& source) {
   return set;
 }
 
-MotionSet read_motions(const std::string& path) { return parse_motions(read_file(path), path); }
 
 std::string format_motions(const MotionSet& set) {
   YAML::Emitter out;

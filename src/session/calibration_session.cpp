@@ -7,6 +7,7 @@
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/io/yaml_io.h"
 

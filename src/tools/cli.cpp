@@ -11,7 +11,7 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "cli_common.h"
+#include "handeye_covariance/tools/cli_common.h"
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/python_script.h"
@@ -20,6 +20,7 @@
 #include "handeye_covariance/estimation/noise_estimation.h"
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/summary.h"
@@ -602,7 +603,7 @@ int suggest_command(const std::vector<std::string>& args, std::ostream& out, std
   }
   if (!config_path.empty()) {  // the file first, then the options given on the command line
     const SessionConfig command_line = config;
-    io::read_session_config(config_path, config);
+    read_session_config(config_path, config);
     if (vm.count("candidates")) config.candidate_poses_file = command_line.candidate_poses_file;
     if (vm.count("criterion")) config.suggest_criterion = command_line.suggest_criterion;
     if (!vm.count("working-distance")) working_distance = config.working_distance;

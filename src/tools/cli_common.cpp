@@ -1,4 +1,4 @@
-#include "cli_common.h"
+#include "handeye_covariance/tools/cli_common.h"
 
 #include <filesystem>
 #include <iostream>

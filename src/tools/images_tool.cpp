@@ -7,7 +7,7 @@
 #include <iostream>
 #include <unistd.h>
 
-#include "cli_common.h"
+#include "handeye_covariance/tools/cli_common.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/corners/corner_calibration.h"

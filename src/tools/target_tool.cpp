@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "cli_common.h"
+#include "handeye_covariance/tools/cli_common.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/yaml_io.h"

@@ -95,7 +95,6 @@ std::vector<std::string> aruco_dictionaries() {
   return names;
 }
 
-bool is_aruco_dictionary(const std::string& name) { return dictionary_names().count(name) > 0; }
 
 int aruco_dictionary_size(const std::string& name) { return dictionary(name)->bytesList.rows; }
 
@@ -160,12 +159,6 @@ void check_charuco(const CharucoTarget& t, const std::string& where) {
                            std::to_string(aruco_dictionary_size(t.dictionary)),
                        where, "use the dictionary the board was printed with");
   }
-}
-
-std::vector<Eigen::Vector3d> charuco_points(const CharucoTarget& t) {
-  std::vector<Eigen::Vector3d> points;
-  for (const cv::Point3f& p : charuco_board(t)->chessboardCorners) points.emplace_back(p.x, p.y, p.z);
-  return points;
 }
 
 TagLayout charuco_marker_layout(const CharucoTarget& t) {

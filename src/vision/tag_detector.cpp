@@ -18,7 +18,6 @@ extern "C" {
 #include <map>
 
 #include "handeye_covariance/core/errors.h"
-#include "handeye_covariance/vision/aruco.h"
 #include "edge_refinement.h"
 
 namespace handeye {
@@ -75,7 +74,7 @@ namespace {
 /// grows by realloc) and call whatever the freed memory holds. An intermittent
 /// crash: about 1 in 5 000 new detectors on an idle machine, more under load
 /// (test_vision's WorkerThreadsStartSafely makes 2 000 from two threads: 3 of 8
-/// runs crashed; most likely what killed test_images in the CI run of d103239).
+/// runs crashed).
 /// A first detection on a blank 8 x 8 image starts the threads with under 8
 /// tasks per step, which the list holds without moving; after it, tasks are only
 /// added while the threads wait for them. With it: no crash in 10 000 detectors
@@ -148,8 +147,7 @@ std::vector<TagCorners> TagDetector::detect(const cv::Mat& gray) const {
   return tags;
 }
 
-TagBitmap tag_bitmap(const std::string& family, int id) {
-  if (names_aruco_dictionary(family)) return aruco_bitmap(family, id);
+TagBitmap apriltag_bitmap(const std::string& family, int id) {
   const Family f = make_family(family);
   if (id < 0 || static_cast<uint32_t>(id) >= f->ncodes) {
     throw HandEyeError(ErrorCode::InvalidLayout,

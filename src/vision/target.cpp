@@ -27,6 +27,10 @@ void check_markers(const TagLayout& layout, const std::string& where) {
   for (const TagPlacement& tag : layout.tags) tag_bitmap(layout.family, tag.id);
 }
 
+TagBitmap tag_bitmap(const std::string& family, int id) {
+  return names_aruco_dictionary(family) ? aruco_bitmap(family, id) : apriltag_bitmap(family, id);
+}
+
 TargetObservation marker_observation(const TagLayout& layout, const std::vector<TagCorners>& tags,
                                      const PatternPoseOptions& options, const std::string& code) {
   TargetObservation found = tag_correspondences(layout, tags, options);

@@ -16,6 +16,7 @@
 #include "named_errors_only.h"
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/io/samples_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

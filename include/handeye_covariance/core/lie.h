@@ -12,6 +12,8 @@
 //    same order as ROS covariances (x, y, z, rx, ry, rz).
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -61,5 +63,9 @@ Vector6d log(const Eigen::Isometry3d& T);
 Eigen::Isometry3d make_pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 
 }  // namespace se3
+
+/// The mean pose of eq. (66-67): the rotation mean on SO(3) (iterated about
+/// the current mean so it holds near pi too) and the arithmetic mean of t.
+Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses, int max_iterations = 20);
 
 }  // namespace handeye

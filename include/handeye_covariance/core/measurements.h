@@ -55,6 +55,10 @@ struct SampleSet {
 /// the samples without one take. Unchanged when it has a block or none has its own.
 SampleSet with_default_noise(SampleSet samples);
 
+/// The pattern's fixed pose Y as the samples and X see it (eq. 68's chain,
+/// rig.pattern_pose of each sample, averaged by mean_pose).
+Eigen::Isometry3d pattern_pose(const SampleSet& samples, const Eigen::Isometry3d& X);
+
 struct MotionPair {
   Eigen::Isometry3d A = Eigen::Isometry3d::Identity();  // robot motion
   Eigen::Isometry3d B = Eigen::Isometry3d::Identity();  // camera motion, A X = X B

@@ -95,7 +95,6 @@ struct CornerView {
 /// The intrinsics that `--method corners` can refine: fx, fy, cx, cy (px), k1, k2.
 using IntrinsicsVector = Eigen::Matrix<double, 6, 1>;
 IntrinsicsVector intrinsics_of(const CameraModel& camera);  // k1, k2 = 0 when the model has none
-CameraModel with_intrinsics(const CameraModel& camera, const IntrinsicsVector& k);
 
 struct CornerOptions {
   /// Pixel sigma (px) of the corner-noise model; 0: estimated from the residuals.

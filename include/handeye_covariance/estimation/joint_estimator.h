@@ -130,9 +130,6 @@ std::vector<Matrix6d> residual_covariances(const SampleSet& samples, const Calib
 /// residual covariance, PoorlyConstrained beyond SolverOptions::max_rotation_sigma.
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options = {});
 
-/// Pose samples by either estimator: solve_joint, or solve (the paper's pairs).
-/// (options: the joint estimator's; the pairs estimator takes its defaults.)
-Calibration estimate(const SampleSet& samples, Method method, const JointOptions& options = {});
 
 /// Method corners, after the pose-level estimate of the same samples: X and Y
 /// refined from the samples' corners (corners/corner_calibration.h: corner_refiner),

@@ -57,10 +57,6 @@ NoiseEstimate noise_from_repeated_observations(const SampleSet& samples, const R
 NoiseEstimate noise_from_residuals(const SampleSet& samples, const Eigen::Isometry3d& X, bool X_fitted_to_these_samples,
                                    const std::optional<PoseNoise>& robot_noise = std::nullopt);
 
-/// The mean pose of eq. (66-67): the rotation mean on SO(3) (iterated about
-/// the current mean so it holds near pi too) and the arithmetic mean of t.
-Eigen::Isometry3d mean_pose(const std::vector<Eigen::Isometry3d>& poses, int max_iterations = 20);
-
 /// One sample's pattern pose against the pattern's fixed pose `pattern`
 /// (eq. 64-65 about P_bar = X^-1 E^-1 pattern, or X^-1 E pattern eye-to-hand),
 /// and its first-order sensitivity to the effector pose's noise.
@@ -70,9 +66,5 @@ struct SampleResidual {
 };
 SampleResidual sample_residual(const Rig& rig, const PoseSample& sample, const Eigen::Isometry3d& X,
                                const Eigen::Isometry3d& pattern);
-
-/// The pattern's fixed pose Y as the samples and X see it (eq. 68's chain,
-/// rig.pattern_pose of each sample, averaged by mean_pose).
-Eigen::Isometry3d pattern_pose(const SampleSet& samples, const Eigen::Isometry3d& X);
 
 }  // namespace handeye

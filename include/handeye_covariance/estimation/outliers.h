@@ -37,16 +37,6 @@ struct OutlierOptions {
   double max_rejected_fraction = 0.3;
 };
 
-/// Solves (by `method`) with outlier rejection; Calibration::rejected lists what
-/// was dropped (indices into `samples`) and why. Throws like the estimator, and
-/// TooManyOutliers when more than max_rejected_fraction would be rejected.
-Calibration solve_robust(const SampleSet& samples, Method method = Method::Joint, const OutlierOptions& options = {},
-                         const JointOptions& joint = {});
-
-/// solve_robust, or the plain estimator when `reject` is false: one switch for every tool.
-Calibration solve_samples(const SampleSet& samples, bool reject, Method method = Method::Joint,
-                          const JointOptions& joint = {});
-
 /// How one sample fits a calibration: its pattern pose against what X, its robot
 /// pose and the pattern's mean pose predict (eq. 64-65), and how many sigmas that
 /// is under the residual's predicted covariance (stage 2 above judges by it).
@@ -69,6 +59,18 @@ const Calibration::Rejected* rejection_of(const Calibration& calibration, int in
 /// at least 1 (1 for none). A detector's decoupled covariance can understate a
 /// correlated truth; scaled so, samples are judged against each other (stage 2).
 double residual_scale(std::vector<double> squared_distances);
+
+/// Stage 1: the samples whose motions to more than `disagreeing_share` of the others
+/// break screw congruence (rotation angle or pitch beyond the robust gates).
+std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const OutlierOptions& options);
+
+/// Each sample of `evaluated` against X and the mean pattern pose of `fitted`, the
+/// samples `c` was solved from, under the residual's predicted covariance (camera and
+/// robot noise, and the shared error of X and of the pattern's mean pose, eq. 64-65).
+std::vector<SampleFit> fits_against(const SampleSet& fitted, const Calibration& c, const SampleSet& evaluated);
+
+/// `samples` without the indices `dropped`.
+SampleSet without(const SampleSet& samples, const std::vector<int>& dropped);
 
 /// The samples without those `calibration.rejected` names.
 SampleSet without_rejected(const SampleSet& samples, const Calibration& calibration);

@@ -1,19 +1,37 @@
-// Whole files: reading, writing atomically, `~/` paths; and the session settings
-// file, which is here (not with a calibration file family) because it is the
-// node's parameters in a file, read with the same YAML readers. No ROS.
+// Whole files: reading, writing atomically, `~/` paths; and a file of
+// `setting: value` lines read key by key (the session's settings file). No ROS.
 #pragma once
 
+#include <memory>
+#include <optional>
+#include <set>
 #include <string>
-
-#include "handeye_covariance/session/session_config.h"
+#include <vector>
 
 namespace handeye {
 namespace io {
 
-/// Session settings from a YAML file with the node's parameter names (the
-/// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
-/// from the file keep their value in `config`. Unknown keys are refused (typos).
-void read_session_config(const std::string& path, SessionConfig& config);
+/// A YAML file of `setting: value` lines, read key by key: each accessor returns the
+/// key's value, nothing when the key is absent or null, and throws MalformedFile
+/// naming the file and key when the value has the wrong type. refuse_unknown()
+/// throws for a key no accessor asked for (a typo), with `fix` as the advice.
+class SettingsFile {
+ public:
+  explicit SettingsFile(const std::string& path);
+  ~SettingsFile();
+  std::optional<double> number(const std::string& key);
+  std::optional<bool> flag(const std::string& key);
+  std::optional<int> whole_number(const std::string& key);
+  std::optional<std::string> text(const std::string& key);
+  std::optional<std::vector<int>> whole_numbers(const std::string& key);
+  void refuse_unknown(const std::string& fix) const;
+
+ private:
+  struct Yaml;
+  std::unique_ptr<Yaml> yaml_;
+  std::string path_;
+  std::set<std::string> asked_;
+};
 
 /// Write to `path.tmp-<pid>` then rename, so a reader never sees half a file
 /// and a failure leaves no file behind. Creates missing parent directories.

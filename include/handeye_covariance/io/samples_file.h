@@ -30,7 +30,6 @@ SampleSet read_samples(const std::string& path);
 /// A file whose `noise:` block is a samples file's ({effector: ..., pattern: ...}),
 /// as the node's ~noise_config. Throws MissingKey when there is no such block.
 MeasurementNoise read_noise_file(const std::string& path);
-MotionSet read_motions(const std::string& path);
 
 /// A file holding either samples or motions (told apart by its top-level key).
 using Input = std::variant<SampleSet, MotionSet>;

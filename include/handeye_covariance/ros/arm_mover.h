@@ -1,5 +1,5 @@
-// The robot moving itself, on the calibration node (issue 40): the next move from
-// the session (motion/auto_calibration.h), sent as trajectory_msgs/JointTrajectory
+// The robot moving itself, on the calibration node: the next move from
+// the session (auto/auto_calibration.h), sent as trajectory_msgs/JointTrajectory
 // to the trajectory controller's command topic, watched from /joint_states
 // (motion/move_monitor.h), then a sample where the arm stands still.
 //
@@ -35,7 +35,7 @@
 #include <optional>
 #include <thread>
 
-#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/auto/auto_calibration.h"
 #include "handeye_covariance/motion/move_monitor.h"
 #include "handeye_covariance/ros/messages.h"
 

@@ -109,4 +109,9 @@ void for_each_setting(SessionConfig& c, Visitor&& visit) {
   visit("min_rotation_deg", c.sampler.min_rotation, deg);
 }
 
+/// Session settings from a YAML file with the node's parameter names (the
+/// keys of config/calibration_defaults.yaml and calibrate.launch); keys absent
+/// from the file keep their value in `config`. Unknown keys are refused (typos).
+void read_session_config(const std::string& path, SessionConfig& config);
+
 }  // namespace handeye

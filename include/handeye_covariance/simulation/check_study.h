@@ -24,7 +24,7 @@
 namespace handeye {
 
 /// What a study moves: X's or Y's translation along a direction uniform on the sphere
-/// (issue 41's figure), or X or Y along a direction uniform in its 6 dof as the check
+/// (the figure BENCHMARKS.md shows first), or X or Y along a direction uniform in its 6 dof as the check
 /// weighs them (u = L w, L L^T the check's covariance of the change, w uniform on the
 /// 6-sphere: the family two_hypothesis_power_bound is the bound for).
 enum class PlantedChange { None, XTranslation, YTranslation, XAnyDirection, YAnyDirection };

@@ -41,7 +41,6 @@ namespace handeye {
 
 /// OpenCV's predefined dictionaries by name (DICT_4X4_50 ... DICT_APRILTAG_36h11).
 std::vector<std::string> aruco_dictionaries();
-bool is_aruco_dictionary(const std::string& name);
 /// The number of markers in the dictionary; throws HandEyeError(InvalidLayout)
 /// naming the known dictionaries when `name` is not one.
 int aruco_dictionary_size(const std::string& name);
@@ -71,9 +70,6 @@ class ArucoDetector {
 /// that are not positive or a marker that does not fit in its square, an unknown
 /// dictionary, or a dictionary with fewer markers than the board needs.
 void check_charuco(const CharucoTarget& target, const std::string& where);
-
-/// The board's inner corners in its frame, by id.
-std::vector<Eigen::Vector3d> charuco_points(const CharucoTarget& target);
 
 /// The board's markers as OpenCV lays them out (CharucoBoard's ids and marker
 /// corners), each a TagPlacement in the board's frame; `family` is the dictionary.

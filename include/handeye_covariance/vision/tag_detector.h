@@ -59,13 +59,13 @@ class TagDetector {
   std::unique_ptr<Impl> impl_;
 };
 
-/// The tag's printable bitmap from libapriltag (black border plus the white
-/// quiet zone around it: `total_width` cells, the black square `width_at_border`).
-/// An OpenCV dictionary name as `family` gives the ArUco marker (aruco.h).
+/// A marker's printable bitmap (black border plus the white quiet zone around it:
+/// `total_width` cells, the black square `width_at_border`).
 struct TagBitmap {
   cv::Mat pixels;  // CV_8UC1, one pixel per cell
   int width_at_border = 0;
 };
-TagBitmap tag_bitmap(const std::string& family, int id);
+/// A libapriltag family's tag (tag_bitmap in target.h takes OpenCV's dictionaries too).
+TagBitmap apriltag_bitmap(const std::string& family, int id);
 
 }  // namespace handeye

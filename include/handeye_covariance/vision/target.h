@@ -53,6 +53,10 @@ const std::vector<VisionKind>& vision_kinds();
 /// Throws HandEyeError(InvalidLayout) when the kind has no detector.
 const VisionKind& vision_kind(const std::string& name);
 
+/// A marker's printable bitmap: a libapriltag family's tag (apriltag_bitmap) or an
+/// OpenCV dictionary's ArUco marker (aruco_bitmap), as `family` names it.
+TagBitmap tag_bitmap(const std::string& family, int id);
+
 /// For the marker kinds: check_layout, and every id in its family or dictionary.
 void check_markers(const TagLayout& layout, const std::string& where);
 /// For the marker kinds: the layout's correspondences from the markers found

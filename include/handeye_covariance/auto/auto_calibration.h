@@ -1,5 +1,5 @@
 // The robot moving itself, without ROS: which move comes next. The node (confirm
-// and auto modes), the simulated arm and the study of issue 40 all ask this class,
+// and auto modes), the simulated arm and handeye_auto_study all ask this class,
 // so the decision is made once:
 //   - until the session can calibrate, the first moves keep the target in view
 //     without knowing X: two or more translations of the start pose by

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "../tools/cli_common.h"
+#include "handeye_covariance/tools/cli_common.h"
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/corners/corner_calibration.h"
@@ -39,7 +39,7 @@ int bag_command(const Args& args, std::ostream& out, std::ostream& err) {
   if (output.empty()) output = default_result_path(bag_path);
 
   SessionConfig config;
-  if (!config_path.empty()) io::read_session_config(config_path, config);
+  if (!config_path.empty()) read_session_config(config_path, config);
   if (!target.empty()) config.target_file = target;
   if (!image_topic.empty()) config.image_topic = image_topic;
   if (!camera_info_topic.empty()) config.camera_info_topic = camera_info_topic;

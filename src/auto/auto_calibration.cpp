@@ -1,4 +1,4 @@
-#include "handeye_covariance/motion/auto_calibration.h"
+#include "handeye_covariance/auto/auto_calibration.h"
 
 #include "handeye_covariance/core/errors.h"
 
