@@ -9,6 +9,8 @@
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "easy_handeye_file.h"
+#include "sections.h"
+#include "test_sections.h"
 #include "scratch_directory.h"
 #include "test_helpers.h"
 
@@ -395,6 +397,56 @@ TEST(YamlIo, AHomeRelativePathIsExpanded) {
   EXPECT_EQ(io::expand_home("~/.ros/x.yaml"), home + "/.ros/x.yaml");
   EXPECT_EQ(io::expand_home("/tmp/~/x.yaml"), "/tmp/~/x.yaml");
   EXPECT_EQ(io::expand_home("~user/x.yaml"), "~user/x.yaml");
+}
+
+/// Every section of a result: its description names each of its fields, and it reads back
+/// as written. A field added to a struct but not to its `fields` fails the first.
+template <class S>
+void expect_described_and_round_trips(const char* name) {
+  const S probe{};
+  EXPECT_EQ(test::undescribed(probe), std::vector<std::string>{}) << name;
+  const S written = test::filled<S>();
+  YAML::Emitter out;
+  io::detail::new_emitter(out);
+  io::detail::emit_section(out, written, false);
+  S read{};
+  io::detail::read_section(YAML::Load(out.c_str()), io::detail::Location{name, ""}, read);
+  EXPECT_EQ(test::flattened(read), test::flattened(written)) << name << ":\n" << out.c_str();
+}
+
+TEST(Sections, EachIsDescribedWholeAndReadsBackAsWritten) {
+  expect_described_and_round_trips<Calibration::NoiseComponent>("noise component");
+  expect_described_and_round_trips<Calibration::NoiseCandidate>("noise candidate");
+  expect_described_and_round_trips<Calibration::ResidualCheck>("residual check");
+  expect_described_and_round_trips<Calibration::Rejected>("rejected");
+  expect_described_and_round_trips<Calibration::Prediction>("prediction");
+  expect_described_and_round_trips<Calibration::CornerFit::Image>("corner image");
+  EXPECT_EQ(test::undescribed(StageDiagnostics{}), std::vector<std::string>{});  // written, not read
+}
+
+/// The guard itself: a struct with a field its description leaves out is caught.
+struct Undescribed {
+  double a = 0.0;
+  bool forgotten = false;
+  double b = 0.0;
+  template <class Self, class Visit>
+  static void fields(Self& s, Visit&& visit) {
+    visit("a", s.a);
+    visit("b", s.b);
+  }
+};
+struct UndescribedAtTheEnd {
+  double a = 0.0;
+  int forgotten = 0;
+  template <class Self, class Visit>
+  static void fields(Self& s, Visit&& visit) {
+    visit("a", s.a);
+  }
+};
+TEST(Sections, AFieldLeftOutOfItsDescriptionIsFound) {
+  EXPECT_EQ(test::undescribed(Undescribed{}).size(), 1u);
+  EXPECT_EQ(test::undescribed(UndescribedAtTheEnd{}).size(), 1u);
+  EXPECT_EQ(test::undescribed(Calibration::Prediction{}), std::vector<std::string>{});
 }
 
 }  // namespace

@@ -77,7 +77,7 @@ std::vector<NoisePart> noise_parts(const SampleSet& views, const Calibration& ca
   const std::vector<Matrix6d> base = residual_covariances(views, only);  // the stated robot noise alone
   std::vector<NoisePart> parts;
   for (const Calibration::NoiseComponent& c : calibration.noise_components) {
-    if (c.at_bound || c.value <= 0.0 || c.sigma <= 0.0) continue;
+    if (!c.supported || c.value <= 0.0 || c.sigma <= 0.0) continue;
     Calibration::ResidualNoise m = zero;
     const std::string& name = c.name;
     const auto axes = [&](int from, int to) {

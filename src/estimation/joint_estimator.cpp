@@ -1482,7 +1482,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       const double v = theta[static_cast<Eigen::Index>(k)], var = fit.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
       Calibration::NoiseComponent out;
       out.name = c.component.name;
-      out.at_bound = fit.at_bound[k];
+      out.supported = !fit.at_bound[k];
       if (c.kind == Kind::CameraScale) {
         out.value = v, out.sigma = std::sqrt(std::max(var, 0.0));
       } else if (c.kind == Kind::CameraPair) {  // as a correlation coefficient
@@ -1515,7 +1515,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       const double unit = c.unit == "m" ? 1e3 : c.unit == "rad" ? kDegreesPerRadian : 1.0;
       text += (k ? ", " : "") + c.name + " " + number_text(c.value * unit, 3) +
               (c.unit == "m" ? " mm" : c.unit == "rad" ? " deg" : "") +
-              (c.at_bound ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));
+              (!c.supported ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));
     }
     if (!given) text += "; the robot's translation noise cannot be told from the camera's and is part of it";
     for (const std::string& name : inseparable) text += "; " + name + " not separable from the camera's: part of it";

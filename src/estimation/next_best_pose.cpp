@@ -37,7 +37,7 @@ int samples_used(const Calibration& c) { return c.samples_used > 0 ? c.samples_u
 /// sigma, when estimated, sets noise_origin).
 bool rests_on_estimated_noise(const Calibration& calibration) {
   bool estimated = calibration.noise_origin == NoiseOrigin::EstimatedFromResiduals;
-  for (const Calibration::NoiseComponent& c : calibration.noise_components) estimated |= !c.at_bound;
+  for (const Calibration::NoiseComponent& c : calibration.noise_components) estimated |= c.supported;
   return estimated || (calibration.corner_fit && calibration.corner_fit->robot_noise_estimated);
 }
 }  // namespace

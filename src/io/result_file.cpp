@@ -8,6 +8,7 @@
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/files.h"
+#include "sections.h"
 #include "yaml_primitives.h"
 
 namespace handeye {
@@ -205,13 +206,9 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       }
       out << YAML::EndMap;
     }
-    out << YAML::Key << "images" << YAML::Value << YAML::BeginSeq;
-    for (const Calibration::CornerFit::Image& image : fit.images) {
-      out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << image.name << YAML::Key << "corners"
-          << YAML::Value << image.corners << YAML::Key << "rms_px" << YAML::Value << image.rms_px << YAML::Key
-          << "sigma_px" << YAML::Value << image.sigma_px << YAML::EndMap;
-    }
-    out << YAML::EndSeq << YAML::EndMap;
+    out << YAML::Key << "images" << YAML::Value;
+    emit_value(out, fit.images);
+    out << YAML::EndMap;
   }
 
   const bool samples = context.setup.has_value();
@@ -222,26 +219,12 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
   if (!calibration.noise_model.empty()) out << YAML::Key << "how" << YAML::Value << calibration.noise_model;
   if (!calibration.noise_components.empty()) {  // joint: each number the residuals estimated, with its 1 sigma
-    out << YAML::Key << "estimated" << YAML::Value << YAML::BeginSeq;
-    for (const Calibration::NoiseComponent& c : calibration.noise_components) {
-      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "value"
-          << YAML::Value << c.value << YAML::Key << "sigma" << YAML::Value << c.sigma << YAML::Key << "unit" << YAML::Value
-          << c.unit << YAML::Key << "supported" << YAML::Value << !c.at_bound << YAML::EndMap;
-    }
-    out << YAML::EndSeq;
+    out << YAML::Key << "estimated" << YAML::Value;
+    emit_value(out, calibration.noise_components);
   }
   if (!calibration.noise_candidates.empty()) {  // joint: the noise models compared by BIC
-    out << YAML::Key << "candidates" << YAML::Value << YAML::BeginSeq;
-    for (const Calibration::NoiseCandidate& c : calibration.noise_candidates) {
-      out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << c.name << YAML::Key << "numbers"
-          << YAML::Value << c.numbers << YAML::Key << "score" << YAML::Value << c.score << YAML::Key << "fitted" << YAML::Value
-          << c.fitted << YAML::Key << "chosen" << YAML::Value << c.chosen;
-      if (c.fitted) {
-        out << YAML::Key << "log_likelihood" << YAML::Value << c.log_likelihood << YAML::Key << "bic" << YAML::Value << c.bic;
-      }
-      out << YAML::EndMap;
-    }
-    out << YAML::EndSeq;
+    out << YAML::Key << "candidates" << YAML::Value;
+    emit_value(out, calibration.noise_candidates);
   }
   if (const auto& m = calibration.residual_noise) {
     // The residual covariance of any view (joint_estimator.h residual_covariances):
@@ -353,18 +336,12 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::EndMap;
   }
   if (const auto& p = calibration.prediction) {  // leave-one-out: how well it predicts a view it has not seen
-    out << YAML::Key << "prediction" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "scale" << YAML::Value
-        << p->scale << YAML::Key << "dof" << YAML::Value << p->dof << YAML::Key << "views" << YAML::Value << p->views
-        << YAML::EndMap;
+    out << YAML::Key << "prediction" << YAML::Value;
+    emit_value(out, *p);
   }
   if (calibration.method == Method::Joint) {  // which tests ran on the residuals, and what they chose
-    out << YAML::Key << "residual_checks" << YAML::Value << YAML::BeginSeq;
-    for (const Calibration::ResidualCheck& c : calibration.residual_checks) {
-      out << YAML::Flow << YAML::BeginMap << YAML::Key << "test" << YAML::Value << c.test << YAML::Key << "statistic"
-          << YAML::Value << c.statistic << YAML::Key << "bound" << YAML::Value << c.bound << YAML::Key << "passed"
-          << YAML::Value << c.passed << YAML::EndMap;
-    }
-    out << YAML::EndSeq;
+    out << YAML::Key << "residual_checks" << YAML::Value;
+    emit_value(out, calibration.residual_checks);
     out << YAML::Key << "robust" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "loss" << YAML::Value << calibration.loss;
     out << YAML::Key << "covariance" << YAML::Value << calibration.covariance_kind;
@@ -377,21 +354,13 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   out << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
   for (const auto& [name, stage] : {std::pair<const char*, const StageDiagnostics*>{"rotation", &calibration.rotation_stage},
                                     {"translation", &calibration.translation_stage}}) {
-    out << YAML::Key << name << YAML::Value << YAML::Flow << YAML::BeginMap;
-    out << YAML::Key << "iterations" << YAML::Value << stage->iterations;
-    out << YAML::Key << "stop_reason" << YAML::Value << to_string(stage->stop_reason);
-    out << YAML::Key << "chi2" << YAML::Value << stage->chi2;
-    out << YAML::Key << "dof" << YAML::Value << stage->dof;
-    out << YAML::EndMap;
+    out << YAML::Key << name << YAML::Value;
+    emit_value(out, *stage);
   }
   out << YAML::EndMap;
   out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << calibration.warnings;
-  out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;  // outliers left out, indices into the input
-  for (const auto& r : calibration.rejected) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "index" << YAML::Value << r.index << YAML::Key << "reason"
-        << YAML::Value << r.reason << YAML::EndMap;
-  }
-  out << YAML::EndSeq;
+  out << YAML::Key << "rejected" << YAML::Value;  // outliers left out, indices into the input
+  emit_value(out, calibration.rejected);
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -542,28 +511,15 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   }
   if (const YAML::Node estimated = root["noise"] && root["noise"].IsMap() ? root["noise"]["estimated"] : YAML::Node();
       estimated && estimated.IsSequence()) {  // each estimated noise number with its 1 sigma: how well the noise is known
-    const Location at = top / "noise" / "estimated";
-    const std::string hint = "each entry is {name, value, sigma, unit, supported}";
-    for (std::size_t i = 0; i < estimated.size(); ++i) {
-      const YAML::Node e = estimated[i];
-      Calibration::NoiseComponent c;
-      c.name = as_text(require(e, "name", at[i], hint), at[i] / "name");
-      c.value = as_finite(require(e, "value", at[i], hint), at[i] / "value", "NaN in a noise value", hint);
-      c.sigma = as_finite(require(e, "sigma", at[i], hint), at[i] / "sigma", "NaN in a noise sigma", hint);
-      if (e["unit"]) c.unit = e["unit"].IsNull() ? "" : as_text(e["unit"], at[i] / "unit");
-      if (e["supported"]) c.at_bound = !as_bool(e["supported"], at[i] / "supported");
-      file.noise_components.push_back(c);
-    }
+    read_value(estimated, top / "noise" / "estimated", file.noise_components);
   }
   if (const YAML::Node prediction = root["prediction"]; prediction && prediction.IsMap()) {
     const Location at = top / "prediction";
-    const std::string hint = "`prediction` is {scale, dof, views}: the leave-one-out of the calibration's views";
     Calibration::Prediction p;
-    p.scale = as_finite(require(prediction, "scale", at, hint), at / "scale", "NaN in the prediction scale", hint);
-    p.dof = as_finite(require(prediction, "dof", at, hint), at / "dof", "NaN in the prediction dof", hint);
-    if (prediction["views"]) p.views = as_integer(prediction["views"], at / "views", 0, 1e9, "views");
-    if (!(p.scale > 0.0) || !(p.dof > 0.0)) {
-      throw HandEyeError(ErrorCode::MalformedFile, "the prediction scale and dof must be positive", at.str(), hint);
+    read_section(prediction, at, p);
+    if (!(p.scale > 0.0) || !(p.dof > 0.0) || p.views < 0) {
+      throw HandEyeError(ErrorCode::MalformedFile, "the prediction scale and dof must be positive", at.str(),
+                         "`prediction` is " + keys_of<Calibration::Prediction>() + ": the leave-one-out of the calibration's views");
     }
     file.prediction = p;
   }

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/core/fields.h"
 #include "handeye_covariance/core/measurements.h"
 #include "handeye_covariance/core/units.h"
 
@@ -74,6 +75,13 @@ struct StageDiagnostics {
   double chi2 = 0.0;  // weighted residual sum of squares at the solution
   int dof = 0;        // expected chi2: 3k minus what the fit absorbs (3k - 3 for independent motions)
   bool converged() const { return stop_reason != StopReason::MaxIterations; }
+  template <class Self, class Visit>
+  static void fields(Self& s, Visit&& visit) {
+    visit("iterations", s.iterations);
+    visit("stop_reason", s.stop_reason);
+    visit("chi2", s.chi2);
+    visit("dof", s.dof);
+  }
 };
 
 /// Where the noise came from.
@@ -132,7 +140,15 @@ struct Calibration {
     std::string unit;      // "m", "rad" (value is a sigma) or "" (a scale of variances)
     double value = 0.0;    // sigma (m, rad) or the scale
     double sigma = 0.0;    // 1 sigma of that value, from the residuals (0 when at its bound)
-    bool at_bound = false; // the residuals do not support it: held at 0 (or its lowest value)
+    bool supported = true; // false: the residuals do not support it, held at 0 (or its lowest value)
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("name", s.name);
+      visit("value", s.value);
+      visit("sigma", s.sigma);
+      visit("unit", s.unit, kOptional);
+      visit("supported", s.supported, kOptional);
+    }
   };
   std::vector<NoiseComponent> noise_components;
   /// Joint, noise estimated: the noise models that were compared, by BIC (the
@@ -146,6 +162,16 @@ struct Calibration {
     bool fitted = false, chosen = false;
     double log_likelihood = 0.0;  // restricted, up to a constant the candidates share (fitted only)
     double bic = 0.0;             // -2 log_likelihood + numbers log(6n - 12) (fitted only)
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("name", s.name);
+      visit("numbers", s.numbers);
+      visit("score", s.score);
+      visit("fitted", s.fitted);
+      visit("chosen", s.chosen);
+      visit("log_likelihood", s.log_likelihood, Only{s.fitted});
+      visit("bic", s.bic, Only{s.fitted});
+    }
   };
   std::vector<NoiseCandidate> noise_candidates;
   /// Joint: the residual noise the covariance was computed with, for any view
@@ -169,6 +195,13 @@ struct Calibration {
     double statistic = 0.0;  // chi2/dof, or the kurtosis z score
     double bound = 0.0;      // the statistic's 99.9% bound under the model
     bool passed = true;
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("test", s.test);
+      visit("statistic", s.statistic);
+      visit("bound", s.bound);
+      visit("passed", s.passed);
+    }
   };
   std::vector<ResidualCheck> residual_checks;
   std::string loss = "squared";              // or "huber": samples far out weigh less (robust mode)
@@ -191,6 +224,11 @@ struct Calibration {
   struct Rejected {
     int index = 0;
     std::string reason;
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("index", s.index);
+      visit("reason", s.reason);
+    }
   };
   std::vector<Rejected> rejected;
 
@@ -281,6 +319,12 @@ struct Calibration {
     double scale = 1.0;
     double dof = 0.0;
     int views = 0;
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("scale", s.scale);
+      visit("dof", s.dof);
+      visit("views", s.views, kOptional);
+    }
   };
   std::optional<Prediction> prediction;
 
@@ -295,6 +339,13 @@ struct Calibration {
       int corners = 0;
       double rms_px = 0.0;
       double sigma_px = 0.0;  // the pixel sigma it was weighed with
+      template <class Self, class Visit>
+      static void fields(Self& s, Visit&& visit) {
+        visit("image", s.name);
+        visit("corners", s.corners);
+        visit("rms_px", s.rms_px);
+        visit("sigma_px", s.sigma_px);
+      }
     };
     std::vector<Image> images;
     /// The test of one pixel sigma for every image and what followed ("one pixel

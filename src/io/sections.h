@@ -1,0 +1,154 @@
+// A section (core/fields.h) written to and read from YAML by its one description:
+// the result file's blocks. Internal to io, as yaml_primitives.h.
+#pragma once
+
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "handeye_covariance/core/fields.h"
+#include "yaml_primitives.h"
+
+namespace handeye {
+namespace io {
+namespace detail {
+
+template <class T>
+struct is_vector : std::false_type {};
+template <class T>
+struct is_vector<std::vector<T>> : std::true_type {};
+
+/// Whether a field holds something: a non-empty string or list, a true bool, a non-zero number.
+template <class T>
+bool holds_something(const T& value) {
+  if constexpr (std::is_same_v<T, std::string> || is_vector<T>::value) {
+    return !value.empty();
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    return value != T{};
+  } else {
+    return true;
+  }
+}
+
+template <class T>
+bool is_written(const T&) {
+  return true;
+}
+template <class T>
+bool is_written(const T&, Only only) {
+  return only.written;
+}
+template <class T>
+bool is_written(const T& value, WhenSet) {
+  return holds_something(value);
+}
+template <class T>
+bool is_written(const T&, Optional) {
+  return true;
+}
+
+/// Whether a reader needs the key: fields with no option.
+template <class... Option>
+constexpr bool is_required() {
+  return sizeof...(Option) == 0;
+}
+
+/// "{name, value, sigma}": a section's keys, for a reader's advice.
+template <class S>
+std::string keys_of() {
+  std::string keys;
+  S probe{};
+  S::fields(probe, [&](const char* key, auto&&...) { keys += (keys.empty() ? "{" : ", ") + std::string(key); });
+  return keys + "}";
+}
+
+template <class S>
+void emit_section(YAML::Emitter& out, const S& section, bool flow);
+
+template <class T>
+void emit_value(YAML::Emitter& out, const T& value) {
+  if constexpr (is_section_v<T>) {
+    emit_section(out, value, true);
+  } else if constexpr (is_vector<T>::value) {
+    if constexpr (is_section_v<typename T::value_type>) {
+      out << YAML::BeginSeq;
+      for (const auto& element : value) emit_section(out, element, true);
+      out << YAML::EndSeq;
+    } else {
+      out << YAML::Flow << value;
+    }
+  } else if constexpr (std::is_enum_v<T>) {
+    out << to_string(value);
+  } else {
+    out << value;
+  }
+}
+
+/// The section's fields as `key: value` pairs into the map `out` has open.
+template <class S>
+void emit_fields(YAML::Emitter& out, const S& section) {
+  S::fields(section, [&](const char* key, const auto& member, auto... option) {
+    if (!is_written(member, option...)) return;
+    out << YAML::Key << key << YAML::Value;
+    emit_value(out, member);
+  });
+}
+
+/// The section as a map (on one line when `flow`).
+template <class S>
+void emit_section(YAML::Emitter& out, const S& section, bool flow) {
+  if (flow) out << YAML::Flow;
+  out << YAML::BeginMap;
+  emit_fields(out, section);
+  out << YAML::EndMap;
+}
+
+template <class S>
+void read_section(const YAML::Node& node, const Location& at, S& section);
+
+template <class T>
+void read_value(const YAML::Node& node, const Location& at, T& value) {
+  if constexpr (is_section_v<T>) {
+    read_section(node, at, value);
+  } else if constexpr (is_vector<T>::value) {
+    using Element = typename T::value_type;
+    if (!node.IsSequence()) {
+      throw HandEyeError(ErrorCode::MalformedFile, "expected a list", at.str(),
+                         is_section_v<Element> ? "write one " + keys_of<Element>() + " per entry" : "write it as [a, b, ...]");
+    }
+    value.clear();
+    for (std::size_t i = 0; i < node.size(); ++i) read_value(node[i], at[i], value.emplace_back());
+  } else if constexpr (std::is_same_v<T, double>) {
+    value = as_finite(node, at, "NaN or Inf in `" + at.path + "`", "write a finite number");
+  } else if constexpr (std::is_same_v<T, int>) {
+    value = as_integer(node, at, -1e9, 1e9, at.path);
+  } else if constexpr (std::is_same_v<T, bool>) {
+    value = as_bool(node, at);
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    value = node.IsNull() ? std::string() : as_text(node, at);
+  } else {
+    static_assert(std::is_enum_v<T>, "a field type sections.h cannot read");
+    value = from_string(as_text(node, at), T{});
+  }
+}
+
+/// The section from the map `node`: every field without an option is required
+/// (MissingKey naming the section's keys), the others keep their default when absent.
+template <class S>
+void read_section(const YAML::Node& node, const Location& at, S& section) {
+  if (!node.IsMap()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "expected a map", at.str(), "write it as " + keys_of<S>());
+  }
+  S::fields(section, [&](const char* key, auto& member, auto... option) {
+    const YAML::Node child = node[key];
+    if (!child) {
+      if constexpr (is_required<decltype(option)...>()) require(node, key, at, "it is " + keys_of<S>());
+      return;
+    }
+    read_value(child, at / key, member);
+  });
+}
+
+}  // namespace detail
+}  // namespace io
+}  // namespace handeye

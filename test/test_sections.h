@@ -1,0 +1,126 @@
+// Checks every section (core/fields.h) against its description: the description names
+// every field of the struct (no byte left out), and a section written and read back is
+// the same, field by field. Used by test_yaml_io.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "handeye_covariance/core/fields.h"
+
+namespace handeye {
+namespace test {
+
+/// The bytes of S that its description leaves out: a member spans [offset, offset +
+/// size); between consecutive spans, and after the last, only padding may lie (less
+/// than the next member's, or the struct's, alignment). Empty when every field is described.
+template <class S>
+std::vector<std::string> undescribed(const S& probe) {
+  struct Span {
+    std::size_t begin, end, align;
+    std::string key;
+  };
+  std::vector<Span> spans;
+  const char* base = reinterpret_cast<const char*>(&probe);
+  S::fields(probe, [&](const char* key, const auto& member, auto&&...) {
+    const std::size_t begin = static_cast<std::size_t>(reinterpret_cast<const char*>(&member) - base);
+    spans.push_back({begin, begin + sizeof(member), alignof(std::decay_t<decltype(member)>), key});
+  });
+  std::sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) { return a.begin < b.begin; });
+  std::vector<std::string> gaps;
+  std::size_t covered = 0;
+  for (const Span& s : spans) {
+    if (s.begin < covered) gaps.push_back("`" + s.key + "` described twice or overlapping");
+    if (s.begin >= covered + s.align) {
+      gaps.push_back(std::to_string(s.begin - covered) + " undescribed bytes before `" + s.key + "`");
+    }
+    covered = std::max(covered, s.end);
+  }
+  if (sizeof(S) >= covered + alignof(S)) gaps.push_back(std::to_string(sizeof(S) - covered) + " undescribed bytes at the end");
+  return gaps;
+}
+
+/// Each field set to a value of its own (numbers by position, strings by key, bools true,
+/// lists of one such section), so that a round trip that drops or swaps one shows.
+struct Fill {
+  int counter = 0;
+  template <class T, class... Option>
+  void operator()(const char* key, T& member, Option&&...) {
+    ++counter;
+    if constexpr (std::is_same_v<T, double>) {
+      member = counter + 0.25;
+    } else if constexpr (std::is_same_v<T, int>) {
+      member = counter + 1;
+    } else if constexpr (std::is_same_v<T, bool>) {
+      member = true;
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      member = std::string(key) + " text";
+    } else if constexpr (is_section_v<T>) {
+      T::fields(member, *this);
+    } else if constexpr (std::is_same_v<T, std::vector<typename T::value_type>>) {
+      member.resize(1);
+      if constexpr (is_section_v<typename T::value_type>) T::value_type::fields(member[0], *this);
+    }
+  }
+};
+
+/// The section as "key=value" lines, nested sections and lists included.
+struct Flatten {
+  std::vector<std::string> lines;
+  std::string prefix;
+  template <class T, class... Option>
+  void operator()(const char* key, const T& member, Option&&...) {
+    const std::string name = prefix + key;
+    char text[64];
+    if constexpr (std::is_same_v<T, double>) {
+      std::snprintf(text, sizeof(text), "%.17g", member);
+      lines.push_back(name + "=" + text);
+    } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, bool>) {
+      lines.push_back(name + "=" + std::to_string(member));
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      lines.push_back(name + "=" + member);
+    } else if constexpr (std::is_enum_v<T>) {
+      lines.push_back(name + "=" + std::to_string(static_cast<int>(member)));
+    } else if constexpr (is_section_v<T>) {
+      const std::string outer = prefix;
+      prefix = name + ".";
+      T::fields(member, *this);
+      prefix = outer;
+    } else {
+      lines.push_back(name + " entries=" + std::to_string(member.size()));
+      const std::string outer = prefix;
+      for (std::size_t i = 0; i < member.size(); ++i) {
+        prefix = name + "[" + std::to_string(i) + "].";
+        if constexpr (is_section_v<typename T::value_type>) {
+          T::value_type::fields(member[i], *this);
+        } else {
+          lines.push_back(prefix + "value=" + std::to_string(member[i]));
+        }
+      }
+      prefix = outer;
+    }
+  }
+};
+
+template <class S>
+std::vector<std::string> flattened(const S& section) {
+  Flatten f;
+  S::fields(section, f);
+  return f.lines;
+}
+
+template <class S>
+S filled() {
+  S section{};
+  Fill fill;
+  S::fields(section, fill);
+  return section;
+}
+
+}  // namespace test
+}  // namespace handeye
