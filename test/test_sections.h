@@ -11,7 +11,10 @@
 #include <type_traits>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "handeye_covariance/core/fields.h"
+#include "handeye_covariance/core/pose_covariance.h"
 
 namespace handeye {
 namespace test {
@@ -60,6 +63,11 @@ struct Fill {
       member = true;
     } else if constexpr (std::is_same_v<T, std::string>) {
       member = std::string(key) + " text";
+    } else if constexpr (std::is_same_v<T, Matrix6d>) {  // symmetric positive definite, every entry its own
+      const Matrix6d A = Matrix6d::Identity() + 0.01 * counter * Matrix6d::Ones();
+      member = A * A.transpose();
+    } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
+      member = {Eigen::Vector3d(counter, counter + 0.5, counter + 0.75)};
     } else if constexpr (is_section_v<T>) {
       T::fields(member, *this);
     } else if constexpr (std::is_same_v<T, std::vector<typename T::value_type>>) {
@@ -86,6 +94,17 @@ struct Flatten {
       lines.push_back(name + "=" + member);
     } else if constexpr (std::is_enum_v<T>) {
       lines.push_back(name + "=" + std::to_string(static_cast<int>(member)));
+    } else if constexpr (std::is_same_v<T, Matrix6d> || std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
+      std::vector<double> numbers;
+      if constexpr (std::is_same_v<T, Matrix6d>) {
+        numbers.assign(member.data(), member.data() + 36);
+      } else {
+        for (const Eigen::Vector3d& p : member) numbers.insert(numbers.end(), {p.x(), p.y(), p.z()});
+      }
+      for (double v : numbers) {
+        std::snprintf(text, sizeof(text), "%.17g", v);
+        lines.push_back(name + "=" + text);
+      }
     } else if constexpr (is_section_v<T>) {
       const std::string outer = prefix;
       prefix = name + ".";

@@ -421,6 +421,7 @@ TEST(Sections, EachIsDescribedWholeAndReadsBackAsWritten) {
   expect_described_and_round_trips<Calibration::Rejected>("rejected");
   expect_described_and_round_trips<Calibration::Prediction>("prediction");
   expect_described_and_round_trips<Calibration::CornerFit::Image>("corner image");
+  expect_described_and_round_trips<Calibration::ResidualNoise>("residual noise");
   EXPECT_EQ(test::undescribed(StageDiagnostics{}), std::vector<std::string>{});  // written, not read
 }
 

@@ -229,21 +229,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   if (const auto& m = calibration.residual_noise) {
     // The residual covariance of any view (joint_estimator.h residual_covariances):
     // S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T.
-    out << YAML::Key << "residual_model" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "camera_scale" << YAML::Value << m->camera_scale;
-    const auto camera = to_row_major_6x6(m->camera), robot = to_row_major_6x6(m->robot);
-    out << YAML::Key << "camera" << YAML::Value;
-    emit_numbers(out, camera.data(), camera.size());
-    out << YAML::Key << "robot" << YAML::Value;
-    emit_numbers(out, robot.data(), robot.size());
-    out << YAML::Key << "view_scale" << YAML::Value << m->view_scale;
-    if (!m->view_points.empty()) {
-      std::vector<double> points;
-      for (const Eigen::Vector3d& p : m->view_points) points.insert(points.end(), {p.x(), p.y(), p.z()});
-      out << YAML::Key << "view_points" << YAML::Value;
-      emit_numbers(out, points.data(), points.size());
-    }
-    out << YAML::EndMap;
+    out << YAML::Key << "residual_model" << YAML::Value;
+    emit_section(out, *m, false);
   }
   out << YAML::EndMap;
   if (!calibration.turned.empty()) {  // a symmetric target: the views turned to agree with the motion
@@ -490,23 +477,10 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   if (const YAML::Node model = root["noise"] && root["noise"].IsMap() ? root["noise"]["residual_model"] : YAML::Node();
       model && model.IsMap()) {
     const Location at = top / "noise" / "residual_model";
-    const std::string model_hint = "`residual_model` is {camera_scale, camera: [36], robot: [36], view_scale, view_points}";
     Calibration::ResidualNoise m;
-    m.camera_scale = as_finite(require(model, "camera_scale", at, model_hint), at / "camera_scale", "NaN in camera_scale",
-                               model_hint);
-    m.camera = from_row_major_6x6(as_numbers<36>(require(model, "camera", at, model_hint), at / "camera", "6x6, ROS order"));
-    m.robot = from_row_major_6x6(as_numbers<36>(require(model, "robot", at, model_hint), at / "robot", "6x6, ROS order"));
+    read_section(model, at, m);
     check_covariance(m.camera, (at / "camera").str());
     check_covariance(m.robot, (at / "robot").str());
-    if (model["view_scale"]) m.view_scale = as_finite(model["view_scale"], at / "view_scale", "NaN in view_scale", model_hint);
-    if (model["view_points"]) {
-      const std::vector<double> points = as_number_list(model["view_points"], at / "view_points", "x, y, z of each point");
-      if (points.size() % 3 != 0) {
-        throw HandEyeError(ErrorCode::WrongLength, "`view_points` needs 3 numbers per point", (at / "view_points").str(),
-                           model_hint);
-      }
-      for (std::size_t i = 0; i + 2 < points.size(); i += 3) m.view_points.emplace_back(points[i], points[i + 1], points[i + 2]);
-    }
     file.residual_noise = m;
   }
   if (const YAML::Node estimated = root["noise"] && root["noise"].IsMap() ? root["noise"]["estimated"] : YAML::Node();

@@ -67,7 +67,14 @@ void emit_section(YAML::Emitter& out, const S& section, bool flow);
 
 template <class T>
 void emit_value(YAML::Emitter& out, const T& value) {
-  if constexpr (is_section_v<T>) {
+  if constexpr (std::is_same_v<T, Matrix6d>) {  // 36 numbers, row-major (ROS order)
+    const auto numbers = to_row_major_6x6(value);
+    emit_numbers(out, numbers.data(), numbers.size());
+  } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {  // x, y, z of each, in one list
+    std::vector<double> numbers;
+    for (const Eigen::Vector3d& p : value) numbers.insert(numbers.end(), {p.x(), p.y(), p.z()});
+    emit_numbers(out, numbers.data(), numbers.size());
+  } else if constexpr (is_section_v<T>) {
     emit_section(out, value, true);
   } else if constexpr (is_vector<T>::value) {
     if constexpr (is_section_v<typename T::value_type>) {
@@ -108,7 +115,17 @@ void read_section(const YAML::Node& node, const Location& at, S& section);
 
 template <class T>
 void read_value(const YAML::Node& node, const Location& at, T& value) {
-  if constexpr (is_section_v<T>) {
+  if constexpr (std::is_same_v<T, Matrix6d>) {
+    value = from_row_major_6x6(as_numbers<36>(node, at, "6x6, row-major, ROS order"));
+  } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
+    const std::vector<double> numbers = as_number_list(node, at, "x, y, z of each point");
+    if (numbers.size() % 3 != 0) {
+      throw HandEyeError(ErrorCode::WrongLength, "`" + at.path + "` needs 3 numbers per point", at.str(),
+                         "write x, y, z of each point in one list");
+    }
+    value.clear();
+    for (std::size_t i = 0; i + 2 < numbers.size(); i += 3) value.emplace_back(numbers[i], numbers[i + 1], numbers[i + 2]);
+  } else if constexpr (is_section_v<T>) {
     read_section(node, at, value);
   } else if constexpr (is_vector<T>::value) {
     using Element = typename T::value_type;

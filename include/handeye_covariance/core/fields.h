@@ -6,7 +6,8 @@
 // The YAML writer and reader (src/io/sections.h) walk it, and test_sections checks
 // that it names every field the struct has (no byte of the struct left out).
 // Field types: double, int, bool, std::string, an enum with to_string (and, to be
-// read, from_string(text, E{})), a section, and std::vector of a section.
+// read, from_string(text, E{})), Matrix6d (36 numbers, row-major), a list of
+// Eigen::Vector3d (3 numbers each, in one list), a section, and std::vector of a section.
 #pragma once
 
 #include <type_traits>

@@ -187,6 +187,14 @@ struct Calibration {
     /// of view_points at the view P); 0 when the model has none.
     double view_scale = 0.0;
     std::vector<Eigen::Vector3d> view_points;
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("camera_scale", s.camera_scale);
+      visit("camera", s.camera);
+      visit("robot", s.robot);
+      visit("view_scale", s.view_scale, kOptional);
+      visit("view_points", s.view_points, kWhenSet);
+    }
   };
   std::optional<ResidualNoise> residual_noise;
   /// Joint: the check of the residuals against the noise model and what followed.
