@@ -1,72 +1,11 @@
-// Calibration from the image corners themselves (no ROS): X and the pattern pose
-// Y refined by the reprojection error of every detected corner of every image,
-// with the robot poses as measurements and, optionally, the intrinsics.
-//
-// Each image i sees the pattern at P_i = X^-1 V_i Y (rig.h), so corner j of the
-// target, at o_j in the pattern frame, should appear at
-//     u_ij = pi(K, D, R_P o_j + t_P),
-// pi the pinhole with OpenCV's distortion model (CameraModel). The detector's
-// corner-noise model gives each block of corners (one AprilTag's four under the
-// edge-fit model, or one corner) a covariance sigma^2 C_b; the cost is
-//     sum_b (u_b - u_hat_b)^T C_b^-1 (u_b - u_hat_b) / sigma^2
-//   + sum_i xi_E,i^T Sigma_E^-1 xi_E,i          (robot poses free: E_i' = exp(xi_E,i) E_i)
-//   + sum_k ((k_k - k0_k) / s_k)^2               (intrinsics free: the CameraInfo as a prior)
-// minimised by Ceres (Levenberg-Marquardt, Schur complement on the robot poses),
-// started from the pose-level estimate. The covariance of (X, Y) is the (X, Y)
-// block of the inverse of the Gauss-Newton information, by ceres::Covariance,
-// times sigma^2 when sigma is estimated.
-//
-// Perturbations as everywhere: X = (exp(xi_R) R_hat, t_hat + xi_t), ROS order,
-// likewise Y; the intrinsics' order is fx, fy, cx, cy, k1, k2.
-//
-// Pixel noise sigma. Given, or estimated from the corners' residuals with the
-// fit's degrees of freedom: sigma^2 = RSS_corners / (m - p_eff), where p_eff is
-// what the fit absorbs of the corners (12, the free intrinsics, and each free robot
-// pose's share, 6 - tr(Sigma_post Sigma_E^-1)); with the robot poses free this
-// alternates with the solve, as the prior's weight depends on sigma.
-//
-// Images with different noise (a blurred one, a grazing view, heavy tails image by
-// image). Each image i's residual variance s_i^2 = RSS_i / nu_i, nu_i its rows minus
-// its share of p_eff (the shared parameters' by its rows, its robot pose's own), is
-// tested for one common sigma (Bartlett: chi2 on images - 1 dof). When the test
-// fails (robust auto; or robust on), each image is weighed by its own sigma_i^2 =
-// RSS_i / (nu_i - 2) (a weight from nu_i dof is too large by nu_i / (nu_i - 2) on
-// average), alternating with the solve (the images with under min_image_dof share one),
-// so a noisy image counts less and the covariance is the information of that
-// weighting. The corner-level counterpart of the joint estimator's robust mode: an
-// image's corners tell its own noise, which one pose residual cannot.
-//
-// Target geometry. A printed board's points are off their nominal positions (print
-// accuracy, a board that is not flat) by the same amount in every image:
-// that error does not average out over the images as the pixel noise does. Each
-// point's 3-d offset delta_j ~ N(0, tau^2 I) is a consider parameter (Schmidt): the
-// fit keeps the nominal target, and the covariance of what it estimates gains
-// tau^2 S S^T, S = H^-1 J^T D the estimate's sensitivity to the offsets (D the
-// whitened corners' Jacobian by them, J and H = J^T J the fit's own). tau^2 is
-// given, or estimated from the corner residuals r left by the fit (MINQUE with the
-// fit's projection M = I - J H^-1 J^T, its corner block M_cc: E[r^T r] = s tr(M_cc^2)
-// + |M_cp|^2 + tau^2 tr(D^T M_cc^2 D) and E[|D^T r|^2] = s tr(D^T M_cc^2 D) +
-// |M_pc D|^2 + tau^2 |D^T M_cc D|_F^2, the priors' rows of unit variance; s the
-// corners' own share of the pixel variance, by which the pixel sigma and the
-// corners' part of the covariance are then scaled). One uniform print scale is a
-// single number, not independent point errors: it is not what tau covers. With each
-// image's own sigma (taken from its residuals, target share included) tau is an
-// approximation. On simulated targets printed 0.2 mm off per axis:
-// estimated 0.200 mm, NEES of X 5.85 (7.31 taken as exact); on an exact target
-// the estimate averages 0.019 mm and the NEES stays 6.2 (test_corner_calibration).
-//
-// Robot noise. Given, or estimated (an isotropic translation and rotation variance,
-// which the corners tell from the pixel noise: a robot error moves all of an image's
-// corners together) as variance components, alternating with the solve until every
-// sigma moves by under 0.1%: each group's squared residuals over its redundancy,
-// its rows minus the share the fit takes of them (Forstner's estimator; for the
-// robot's translation, sum |xi_t,i|^2 / (3n - sum tr(Sigma_post,tt,i) / s_t^2)).
-// Where few images tell translation from rotation, the fixed point creeps along a
-// ridge: every third round jumps to its geometric limit (Aitken), and a component
-// left with under one row of redundancy is put at its bound (0.1 um, 0.1 urad). When
-// the robot is exact, the estimate still frees each pose a little: 1.03x / 1.00x the pose
-// level's RMS error on one rendered 48 mm AprilTag (handeye_corners_study
-// --kinds apriltag_single, 300 sessions; 1.05x with a (1 um)^2 bound).
+// X and the pattern pose Y refined from the image corners themselves (no ROS): each
+// detected corner against u_ij = pi(K, D, R_P o_j + t_P), P_i = X^-1 V_i Y (rig.h;
+// OpenCV's pinhole and distortion, raw pixels), whitened by the detector's corner-noise
+// model over the pixel sigma; the robot poses as measurements with a prior and, as an
+// option, the intrinsics (fx, fy, cx, cy, k1, k2; the camera as their prior). Solved by
+// Ceres from the pose-level estimate; the covariance of (xi_X, xi_Y), ROS order, left
+// perturbations as everywhere, carries the target points' error as a consider parameter.
+// Derivation: docs/how_it_works.md, "The corner estimator".
 #pragma once
 
 #include <Eigen/Core>

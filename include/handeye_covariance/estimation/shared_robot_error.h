@@ -1,42 +1,12 @@
-// A robot error shared by nearby poses: the per-view noise model with a correlated part.
-//
-// The joint estimator (joint_estimator.h) takes the samples' errors as independent.
-// A real arm's recorded pose is off by a kinematic error (link lengths, joint
-// offsets, compliance) that is a smooth function of where the arm is: poses taken
-// close together share most of it. On the real KUKA sessions of ../shared/realdata
-// the split-half check reads such an error from both sides (docs/evidence.md):
-// random halves cancel it and read under-confident, halves of runs keep it and read
-// overconfident. Here the residuals' covariance is
+// A robot error shared by nearby poses: the per-view noise model with a correlated
+// part, a Gaussian process over the effector's position p_i (base frame, m):
 //     Cov(e_i, e_j) = s S_i [i = j] + k(p_i, p_j) D_i diag(a I3, b I3) D_j^T,
 //     k(p, q) = exp(-|p - q|^2 / (2 l^2)),
-// S_i the sample's residual covariance under the calibration's per-view model,
-// p_i the effector's position in the base frame, D_i = d P_hat_i / d xi_E (the
-// robot pose's left perturbation in the base frame carried into the camera,
-// joint_estimator.h): a Gaussian process over the arm's workspace, a per-axis
-// translation variance a and rotation variance b in the base frame, length l.
-// Linearised at the calibration: e = r + J dxi, J the residuals' Jacobian to
-// (xi_X, xi_Y) and r the residuals at (X_hat, Y_hat).
-//   - (s, a, b) by REML at each length of a grid (Fisher scoring on the dense
-//     6n x 6n covariance C), l by the best restricted likelihood;
-//   - the model is chosen over the per-view one (s = 1, a = b = 0) when its BIC is
-//     better: 2 (L - L0) > 4 log(6n - 12), four numbers more (s, a, b, l);
-//   - then (X, Y) take one generalised least-squares step,
-//     dxi = -(J^T C^-1 J)^-1 J^T C^-1 r, with the covariance (J^T C^-1 J)^-1
-//     adjusted for (s, a, b)'s own error (Kenward and Roger 1997).
-// A constant error (l far beyond the workspace) is a change of the base frame and
-// Y absorbs it; an error shared by a few neighbours counts them as fewer samples.
-// S_i's shape was fitted with the shared error in the residuals; s rescales it,
-// but its shape stays. On simulated sessions that leaves X's NEES at 6.8 (200
-// sessions), 6.1 with the true per-view noise; a camera and a robot scale in place
-// of s changed neither that nor the real sessions (docs/evidence.md).
-//
-// The check of this model is the split-half check of split_check.h, linearised:
-// a half's estimate is -G_h r_h (G_h its gain: the GLS one under C's block, or the
-// per-view estimator's), and the difference of two halves has covariance
-//     G_1 C_11 G_1^T + G_2 C_22 G_2^T - G_1 C_12 G_2^T - G_2 C_21 G_1^T,
-// the cross terms being the error the halves share. The reference is a parametric
-// bootstrap: r* ~ N(0, C_hat) at the session's J, its (s, a, b) fitted again at l,
-// split the same way.
+// S_i the per-view residual covariance, D_i as in joint_estimator.h, a (m^2) and b
+// (rad^2) per axis in the base frame. (s, a, b) by REML at each length l, chosen over the
+// per-view model by BIC; then one GLS step of (X, Y) with Kenward-Roger's covariance,
+// and the model's linearised split-half check.
+// Derivation: docs/how_it_works.md, "A robot error shared by nearby poses".
 #pragma once
 
 #include <optional>
@@ -75,12 +45,11 @@ struct SharedRobotErrorOptions {
   std::vector<double> length_scales = {0.05, 0.1, 0.2, 0.4, 0.8, 1.6};  // m
   int max_iterations = 50;
   /// Fitted from this many samples used (fewer: the per-view model alone). A
-  /// workspace's error needs neighbours to be told from the views' own noise: on the
-  /// 8-pose Franka sessions of ../shared/realdata a kernel wins the BIC and then
-  /// reads overconfident (docs/evidence.md). The runs look of split_check starts here too.
+  /// workspace's error needs neighbours to be told from the views' own noise
+  /// (docs/how_it_works.md). The runs look of split_check starts here too.
   int min_samples = 16;
-  /// ... and up to this many (more: none). The dense 6n x 6n fit grows as n^3: 0.2 s
-  /// at 30 samples, about 0.5 s at 40, one core.
+  /// ... and up to this many (more: none): the dense 6n x 6n fit grows as n^3 (its
+  /// time: docs/how_it_works.md).
   int max_samples = 40;
   /// Set: this model (its length, s, a and b) is taken as chosen, nothing fitted or
   /// compared (bic_gain 0): a part of a session judged with the whole session's model.

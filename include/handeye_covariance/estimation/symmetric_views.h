@@ -1,62 +1,12 @@
 // Targets that look the same turned by 180 degrees (core/target.h,
-// is_half_turn_symmetric: a chessboard of 9 x 7 or 8 x 6 inner corners): each
-// view's detected pose P = T_camera_pattern is one of two candidates, P and P * F,
-// F = T_pattern_pattern' the turn by pi about the face's normal through its centre
-// (half_turn). The detector cannot tell them apart; the robot's motion can.
-//
-// What is observable. Turning every view gives the same camera motions
-// (P_j F (P_i F)^-1 = P_j P_i^-1) and moves only the pattern frame Y (Y -> Y F),
-// never X: only the views' labels relative to each other count. The decision, in
-// order (a wrong early choice must not lock in):
-//  1. Pairs, before any X (synchronise_half_turns). For every pair i -> j the
-//     robot motion A and the camera motion under "same candidate"
-//     B = P_j P_i^-1 and under "one turned" B' = P_j F P_i^-1 (F = F^-1). A X = X B
-//     demands that A and B rotate by the same angle and have the same screw pitch
-//     (omega . t), whatever X is (Chen's screw congruence, as outliers.h's
-//     consensus). Scales are robust (the lower quartile of the better hypothesis'
-//     differences over all pairs). Each pair's evidence is the log-likelihood
-//     ratio of the two, capped; a pair that cannot tell (a motion turning by about
-//     90 degrees about the board's normal) weighs about 0, and one that fits neither
-//     (a wrong detection in it) 0.
-//  2. Synchronised globally, not greedily: the labels are the signs of the leading
-//     eigenvector of W_ij = evidence_ij (+ same, - one turned) (spectral sign
-//     synchronisation).
-//  3. Refined from the fit (refine_half_turns). X and Y are solved by the joint
-//     estimator from a core: the views whose labels agree with the pairs' (up to a
-//     global turn, so labels half wrong still leave a consistent core) and whose
-//     informative pairs mostly agree with them (the others are left out of the
-//     solve, not decided; on a refusal the least trusted is dropped and the solve
-//     redone). Then every view's two candidates are compared with the prediction
-//     P_hat_i = X^-1 V_i Y under the residual covariance S_i of the fitted noise
-//     model (residual_covariances) plus the prediction's own, J Cov(X, Y) J^T. Each
-//     view takes its nearer candidate, the solve is redone from the views that
-//     pass the gate below, until neither the labels nor that set change (bounded).
-//  4. Gate: a view is kept when exactly one candidate lies within the chi2(6)
-//     99.9% gate (scaled by outliers.h residual_scale: real detectors' covariances
-//     are too small); both within or neither: it is left out, named with its two
-//     Mahalanobis distances.
-//  5. Normalised: when more than half of the kept views come out turned, every
-//     label is turned (a global turn changes Y only), so that views detected
-//     right stay as they are.
-//
-// A turned view's pose is P * F, and its stated camera noise follows it. The
-// package's pose perturbation is additive in translation (pose_covariance.h): a
-// pose's translation error is its origin's, and the turned frame's origin lies
-// elsewhere (a board's: its opposite corner), a lever arm a = R_P t_F away, so
-// xi_t' = xi_t - [a]x xi_R (Sigma' = J Sigma J^T, J = compose_jacobian_left(P, F);
-// the rotation error is the same). Left as detected, it misweighs the turned
-// views: on the real sessions of test_symmetric X moved by 0.25-0.8 sigma. Its
-// corners (PoseSample::corners, for --method corners) are given in the turned
-// frame (F^-1 o), each moved onto the view's own target point there when one is (a
-// chessboard's corner k becomes its mirror n - 1 - k), so their coordinates and
-// ids stay those of the target.
-//
-// The solves see the set as a session does: detections with their own
-// covariance and no global noise block get the mean of theirs as the block
-// (session/calibration_session.h); the kept samples keep the set's as given.
-//
-// Frames and conventions: rig.h (T_a_b maps points in b to a; left perturbations
-// in the parent frame, ROS order x y z rx ry rz). No ROS, no OpenCV.
+// is_half_turn_symmetric): each view's detected pose P = T_camera_pattern is P or
+// P * F, F = half_turn, the turn by pi about the face's normal through its centre.
+// The views are labelled from the robot's motion (synchronise_half_turns: pairs, then
+// spectral sign synchronisation; refine_half_turns: from the joint fit, a chi2(6) 99.9%
+// gate); a turned view's pose, stated covariance and corners move to the turned frame.
+// Only relative labels are observable: a global turn moves Y, never X. Frames: rig.h
+// (T_a_b maps points in b to a; left perturbations, ROS order). No ROS, no OpenCV.
+// Derivation: docs/how_it_works.md, "Symmetric boards: each view's pose decided from the motion".
 #pragma once
 
 #include <string>

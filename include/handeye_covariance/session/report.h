@@ -1,28 +1,11 @@
-// The calibration report: how far this session's X can be trusted, and what to
-// do about it, from the samples alone (no truth needed, so it works on real
-// sessions). `handeye report` and the node's /save_calibration write it; the
-// figures and the HTML page are scripts/report.py's.
-//
-// Three views of X's uncertainty, per axis (ROS order x, y, z, rx, ry, rz):
-//  - predicted: the estimator's covariance (the product);
-//  - leave-one-out: the jackknife over the kept samples. Each X_(i) is solved
-//    without sample i, d_i = (t_(i) - t, log(R_(i) R^T)), and
-//        sigma_k^2 = (n-1)/n * sum_i (d_ik - mean_k)^2        (Efron's jackknife);
-//  - split-half (split_check.h): each split's difference d = X_a - X_b over the
-//    sigma its covariance predicts, s_k = sqrt((Sigma_a + Sigma_b)_kk); the
-//    predicted sigma scaled by the RMS of d_k / s_k over the splits. Its NEES is
-//    judged against what an honest covariance gives on the same poses (the
-//    calibrated check, honesty_check), not against a fixed 6.
-// An honest covariance has all three alike. The jackknife variance itself has a
-// relative 1 sigma of about sqrt(2/(n-1)) (27% at 30 samples), so only ratios
-// beyond `ratio_advice` are called out; the split-half NEES by the check's verdict.
-//
-// The rotation axes: each pair of kept samples i < j gives the camera-side
-// motion B = P_i P_j^-1 (P = T_camera_pattern), whose rotation axis is in the
-// camera frame. X's rotation is pinned only about axes the motions turn about:
-// the eigenvalues of M = sum_ij theta_ij^2 a_ij a_ij^T say how much turning
-// each direction saw; the weakest one, below `weak_axis_share` of the
-// strongest, is called out.
+// The calibration report (make_report, write_report): how far this session's X can be
+// trusted and what to mend, from the samples alone (no truth needed). Per axis of X (ROS
+// order x y z rx ry rz; m and rad) three 1 sigma: predicted, leave-one-out (jackknife)
+// and split-half (split_check.h, judged by the calibrated check); the motions' rotation
+// axes in the camera frame, the weakest called out; advice. `handeye report` and the
+// node's /save_calibration write it; its figures and page are scripts/report.py's.
+// Derivation: docs/how_it_works.md, "The calibration report: three views of X's
+// uncertainty, and the rotation axes".
 #pragma once
 
 #include <string>
@@ -41,8 +24,8 @@ struct ReportOptions {
   /// is called out: sqrt of the chi2(6) 0.999 quantile.
   double advice_sigma = 4.74;
   /// Leave-one-out or split-half sigma over the predicted one, per axis, beyond
-  /// which the advice calls the covariance overconfident. Honest simulated sessions
-  /// (test_report) reach 1.98 at most.
+  /// which the advice calls the covariance overconfident (what honest sessions reach:
+  /// docs/offline.md, the calibration report).
   double ratio_advice = 2.0;
   double weak_axis_share = 0.1;    // weakest over strongest eigenvalue of M
   std::size_t max_rotation_axes = 2000;  // motions kept for the figure (M uses every pair)

@@ -1,31 +1,12 @@
 // A position-controlled arm under ros_controllers' joint_trajectory_controller,
-// simulated without ROS, for the simulated arm's node and the motion tests. It
-// applies the controller's rules to each command (joint_trajectory_controller's
-// updateTrajectoryCommand and initJointTrajectory, summarised in docs/motion.md):
-//   - not running: every command is refused, the empty one too;
-//   - no points: hold the current (actual) position, decelerating over
-//     `stop_trajectory_duration` (its parameter; 0 by default: at once; with d,
-//     the arm comes to rest 5/8 v d further, its quintic segment's midpoint);
-//   - refused: times not strictly increasing, joints other than the controller's,
-//     point sizes that do not match;
-//   - a zero stamp starts the command at the next control update, a stamp in the
-//     future at that time; points at or before that start are dropped (a first
-//     point at time 0 with a zero stamp silently); all of them dropped: the
-//     command is ignored and the running trajectory goes on;
-//   - otherwise the running trajectory is kept up to the command's start and
-//     bridged from its desired state there to the first point kept;
-//   - between points: linear, cubic or quintic as positions, velocities and
-//     accelerations are given; after the last point it holds it.
-// Path and goal tolerances are not enforced (the topic interface has none).
-// Speed scaling, as the UR driver's scaled_pos_joint_traj_controller: the
-// trajectory's clock advances by speed_scale times each control period.
-// Faults for the tests: the arm stops at a fraction of each move (a protective
-// stop: the arm and the trajectory's clock stop, as a UR's driver scales it to 0).
-// Not modelled: a continuous joint's wraparound in the bridge, and tracking lag (the
-// arm is where the trajectory puts it, as ros_control's simulated position interface).
-// Times are seconds on the caller's clock (the node's ROS time). SimulatedArm runs
-// one on a simulated clock, and run_move makes a move through it as the calibration
-// node does (ros/arm_mover.cpp), for the tests and studies without ROS.
+// simulated without ROS for the simulated arm's node and the motion tests. Each command
+// gets that controller's rules (docs/motion.md, "The simulated arm's controller"):
+// refused, dropped, an empty one a hold, else bridged from the running trajectory;
+// between points linear, cubic or quintic as positions, velocities and accelerations
+// are given, the last one held. The trajectory clock runs at speed_scale (the UR
+// driver's scaling); stop_fraction stops the arm and that clock part way (a protective
+// stop). Times: s on the caller's clock. SimulatedArm runs one on a simulated clock;
+// run_move makes a move through it as the calibration node does (ros/arm_mover.cpp).
 #pragma once
 
 #include <functional>
