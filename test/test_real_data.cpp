@@ -87,19 +87,27 @@ RealSession real_session(const fs::path& dir, Setup setup, const Target& target)
   return session;
 }
 
+/// Which of the session's doors a calibration goes through: `calibrate_checked`, as the
+/// node's /calibrate, `handeye solve` and `handeye images` do (the shared robot error's
+/// model where it is used, the honesty check and its inflation); or `calibrate_modelled`,
+/// the same X without the honesty check (its covariance not inflated), for leave-one-out.
+enum class Door { Checked, Modelled };
+
 /// As the node: no noise config, each sample's own detection covariance; `method`
 /// joint, or corners (the joint estimate refined from the corners, as the node and
 /// `handeye images --method corners` run it).
-Calibration calibrate_like_the_node(const SampleSet& samples, Method method = Method::Joint) {
+Calibration calibrate_like_the_node(const SampleSet& samples, Method method = Method::Joint, Door door = Door::Checked,
+                                   SharedErrorUse shared = SharedErrorUse::Use) {
   SessionConfig config;
   config.rig = samples.rig;
   SessionSettings settings = session_settings(config);
   settings.session_file.clear();
   settings.method = method;
+  settings.shared_robot_error = shared;
   if (method == Method::Corners) settings.refine_corners = corner_refiner();
   CalibrationSession session(settings);
   session.replace(samples.samples, "real images");
-  return session.calibrate(session.snapshot());
+  return door == Door::Checked ? session.calibrate_checked(session.snapshot()) : session.calibrate_modelled(session.snapshot());
 }
 
 /// Method corners (the robot poses free with the noise it estimates), with its
@@ -117,18 +125,26 @@ Calibration calibrate_by_corners(const RealSession& session) {
   return c;
 }
 
+/// The README's "X lands within 1.6 sigma per axis of the published X" (the Franka sessions).
+constexpr double kReadmeSigmas = 1.6;
+
 using Pipeline = std::function<Calibration(const RealSession&)>;
 const Pipeline by_poses = [](const RealSession& s) { return calibrate_like_the_node(s.samples); };
+const Pipeline by_poses_modelled = [](const RealSession& s) {
+  return calibrate_like_the_node(s.samples, Method::Joint, Door::Modelled);
+};
 
-/// X against the published X (both from the same images): within 3 sigma per axis
-/// of the combined uncertainty, ours and the jackknife spread of this pipeline
-/// over the leave-one-out sessions for theirs (8 poses determine it weakly).
-Calibration judge(const RealSession& session, const Eigen::Isometry3d& published, const Pipeline& calibrate = by_poses) {
+/// X against the published X (both from the same images): within `bound` sigma per
+/// axis of the combined uncertainty, ours and the jackknife spread of this pipeline's X
+/// (`leave_one_out`: the same X, without the honesty check's cost) over the
+/// leave-one-out sessions for theirs (8 poses determine it weakly).
+Calibration judge(const RealSession& session, const Eigen::Isometry3d& published, double bound,
+                  const Pipeline& calibrate = by_poses, const Pipeline& leave_one_out_calibrate = by_poses_modelled) {
   const Calibration c = calibrate(session);
   const Vector6d error = pose_error(c.T_parent_camera, published);
   std::vector<Vector6d> leave_one_out;
   for (std::size_t k = 0; k < session.samples.samples.size(); ++k) {
-    leave_one_out.push_back(pose_error(calibrate(session.without(k)).T_parent_camera, published));
+    leave_one_out.push_back(pose_error(leave_one_out_calibrate(session.without(k)).T_parent_camera, published));
   }
   const Vector6d ours = c.pose_covariance.diagonal().cwiseSqrt(), theirs = jackknife_sigma(leave_one_out);
   const Vector6d combined = (ours.cwiseAbs2() + theirs.cwiseAbs2()).cwiseSqrt();
@@ -145,12 +161,13 @@ Calibration judge(const RealSession& session, const Eigen::Isometry3d& published
     std::printf("  %-2s  X - published %+8.3f %s   ours 1 sigma %.3f, published (jackknife) %.3f, combined %.3f: %+.2f sigma\n",
                 axes[a], error[a] * unit, a < 3 ? "mm " : "deg", ours[a] * unit, theirs[a] * unit, combined[a] * unit,
                 error[a] / combined[a]);
-    EXPECT_LE(std::abs(error[a]), 3.0 * combined[a]) << axes[a];
+    EXPECT_LE(std::abs(error[a]), bound * combined[a]) << axes[a];
   }
+  if (c.honesty) std::printf("  honesty: %s, inflation %.3f\n", c.honesty->text.c_str(), c.honesty->inflation);
   return c;
 }
 
-TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithin3SigmaOfThePublishedX) {
+TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithinTheReadmes1Point6Sigma) {
   const fs::path dir = realdata() / "visp-franka" / "data-eye-to-hand";
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir
                                << ": put shared/realdata beside the repository (or a parent of it), or set HANDEYE_REALDATA";
@@ -159,8 +176,11 @@ TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithin3SigmaOfThePublish
   const RealSession session = real_session(dir, Setup::EyeToHand, make_target(single_tag_layout(10, 0.048)));
   EXPECT_EQ(session.detected, 8) << "every image shows the tag";
   // ViSP's published X = T_base_camera (the data's README).
-  const Calibration c = judge(session, theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018},
-                                                    {-1.104108108, -1.112745553, 1.289540899}));
+  // The README's and evidence.md's figure: within 1.6 sigma per axis (a fixed session: the
+  // figure is deterministic, so this bounds a regression, not a sampling spread).
+  const Calibration c = judge(session,
+                              theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018}, {-1.104108108, -1.112745553, 1.289540899}),
+                              kReadmeSigmas);
   // The detector's covariances alone are far too small for real data (robot errors,
   // calibration of the camera): the stated noise fails its chi2 test and the
   // missing part is estimated and used, not only warned about.
@@ -169,7 +189,7 @@ TEST(RealData, EyeToHandAprilTagThroughTheNodesPathLandsWithin3SigmaOfThePublish
   EXPECT_FALSE(c.noise_components.empty());
 }
 
-TEST(RealData, EyeInHandChessboardLandsWithin3SigmaOfThePublishedX) {
+TEST(RealData, EyeInHandChessboardLandsWithinTheReadmes1Point6Sigma) {
   const fs::path dir = realdata() / "visp-franka" / "data-eye-in-hand";
   ASSERT_TRUE(fs::exists(dir)) << "the real data is not at " << dir;
   std::printf("[real eye-in-hand, chessboard 9 x 6 inner corners, 23.6 mm squares] %s\n", dir.c_str());
@@ -179,7 +199,8 @@ TEST(RealData, EyeInHandChessboardLandsWithin3SigmaOfThePublishedX) {
                                                             "chessboard.yaml"));
   EXPECT_EQ(session.detected, 8) << "every image shows the board";
   // ViSP's published X = T_effector_camera (the data's README).
-  judge(session, theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244}, {0.001783530191, 0.009173747947, 1.581782359}));
+  judge(session, theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244}, {0.001783530191, 0.009173747947, 1.581782359}),
+        kReadmeSigmas);
 }
 
 // --method corners on the same real sessions: X within 3 sigma of the published X.
@@ -190,7 +211,7 @@ TEST(RealData, CornersOnTheEyeToHandAprilTagSessionLandWithin3SigmaOfThePublishe
   const RealSession session = real_session(dir, Setup::EyeToHand, make_target(single_tag_layout(10, 0.048)));
   const Calibration c = judge(session,
                               theta_u_pose({0.9540358034, -0.05123574465, 0.4762201018}, {-1.104108108, -1.112745553, 1.289540899}),
-                              calibrate_by_corners);
+                              3.0, calibrate_by_corners, calibrate_by_corners);
   EXPECT_EQ(c.method, Method::Corners);
 }
 
@@ -204,7 +225,7 @@ TEST(RealData, CornersOnTheEyeInHandChessboardSessionLandWithin3SigmaOfThePublis
   const Calibration c = judge(session,
                               theta_u_pose({0.05771519632, -0.03392488515, -0.04227690244},
                                            {0.001783530191, 0.009173747947, 1.581782359}),
-                              calibrate_by_corners);
+                              3.0, calibrate_by_corners, calibrate_by_corners);
   EXPECT_EQ(c.method, Method::Corners);
 }
 
@@ -903,17 +924,41 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
   }
 }
 
-// The KUKA sessions through the node's path: X within 3 sigma of X_park per axis
-// (combined with the jackknife spread of our pipeline for X_park's, as the Franka
-// sessions are judged against ViSP's).
-TEST(RealData, KukaSessionsLandWithin3SigmaOfOpenCvsX) {
+// The KUKA sessions through the node's door (calibrate_checked), as evidence.md states them:
+// the per-view model's X (the shared robot error off) within 3 sigma of X_park per axis
+// (combined with the jackknife spread of that pipeline for X_park's, as the Franka sessions
+// are judged against ViSP's); and the X users get, the shared robot error's, used, its step
+// from the per-view X explained by its own covariance (NEES below chi2(6)'s 99%, 16.81). X_park
+// is OpenCV's PARK on the same detections, not a truth: the model's X is printed against it.
+TEST(RealData, KukaSessionsThroughTheNodesDoorAsEvidenceStatesThem) {
+  const Pipeline per_view = [](const RealSession& s) {
+    return calibrate_like_the_node(s.samples, Method::Joint, Door::Checked, SharedErrorUse::Off);
+  };
+  const Pipeline per_view_modelled = [](const RealSession& s) {
+    return calibrate_like_the_node(s.samples, Method::Joint, Door::Modelled, SharedErrorUse::Off);
+  };
   for (const RealCase& c : real_cases()) {
     if (std::string(c.name).rfind("kuka", 0) != 0) continue;
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
-    std::printf("[real %s, the node's path] %s\n", c.name, c.dir.c_str());
+    std::printf("[real %s, the node's door, the per-view model] %s\n", c.name, c.dir.c_str());
     const RealSession session = real_session(c.dir, c.setup, c.target);
     EXPECT_EQ(session.detected, session.images) << "every image shows the board";
-    judge(session, c.published);
+    judge(session, c.published, 3.0, per_view, per_view_modelled);
+    const Calibration used = by_poses(session);
+    ASSERT_TRUE(used.shared_robot_error.has_value()) << c.name;
+    const Calibration::SharedError& e = *used.shared_robot_error;
+    EXPECT_TRUE(e.used) << c.name << ": " << e.not_fitted;
+    const Vector6d error = pose_error(used.T_parent_camera, c.published);
+    const Vector6d sigma = used.pose_covariance.diagonal().cwiseSqrt();
+    std::printf("[real %s, the node's door, the shared robot error] step NEES %.2f (chi2(6) 99%%: 16.81), honesty %s\n",
+                c.name, e.step_nees, used.honesty ? used.honesty->text.c_str() : "not run");
+    std::printf("  the model's X - X_park in its own sigma (measured, not asserted):");
+    for (int a = 0; a < 6; ++a) std::printf(" %+.2f", error[a] / sigma[a]);
+    std::printf("\n");
+    EXPECT_LE(e.step_nees, 16.81) << c.name;
+    // evidence.md's figures for the images path (deterministic: a regression guard, to the digits quoted).
+    const double quoted = std::string(c.name).rfind("kuka_2", 0) == 0 ? 8.83 : 3.77;
+    EXPECT_NEAR(e.step_nees, quoted, 0.005) << c.name;
   }
 }
 

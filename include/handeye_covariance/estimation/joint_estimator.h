@@ -21,7 +21,7 @@ struct JointOptions {
   double step_tolerance = 1e-2;
   int max_noise_rounds = 20;
   /// The estimated noise model by the residuals' dof (n - 2): the full 6x6 from this many,
-  /// else per-axis variances from 6, else one translation and one rotation variance.
+  /// else per-axis variances from per_axis_noise_min_dof, else one translation and one rotation variance.
   int full_noise_min_dof = 60;
   int per_axis_noise_min_dof = 12;
   /// Robot noise estimated (no noise given) from this many samples' worth of residuals.
