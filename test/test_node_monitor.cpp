@@ -3,7 +3,8 @@
 // truth, the rig's detection noise, solved as `handeye solve` does), starts publish.launch
 // monitor:=true in a shell as a user types it, and watches /diagnostics: no ERROR over 200
 // still views; after the rig's camera moves 3 mm on its mount, ERROR within 10 still views,
-// and X named on ~check once the window holds only views after the bump. The published TF stays the saved X throughout.
+// and X named on ~check once the window holds only views after the bump, its reported change the bump
+// within its covariance (NEES below chi2(6)'s 99.9%). The published TF stays the saved X throughout.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <signal.h>
 #include <std_msgs/Float64.h>
@@ -13,6 +14,9 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/statistics.h"
+#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/messages.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -32,7 +36,7 @@ void write_rig_calibration() {
   Rng rng(11);
   MeasurementNoise noise;
   noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
-  noise.camera.rotation = std::pow(0.05 * M_PI / 180.0, 2) * Eigen::Matrix3d::Identity();
+  noise.camera.rotation = std::pow(radians(0.05), 2) * Eigen::Matrix3d::Identity();
   SimulatedSession sim = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, noise);
   sim.samples.noise.reset();
   CalibrationSession session(session_settings(sim.samples));
@@ -97,6 +101,21 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   EXPECT_EQ(latest.level, diagnostic_msgs::DiagnosticStatus::ERROR) << latest.message;
   EXPECT_EQ(check.changed, "X") << check.text;
   std::printf("[monitor] 10 views later: %s\n", latest.message.c_str());
+  // The change it reports is the bump: the rig moved the camera 3 mm along its own x axis
+  // (rig_simulator.cpp), so the new X is exp(expected) saved. Its NEES under the reported
+  // covariance is one chi2(6) draw: below its 99.9% point (22.46) unless the value or the
+  // covariance is wrong (a flipped sign puts it 6 mm off, hundreds of sigma).
+  Eigen::Isometry3d bumped = typical_X(Setup::EyeInHand);
+  bumped.translation() += bumped.linear() * Eigen::Vector3d(metres(3.0), 0.0, 0.0);
+  const Vector6d expected = se3::log(bumped * saved.inverse());
+  const Vector6d reported = Eigen::Map<const Vector6d>(check.change.data());
+  const Matrix6d covariance = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(check.change_covariance.data());
+  const Vector6d error = reported - expected;
+  const double nees = error.dot(covariance.ldlt().solve(error));
+  std::printf("[monitor] reported change %.2f, %.2f, %.2f mm (the bump: %.2f, %.2f, %.2f mm), NEES %.2f of 6\n",
+              millimetres(reported(0)), millimetres(reported(1)), millimetres(reported(2)), millimetres(expected(0)),
+              millimetres(expected(1)), millimetres(expected(2)), nees);
+  EXPECT_LT(nees, chi2_quantile(6, 0.999)) << "reported " << reported.transpose() << ", the bump " << expected.transpose();
   ASSERT_NO_THROW(published = tf.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9)) << "the monitor never changes the TF";
 

@@ -29,8 +29,10 @@ constexpr double kLargestOddsExponent = 690.0;
 
 double chi2_upper(double statistic, int dof) { return dof <= 0 ? 1.0 : chi2_upper_tail(dof, statistic); }
 
-/// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters)
-/// to the whitened residual z: the estimate, its covariance and the chi2 drop.
+/// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters,
+/// J = d e / d xi) to the whitened residual z: the change that removes z, -(H^T H)^-1 H^T z,
+/// as the joint estimator's step (so the new pose is exp(value) times the saved one), its
+/// covariance and the chi2 drop.
 struct Fit {
   Eigen::VectorXd value;
   Eigen::MatrixXd covariance;
@@ -41,9 +43,9 @@ Fit fit_change(const Eigen::MatrixXd& H, const Eigen::VectorXd& z) {
   const Eigen::LDLT<Eigen::MatrixXd> solver(information);
   const Eigen::VectorXd g = H.transpose() * z;
   Fit fit;
-  fit.value = solver.solve(g);
+  fit.value = -solver.solve(g);
   fit.covariance = solver.solve(Eigen::MatrixXd::Identity(information.rows(), information.cols()));
-  fit.drop = g.dot(fit.value);
+  fit.drop = -g.dot(fit.value);
   return fit;
 }
 
