@@ -158,7 +158,7 @@ void BM_HonestyCheck(benchmark::State& state) {
   std::string verdict;
   for (auto _ : state) {
     const Calibration c = session.calibrate_checked(session.snapshot());
-    verdict = c.honesty->verdict + " " + (c.honesty->verdict == "not run" ? c.honesty->text : number_text(c.honesty->ratio, 3));
+    verdict = std::string(to_string(c.honesty->verdict)) + " " + (!c.honesty->ran() ? c.honesty->text : number_text(c.honesty->ratio, 3));
     benchmark::DoNotOptimize(c.pose_covariance);
   }
   state.SetLabel(verdict);  // "not run ..." would say the check was not timed
@@ -195,7 +195,7 @@ void BM_SharedErrorSession(benchmark::State& state) {
   std::string label;
   for (auto _ : state) {
     const Calibration c = session.calibrate_checked(session.snapshot());
-    label = std::string(c.shared_robot_error && c.shared_robot_error->used ? "used, " : "not used, ") + c.honesty->verdict +
+    label = std::string(c.shared_robot_error && c.shared_robot_error->used ? "used, " : "not used, ") + to_string(c.honesty->verdict) +
             " " + number_text(c.honesty->ratio, 3);
     benchmark::DoNotOptimize(c.pose_covariance);
   }

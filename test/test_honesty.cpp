@@ -74,13 +74,13 @@ TEST(Honesty, TheReferenceAveragesOneOnHonestSessions) {
       session.replace(samples.samples, "simulated");
       const Calibration c = session.calibrate_checked(session.snapshot());
       ASSERT_TRUE(c.honesty);
-      if (c.honesty->verdict == "not run") continue;
+      if (!c.honesty->ran()) continue;
       ++checked;
       sum += c.honesty->random_ratio;
       squares += c.honesty->random_ratio * c.honesty->random_ratio;
-      overconfident += c.honesty->verdict == "overconfident" ? 1 : 0;
-      EXPECT_EQ(c.honesty->runs_length, size.n >= 16 ? std::clamp(size.n / 8, 2, 4) : 0);
-      if (c.honesty->runs_length > 0) ++with_runs, runs_sum += c.honesty->runs_ratio;
+      overconfident += c.honesty->verdict == Honesty::Overconfident ? 1 : 0;
+      EXPECT_EQ(c.honesty->runs.length, size.n >= 16 ? std::clamp(size.n / 8, 2, 4) : 0);
+      if (c.honesty->runs.length > 0) ++with_runs, runs_sum += c.honesty->runs.ratio;
     }
     const double mean = sum / checked, spread = std::sqrt(squares / checked - mean * mean);
     std::printf("[ figures  ] %d honest sessions of %d: ratio %.3f +- %.3f (1 sigma of the mean; per session %.3f); "
@@ -112,7 +112,7 @@ TEST(Honesty, AnOverconfidentVerdictInflatesTheCovariances) {
   Calibration inflated = model;
   record_honesty(inflated, check, true);
   ASSERT_TRUE(inflated.honesty);
-  EXPECT_EQ(inflated.honesty->verdict, "overconfident");
+  EXPECT_EQ(inflated.honesty->verdict, Honesty::Overconfident);
   EXPECT_DOUBLE_EQ(inflated.honesty->inflation, 2.0);
   EXPECT_TRUE(inflated.pose_covariance.isApprox(2.0 * model.pose_covariance));
   EXPECT_TRUE(inflated.rotation_covariance.isApprox(2.0 * model.rotation_covariance));
@@ -154,7 +154,7 @@ TEST(Honesty, AnUnderstatedNoiseIsCaughtAndTheInflatedCovarianceCoversTheTruth) 
     session.replace(s.samples.samples, "simulated");
     const Calibration c = session.calibrate_checked(session.snapshot());
     ASSERT_TRUE(c.honesty);
-    EXPECT_EQ(c.honesty->verdict, "overconfident") << m;
+    EXPECT_EQ(c.honesty->verdict, Honesty::Overconfident) << m;
     const Vector6d e = pose_error(c.T_parent_camera, s.X);
     model_nees += e.dot(c.honesty->model_pose_covariance.ldlt().solve(e)) / sessions;
     inflated_nees += e.dot(c.pose_covariance.ldlt().solve(e)) / sessions;
@@ -277,23 +277,23 @@ TEST(Honesty, HalvesOfRunsSeeAnErrorSharedByNeighbouringPoses) {
       CalibrationSession session(settings);
       session.replace(samples.samples, "simulated");
       const Calibration c = session.calibrate_checked(session.snapshot());
-      if (!c.honesty || c.honesty->verdict == "not run" || c.honesty->runs_length != per_place) {
+      if (!c.honesty || !c.honesty->ran() || c.honesty->runs.length != per_place) {
         ADD_FAILURE() << "no honesty check with runs of " << per_place << " on session " << m;
         continue;
       }
       const Calibration::Honesty& h = *c.honesty;
       const bool runs_decided = h.run_length == per_place;
-      EXPECT_DOUBLE_EQ(h.ratio, runs_decided ? h.runs_ratio : h.random_ratio);
+      EXPECT_DOUBLE_EQ(h.ratio, runs_decided ? h.runs.ratio : h.random_ratio);
       if (runs_decided) {
         ++r.runs_overconfident;
-        EXPECT_EQ(h.verdict, "overconfident");
-        EXPECT_GT(h.runs_ratio, h.random_ratio);
+        EXPECT_EQ(h.verdict, Honesty::Overconfident);
+        EXPECT_GT(h.runs.ratio, h.random_ratio);
         EXPECT_NE(h.text.find("(halves of runs of 3 consecutive samples)"), std::string::npos) << h.text;
       }
       const Vector6d e = pose_error(c.T_parent_camera, at.X);
       r.truth_nees_model += e.dot(h.model_pose_covariance.ldlt().solve(e)) / sessions;
       r.truth_nees_runs += e.dot(c.pose_covariance.ldlt().solve(e)) / sessions;
-      const double ratio[2] = {h.random_ratio, h.runs_ratio};
+      const double ratio[2] = {h.random_ratio, h.runs.ratio};
       r.random += ratio[0] / sessions;
       r.runs += ratio[1] / sessions;
     }

@@ -1,6 +1,6 @@
 // Checks every section (core/fields.h) against its description: the description names
 // every field of the struct (no byte left out), and a section written and read back is
-// the same, field by field. Used by test_yaml_io.
+// the same, field by field (each field it writes). Used by test_yaml_io.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -15,6 +15,7 @@
 
 #include "handeye_covariance/core/fields.h"
 #include "handeye_covariance/core/pose_covariance.h"
+#include "sections.h"
 
 namespace handeye {
 namespace test {
@@ -52,6 +53,10 @@ std::vector<std::string> undescribed(const S& probe) {
 /// lists of one such section), so that a round trip that drops or swaps one shows.
 struct Fill {
   int counter = 0;
+  static Matrix6d spd(int counter) {
+    const Matrix6d A = Matrix6d::Identity() + 0.01 * counter * Matrix6d::Ones();
+    return A * A.transpose();
+  }
   template <class T, class... Option>
   void operator()(const char* key, T& member, Option&&...) {
     ++counter;
@@ -64,10 +69,16 @@ struct Fill {
     } else if constexpr (std::is_same_v<T, std::string>) {
       member = std::string(key) + " text";
     } else if constexpr (std::is_same_v<T, Matrix6d>) {  // symmetric positive definite, every entry its own
-      const Matrix6d A = Matrix6d::Identity() + 0.01 * counter * Matrix6d::Ones();
-      member = A * A.transpose();
+      member = spd(counter);
+    } else if constexpr (io::detail::is_eigen_matrix<T>::value) {
+      for (int k = 0; k < member.size(); ++k) member(k) = counter + 0.01 * k;
+    } else if constexpr (std::is_same_v<T, PoseWithCovariance>) {
+      member.pose = Eigen::Translation3d(0.1 * counter, 0.2, 0.3) * Eigen::AngleAxisd(0.1 * counter, Eigen::Vector3d(1, 2, 3).normalized());
+      member.covariance = spd(counter);
     } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
       member = {Eigen::Vector3d(counter, counter + 0.5, counter + 0.75)};
+    } else if constexpr (std::is_enum_v<T>) {
+      member = T{};  // its first value, which no section has as its default
     } else if constexpr (is_section_v<T>) {
       T::fields(member, *this);
     } else if constexpr (std::is_same_v<T, std::vector<typename T::value_type>>) {
@@ -77,12 +88,15 @@ struct Fill {
   }
 };
 
-/// The section as "key=value" lines, nested sections and lists included.
+/// The section's written fields as "key=value" lines, nested sections and lists
+/// included: a field its description says is not written (io/sections.h is_written,
+/// e.g. one of two exclusive keys) is left out.
 struct Flatten {
   std::vector<std::string> lines;
   std::string prefix;
   template <class T, class... Option>
-  void operator()(const char* key, const T& member, Option&&...) {
+  void operator()(const char* key, const T& member, Option... option) {
+    if (!io::detail::is_written(member, option...)) return;
     const std::string name = prefix + key;
     char text[64];
     if constexpr (std::is_same_v<T, double>) {
@@ -94,10 +108,19 @@ struct Flatten {
       lines.push_back(name + "=" + member);
     } else if constexpr (std::is_enum_v<T>) {
       lines.push_back(name + "=" + std::to_string(static_cast<int>(member)));
-    } else if constexpr (std::is_same_v<T, Matrix6d> || std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
+    } else if constexpr (std::is_same_v<T, PoseWithCovariance>) {  // the pose to 12 digits: it is written as a quaternion
+      for (int k = 0; k < 16; ++k) {
+        std::snprintf(text, sizeof(text), "%.12g", member.pose.matrix()(k) + 0.0);
+        lines.push_back(name + ".pose=" + text);
+      }
+      const std::string outer = prefix;
+      prefix = name + ".";
+      (*this)("covariance", member.covariance);
+      prefix = outer;
+    } else if constexpr (io::detail::is_eigen_matrix<T>::value || std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
       std::vector<double> numbers;
-      if constexpr (std::is_same_v<T, Matrix6d>) {
-        numbers.assign(member.data(), member.data() + 36);
+      if constexpr (io::detail::is_eigen_matrix<T>::value) {
+        numbers.assign(member.data(), member.data() + member.size());
       } else {
         for (const Eigen::Vector3d& p : member) numbers.insert(numbers.end(), {p.x(), p.y(), p.z()});
       }

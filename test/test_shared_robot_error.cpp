@@ -168,19 +168,19 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   EXPECT_TRUE(c.cross_covariance.isApprox(k * fit.cross_covariance, 1e-9));
   EXPECT_TRUE(c.translation_covariance.isApprox(k * fit.pose_covariance.topLeftCorner<3, 3>(), 1e-9));
   EXPECT_TRUE(c.rotation_covariance.isApprox(k * fit.pose_covariance.bottomRightCorner<3, 3>(), 1e-9));
-  EXPECT_TRUE(c.shared_robot_error->per_view_T_parent_camera.isApprox(per_view.T_parent_camera, 1e-12));
-  EXPECT_TRUE(c.shared_robot_error->per_view_pattern_pose.isApprox(per_view.pattern->pose, 1e-12));
+  EXPECT_TRUE(c.shared_robot_error->per_view_X.pose.isApprox(per_view.T_parent_camera, 1e-12));
+  EXPECT_TRUE(c.shared_robot_error->per_view_pattern.pose.isApprox(per_view.pattern->pose, 1e-12));
   // Its check is the model's, with GLS halves.
   const HonestyCheck expected =
       check_shared_robot_error(session.decided(snapshot.samples, per_view), per_view, fit.best, settings.honesty,
                                SharedErrorEstimator::Gls);
   EXPECT_NEAR(c.honesty->ratio, expected.ratio, 1e-9);
   EXPECT_NEAR(c.honesty->random_ratio, expected.random_ratio, 1e-9);
-  EXPECT_NEAR(c.honesty->runs_ratio, expected.runs_ratio, 1e-9);
-  EXPECT_EQ(c.honesty->runs_length, 3);
-  EXPECT_EQ(c.honesty->replicates, 20);
+  EXPECT_NEAR(c.honesty->runs.ratio, expected.runs_ratio, 1e-9);
+  EXPECT_EQ(c.honesty->runs.length, 3);
+  EXPECT_EQ(c.honesty->reference.sessions, 20);
   std::printf("[ figures  ] the session's check of the model in use: %s (random halves %.3f, runs of 3 %.3f)\n",
-              c.honesty->text.c_str(), c.honesty->random_ratio, c.honesty->runs_ratio);
+              c.honesty->text.c_str(), c.honesty->random_ratio, c.honesty->runs.ratio);
   // calibrate_modelled: the same calibration before the check.
   const Calibration modelled = session.calibrate_modelled(snapshot);
   EXPECT_TRUE(modelled.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
@@ -192,7 +192,7 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   const CalibrationReport report = make_report(session, snapshot, options);
   EXPECT_TRUE(report.calibration.T_parent_camera.isApprox(c.T_parent_camera, 1e-12));
   EXPECT_NEAR(report.honesty.random_ratio, c.honesty->random_ratio, 1e-9);
-  EXPECT_NEAR(report.honesty.runs_ratio, c.honesty->runs_ratio, 1e-9);
+  EXPECT_NEAR(report.honesty.runs_ratio, c.honesty->runs.ratio, 1e-9);
   EXPECT_EQ(report.honesty.observed.differences.size(), static_cast<std::size_t>(report.honesty.observed.splits));
   ASSERT_TRUE(report.calibration.shared_robot_error);  // the per-view model checked beside it, as calibrate_checked does
   EXPECT_EQ(report.calibration.shared_robot_error->per_view_honesty, c.shared_robot_error->per_view_honesty);
@@ -218,7 +218,7 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   EXPECT_NEAR(back.length_scale, c.shared_robot_error->length_scale, 1e-9);
   EXPECT_NEAR(back.translation_sigma, c.shared_robot_error->translation_sigma, 1e-9);
   EXPECT_NEAR(back.covariance_inflation, c.shared_robot_error->covariance_inflation, 1e-6);
-  EXPECT_TRUE(back.T_parent_camera.isApprox(c.T_parent_camera, 1e-6));
+  EXPECT_TRUE(back.X.pose.isApprox(c.T_parent_camera, 1e-6));
   EXPECT_EQ(back.per_view_honesty, c.shared_robot_error->per_view_honesty);
   EXPECT_NEAR(back.per_view_inflation, c.shared_robot_error->per_view_inflation, 1e-9);
   EXPECT_EQ(per_view_calibration(read).honesty->text, c.shared_robot_error->per_view_honesty);

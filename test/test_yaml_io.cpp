@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 
 #include "handeye_covariance/estimation/joint_estimator.h"
@@ -402,10 +403,11 @@ TEST(YamlIo, AHomeRelativePathIsExpanded) {
 /// Every section of a result: its description names each of its fields, and it reads back
 /// as written. A field added to a struct but not to its `fields` fails the first.
 template <class S>
-void expect_described_and_round_trips(const char* name) {
+void expect_described_and_round_trips(const char* name, const std::function<void(S&)>& widest = {}) {
   const S probe{};
   EXPECT_EQ(test::undescribed(probe), std::vector<std::string>{}) << name;
-  const S written = test::filled<S>();
+  S written = test::filled<S>();
+  if (widest) widest(written);  // the state in which it writes the most
   YAML::Emitter out;
   io::detail::new_emitter(out);
   io::detail::emit_section(out, written, false);
@@ -422,6 +424,13 @@ TEST(Sections, EachIsDescribedWholeAndReadsBackAsWritten) {
   expect_described_and_round_trips<Calibration::Prediction>("prediction");
   expect_described_and_round_trips<Calibration::CornerFit::Image>("corner image");
   expect_described_and_round_trips<Calibration::ResidualNoise>("residual noise");
+  expect_described_and_round_trips<Calibration::Honesty>("honesty");
+  expect_described_and_round_trips<Calibration::Honesty::Reference>("honesty reference");
+  expect_described_and_round_trips<Calibration::Honesty::Runs>("honesty runs");
+  expect_described_and_round_trips<Calibration::SharedError>("shared robot error",
+                                                             [](Calibration::SharedError& e) { e.not_fitted.clear(); });
+  expect_described_and_round_trips<Calibration::SharedError>("shared robot error, not fitted");
+  expect_described_and_round_trips<Calibration::SharedError::View>("shared robot error view");
   EXPECT_EQ(test::undescribed(StageDiagnostics{}), std::vector<std::string>{});  // written, not read
 }
 

@@ -429,10 +429,10 @@ Calibration per_view_calibration(const Calibration& calibration) {
   if (!calibration.shared_robot_error || !calibration.shared_robot_error->used || !calibration.pattern) return calibration;
   const Calibration::SharedError& e = *calibration.shared_robot_error;
   Calibration c = calibration;
-  c.T_parent_camera = e.per_view_T_parent_camera;
-  set_pose_covariance(c, e.per_view_pose_covariance);
-  c.pattern->pose = e.per_view_pattern_pose;
-  c.pattern->covariance = e.per_view_pattern_covariance;
+  c.T_parent_camera = e.per_view_X.pose;
+  set_pose_covariance(c, e.per_view_X.covariance);
+  c.pattern->pose = e.per_view_pattern.pose;
+  c.pattern->covariance = e.per_view_pattern.covariance;
   c.cross_covariance = e.per_view_cross_covariance;
   c.covariance_kind = "information";
   c.covariance_inflation = e.per_view_covariance_inflation;
@@ -443,8 +443,8 @@ Calibration per_view_calibration(const Calibration& calibration) {
   // Its own honesty check: the verdict it gave and its inflation, as record_honesty applies it.
   Calibration::Honesty h;
   h.inflation = e.per_view_inflation;
-  h.model_pose_covariance = e.per_view_pose_covariance;
-  h.verdict = e.per_view_honesty.empty() ? "not run" : e.per_view_inflation > 1.0 ? "overconfident" : "honest";
+  h.model_pose_covariance = e.per_view_X.covariance;
+  h.verdict = e.per_view_honesty.empty() ? Honesty::NotRun : e.per_view_inflation > 1.0 ? Honesty::Overconfident : Honesty::Honest;
   h.text = e.per_view_honesty.empty() ? "the per-view model was not checked" : e.per_view_honesty;
   c.honesty = h;
   if (e.per_view_inflation > 1.0) scale_covariances(c, e.per_view_inflation);
@@ -500,10 +500,10 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   }
   Calibration::SharedError& record = *c.shared_robot_error;
   record.used = true;
-  record.per_view_T_parent_camera = c.T_parent_camera;
-  record.per_view_pose_covariance = c.pose_covariance;
-  record.per_view_pattern_pose = c.pattern->pose;
-  record.per_view_pattern_covariance = c.pattern->covariance;
+  record.per_view_X.pose = c.T_parent_camera;
+  record.per_view_X.covariance = c.pose_covariance;
+  record.per_view_pattern.pose = c.pattern->pose;
+  record.per_view_pattern.covariance = c.pattern->covariance;
   record.per_view_cross_covariance = c.cross_covariance;
   record.per_view_covariance_inflation = c.covariance_inflation;
   record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
@@ -532,8 +532,7 @@ Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   r.rotation_sigma = fit.best.rotation_sigma;
   r.view_noise_scale = fit.best.view_noise_scale;
   r.covariance_inflation = fit.covariance_inflation;
-  r.T_parent_camera = fit.T_parent_camera;
-  r.pose_covariance = fit.pose_covariance;
+  r.X = {fit.T_parent_camera, fit.pose_covariance};
   r.step_nees = fit.step_nees;
   r.per_view_estimate_covariance = fit.per_view_estimate_covariance;
   r.per_view_estimate_pattern_covariance = fit.per_view_estimate_pattern_covariance;

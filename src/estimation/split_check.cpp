@@ -105,8 +105,17 @@ const char* to_string(Honesty honesty) {
     case Honesty::Honest: return "honest";
     case Honesty::Overconfident: return "overconfident";
     case Honesty::Underconfident: return "underconfident";
+    case Honesty::NotRun: return "not run";
   }
-  return "honest";
+  return "not run";
+}
+
+Honesty from_string(const std::string& name, Honesty) {
+  for (Honesty h : {Honesty::Honest, Honesty::Overconfident, Honesty::Underconfident, Honesty::NotRun}) {
+    if (name == to_string(h)) return h;
+  }
+  throw HandEyeError(ErrorCode::MalformedFile, "unknown honesty verdict `" + name + "`", "honesty: verdict",
+                     "write honest, overconfident, underconfident or not run");
 }
 
 void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
@@ -115,14 +124,12 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   h.half_size = check.observed.half_size;
   h.run_length = check.observed.run_length;
   h.random_ratio = check.random_ratio;
-  h.runs_length = check.runs_length;
-  h.runs_ratio = check.runs_ratio;
+  h.runs = {check.runs_length, check.runs_ratio};
   h.runs_note = check.runs_note;
   h.split_half_nees = check.observed.trimmed_mean_nees;
-  h.replicates = check.reference.replicates;
-  h.reference_mean = check.reference.mean, h.reference_low = check.reference.low, h.reference_high = check.reference.high;
+  h.reference = {check.reference.replicates, check.reference.mean, check.reference.low, check.reference.high};
   h.ratio = check.ratio;
-  h.verdict = check.ran() ? to_string(check.verdict) : "not run";
+  h.verdict = check.ran() ? check.verdict : Honesty::NotRun;
   h.text = check.text;
   h.model_pose_covariance = c.pose_covariance;
   if (inflate && check.verdict == Honesty::Overconfident && check.inflation > 1.0) {

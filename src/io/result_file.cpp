@@ -237,90 +237,12 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "turned_samples" << YAML::Value << YAML::Flow << calibration.turned;
   }
   if (const auto& h = calibration.honesty) {  // the calibrated split-half check (split_check.h)
-    out << YAML::Key << "honesty" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "verdict" << YAML::Value << h->verdict;
-    out << YAML::Key << "text" << YAML::Value << h->text;
-    if (h->verdict != "not run") {
-      out << YAML::Key << "splits" << YAML::Value << h->splits << YAML::Key << "half_size" << YAML::Value << h->half_size;
-      if (h->run_length > 1) out << YAML::Key << "run_length" << YAML::Value << h->run_length;  // the runs decided
-      out << YAML::Key << "split_half_nees" << YAML::Value << h->split_half_nees;
-      out << YAML::Key << "reference" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sessions"
-          << YAML::Value << h->replicates << YAML::Key << "mean" << YAML::Value << h->reference_mean << YAML::Key << "low"
-          << YAML::Value << h->reference_low << YAML::Key << "high" << YAML::Value << h->reference_high << YAML::EndMap;
-      out << YAML::Key << "ratio" << YAML::Value << h->ratio;
-      out << YAML::Key << "random_halves_ratio" << YAML::Value << h->random_ratio;
-      if (h->runs_length > 0) {
-        out << YAML::Key << "runs" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "length" << YAML::Value
-            << h->runs_length << YAML::Key << "ratio" << YAML::Value << h->runs_ratio << YAML::EndMap;
-      } else if (!h->runs_note.empty()) {
-        out << YAML::Key << "runs_not_run" << YAML::Value << h->runs_note;
-      }
-      out << YAML::Key << "inflation" << YAML::Value << h->inflation;
-      if (h->inflation > 1.0) {  // X's covariance as the noise model gave it; the one above is inflated
-        const auto model = to_row_major_6x6(h->model_pose_covariance);
-        out << YAML::Key << "model_covariance" << YAML::Value;
-        emit_numbers(out, model.data(), model.size());
-      }
-    }
-    out << YAML::EndMap;
+    out << YAML::Key << "honesty" << YAML::Value;
+    emit_section(out, *h, false);
   }
   if (const auto& e = calibration.shared_robot_error) {  // a robot error shared by nearby poses, used or said
-    out << YAML::Key << "shared_robot_error" << YAML::Value << YAML::BeginMap;
-    if (!e->not_fitted.empty()) {
-      out << YAML::Key << "not_fitted" << YAML::Value << e->not_fitted;
-    } else {
-      out << YAML::Key << "chosen" << YAML::Value << e->chosen << YAML::Key << "used" << YAML::Value << e->used;
-      out << YAML::Key << "bic_gain" << YAML::Value << e->bic_gain;
-    }
-    if (e->not_fitted.empty() && e->chosen) {
-      out << YAML::Key << "length_scale" << YAML::Value << e->length_scale;
-      out << YAML::Key << "translation_sigma" << YAML::Value << e->translation_sigma;
-      out << YAML::Key << "rotation_sigma" << YAML::Value << e->rotation_sigma;
-      out << YAML::Key << "view_noise_scale" << YAML::Value << e->view_noise_scale;
-      out << YAML::Key << "step_nees" << YAML::Value << e->step_nees;
-      out << YAML::Key << "covariance_inflation" << YAML::Value << e->covariance_inflation;
-      // A pose and its covariance (36 numbers, ROS order, row-major) under `key`.
-      const auto pose_block = [&out](const char* key, const Eigen::Isometry3d& pose, const Matrix6d& covariance) {
-        out << YAML::Key << key << YAML::Value << YAML::BeginMap;
-        emit_pose(out, pose);
-        out << YAML::Key << "covariance" << YAML::Value;
-        const auto numbers = to_row_major_6x6(covariance);
-        emit_numbers(out, numbers.data(), numbers.size());
-        out << YAML::EndMap;
-      };
-      pose_block("X", e->T_parent_camera, e->pose_covariance);
-      out << YAML::Key << "per_view_covariance_under_it" << YAML::Value;
-      const auto per_view = to_row_major_6x6(e->per_view_estimate_covariance);
-      emit_numbers(out, per_view.data(), per_view.size());
-      if (e->used) {  // the per-view model's X and Y with their own covariances, which the model's replaced
-        pose_block("per_view_X", e->per_view_T_parent_camera, e->per_view_pose_covariance);
-        pose_block("per_view_pattern", e->per_view_pattern_pose, e->per_view_pattern_covariance);
-        out << YAML::Key << "per_view_cross_covariance" << YAML::Value;
-        const auto cross = to_row_major_6x6(e->per_view_cross_covariance);
-        emit_numbers(out, cross.data(), cross.size());
-        out << YAML::Key << "per_view_honesty" << YAML::Value << e->per_view_honesty;
-        out << YAML::Key << "per_view_inflation" << YAML::Value << e->per_view_inflation;
-        // What a check of new views predicts them with under the model (calibration_check.h).
-        out << YAML::Key << "per_view_pattern_covariance_under_it" << YAML::Value;
-        const auto pattern = to_row_major_6x6(e->per_view_estimate_pattern_covariance);
-        emit_numbers(out, pattern.data(), pattern.size());
-        out << YAML::Key << "per_view_cross_covariance_under_it" << YAML::Value;
-        const auto cross_under = to_row_major_6x6(e->per_view_estimate_cross_covariance);
-        emit_numbers(out, cross_under.data(), cross_under.size());
-        out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;
-        for (const Calibration::SharedError::View& v : e->views) {
-          out << YAML::Flow << YAML::BeginMap << YAML::Key << "position" << YAML::Value;
-          emit_numbers(out, v.position.data(), 3);
-          // H0_j D_j, 12 x 6 row-major: (xi_X, xi_Y) in ROS order per the robot error xi_E.
-          const Eigen::Matrix<double, 12, 6, Eigen::RowMajor> gain = v.gain;
-          out << YAML::Key << "gain" << YAML::Value;
-          emit_numbers(out, gain.data(), gain.size());
-          out << YAML::EndMap;
-        }
-        out << YAML::EndSeq;
-      }
-    }
-    out << YAML::EndMap;
+    out << YAML::Key << "shared_robot_error" << YAML::Value;
+    emit_section(out, *e, false);
   }
   if (const auto& p = calibration.prediction) {  // leave-one-out: how well it predicts a view it has not seen
     out << YAML::Key << "prediction" << YAML::Value;
@@ -445,6 +367,38 @@ PoseFile parse_pose_file(const std::string& text, const std::string& source) {
 PoseFile read_pose_file(const std::string& path) { return parse_pose_file(read_file(path), path); }
 
 namespace {
+namespace {
+/// What a shared robot error read from a file must hold beyond its keys: used only where
+/// chosen, covariances that are covariances, a model a check can predict with, the
+/// per-view inflation >= 1, and views (when given) that are some.
+void check_shared_error(const Calibration::SharedError& e, const YAML::Node& node, const Location& at) {
+  if (e.used && !e.chosen) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the shared robot error is used but not chosen", (at / "used").str(),
+                       "a model is used only where its fit chose it: write `used: false`, or save the calibration again");
+  }
+  if (!e.fitted() || !e.chosen) return;
+  require_predictable(e, at.str());
+  check_covariance(e.X.covariance, (at / "X" / "covariance").str());
+  check_covariance(e.per_view_estimate_covariance, (at / "per_view_covariance_under_it").str());
+  if (!e.used) return;
+  check_covariance(e.per_view_X.covariance, (at / "per_view_X" / "covariance").str());
+  check_covariance(e.per_view_pattern.covariance, (at / "per_view_pattern" / "covariance").str());
+  if (e.per_view_inflation < 1.0) {
+    throw HandEyeError(ErrorCode::MalformedFile, "the per-view model's inflation must be >= 1, got " + number_text(e.per_view_inflation),
+                       (at / "per_view_inflation").str(), "write the factor its honesty check gave (1: none)");
+  }
+  if (!node["views"]) return;  // a file of an earlier version: a check predicts with the per-view model alone
+  if (e.views.empty()) {
+    throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",
+                       (at / "views").str(), "write one " + keys_of<Calibration::SharedError::View>() +
+                                                 " per view (position: x, y, z in m; gain: 72 numbers, 12 x 6 row-major), "
+                                                 "or save the calibration again");
+  }
+  check_covariance(e.per_view_estimate_pattern_covariance, (at / "per_view_pattern_covariance_under_it").str());
+  check_covariance(per_view_estimate_joint_covariance(e), (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
+}
+}  // namespace
+
 CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   CalibrationFile file;
   if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
@@ -502,85 +456,9 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   // beside it, about which a check predicts new views under the model (its `views`).
   if (const YAML::Node shared = root["shared_robot_error"]; shared && shared.IsMap()) {
     const Location at = top / "shared_robot_error";
-    const std::string shared_hint =
-        "the block /calibrate and `handeye solve` write: not_fitted, or chosen, used, bic_gain, ...; a used one has "
-        "per_view_X, per_view_pattern, per_view_cross_covariance, per_view_pattern_covariance_under_it, "
-        "per_view_cross_covariance_under_it and views";
-    const auto number = [&](const char* key) {
-      return as_finite(require(shared, key, at, shared_hint), at / key, std::string("NaN in ") + key, shared_hint);
-    };
-    const auto covariance = [&](const YAML::Node& node, const Location& where) {
-      const Matrix6d m = from_row_major_6x6(as_numbers<36>(node, where, "6x6 covariance, ROS order"));
-      check_covariance(m, where.str());
-      return m;
-    };
-    const auto pose_block = [&](const char* key, Eigen::Isometry3d& pose, Matrix6d& cov) {
-      const YAML::Node node = require(shared, key, at, shared_hint);
-      pose = read_pose(node, at / key);
-      cov = covariance(require(node, "covariance", at / key, shared_hint), at / key / "covariance");
-    };
     Calibration::SharedError e;
-    if (shared["not_fitted"]) {
-      e.not_fitted = as_text(shared["not_fitted"], at / "not_fitted");
-    } else {
-      e.chosen = as_bool(require(shared, "chosen", at, shared_hint), at / "chosen");
-      e.used = shared["used"] && as_bool(shared["used"], at / "used");
-      e.bic_gain = number("bic_gain");
-    }
-    if (e.used && !e.chosen) {
-      throw HandEyeError(ErrorCode::MalformedFile, "the shared robot error is used but not chosen", (at / "used").str(),
-                         "a model is used only where its fit chose it: write `used: false`, or save the calibration again");
-    }
-    if (e.not_fitted.empty() && e.chosen) {
-      e.length_scale = number("length_scale");
-      e.translation_sigma = number("translation_sigma");
-      e.rotation_sigma = number("rotation_sigma");
-      e.view_noise_scale = number("view_noise_scale");
-      require_predictable(e, at.str());
-      e.step_nees = number("step_nees");
-      e.covariance_inflation = number("covariance_inflation");
-      pose_block("X", e.T_parent_camera, e.pose_covariance);
-      e.per_view_estimate_covariance =
-          covariance(require(shared, "per_view_covariance_under_it", at, shared_hint), at / "per_view_covariance_under_it");
-    }
-    if (e.used) {
-      pose_block("per_view_X", e.per_view_T_parent_camera, e.per_view_pose_covariance);
-      pose_block("per_view_pattern", e.per_view_pattern_pose, e.per_view_pattern_covariance);
-      e.per_view_cross_covariance = from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance", at, shared_hint),
-                                                                      at / "per_view_cross_covariance", "6x6 Cov(X, Y)"));
-      e.per_view_honesty = as_text(require(shared, "per_view_honesty", at, shared_hint), at / "per_view_honesty");
-      e.per_view_inflation = number("per_view_inflation");
-      if (e.per_view_inflation < 1.0) {
-        throw HandEyeError(ErrorCode::MalformedFile, "the per-view model's inflation must be >= 1, got " + number_text(e.per_view_inflation),
-                           (at / "per_view_inflation").str(), "write the factor its honesty check gave (1: none)");
-      }
-      // Without them (a file of an earlier version) a check predicts with the per-view model alone.
-      if (shared["views"]) {
-        e.per_view_estimate_pattern_covariance = covariance(
-            require(shared, "per_view_pattern_covariance_under_it", at, shared_hint), at / "per_view_pattern_covariance_under_it");
-        e.per_view_estimate_cross_covariance =
-            from_row_major_6x6(as_numbers<36>(require(shared, "per_view_cross_covariance_under_it", at, shared_hint),
-                                              at / "per_view_cross_covariance_under_it", "6x6 Cov(X, Y) under the model"));
-        check_covariance(per_view_estimate_joint_covariance(e),
-                         (at / "per_view_cross_covariance_under_it").str() + " (with the X and Y blocks)");
-        const YAML::Node list = shared["views"];
-        if (!list.IsSequence() || list.size() == 0) {
-          throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",
-                             (at / "views").str(),
-                             "write one {position: [3 numbers], gain: [72 numbers]} per view, or save the calibration again");
-        }
-        for (std::size_t i = 0; i < list.size(); ++i) {
-          const Location where = (at / "views")[i];
-          const std::string view_hint = "{position: [x, y, z] m, gain: 72 numbers, 12 x 6 row-major}";
-          Calibration::SharedError::View v;
-          const auto p = as_numbers<3>(require(list[i], "position", where, view_hint), where / "position", "x, y, z in m");
-          v.position = Eigen::Vector3d(p[0], p[1], p[2]);
-          const auto g = as_numbers<72>(require(list[i], "gain", where, view_hint), where / "gain", "12 x 6, row-major");
-          v.gain = Eigen::Map<const Eigen::Matrix<double, 12, 6, Eigen::RowMajor>>(g.data());
-          e.views.push_back(v);
-        }
-      }
-    }
+    read_section(shared, at, e);
+    check_shared_error(e, shared, at);
     file.shared_robot_error = e;
   }
   if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
@@ -614,7 +492,7 @@ Calibration calibration_of(const CalibrationFile& file) {
   if (file.inflation > 1.0) {
     Calibration::Honesty h;
     h.inflation = file.inflation;
-    h.verdict = "overconfident";
+    h.verdict = Honesty::Overconfident;
     c.honesty = h;
   }
   return c;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "handeye_covariance/core/fields.h"
+#include "handeye_covariance/core/pose_covariance.h"
 #include "yaml_primitives.h"
 
 namespace handeye {
@@ -46,19 +47,35 @@ template <class T>
 bool is_written(const T&, Optional) {
   return true;
 }
-
-/// Whether a reader needs the key: fields with no option.
-template <class... Option>
-constexpr bool is_required() {
-  return sizeof...(Option) == 0;
+template <class T>
+bool is_written(const T&, InMemory) {
+  return false;
 }
+
+/// Whether a reader needs the key: fields with no option, and Only's where it holds.
+inline bool is_required() { return true; }
+inline bool is_required(Only only) { return only.written && !only.optional; }
+inline bool is_required(WhenSet) { return false; }
+inline bool is_required(Optional) { return false; }
+inline bool is_required(InMemory) { return false; }
+
+/// A fixed-size matrix's row-major twin (a column vector stays as it is).
+template <int Rows, int Cols>
+using RowMajorMatrix = Eigen::Matrix<double, Rows, Cols, (Cols == 1 ? Eigen::ColMajor : Eigen::RowMajor)>;
+
+template <class T>
+struct is_eigen_matrix : std::false_type {};
+template <int Rows, int Cols, int Options>
+struct is_eigen_matrix<Eigen::Matrix<double, Rows, Cols, Options>> : std::bool_constant<(Rows > 0 && Cols > 0)> {};
 
 /// "{name, value, sigma}": a section's keys, for a reader's advice.
 template <class S>
 std::string keys_of() {
   std::string keys;
   S probe{};
-  S::fields(probe, [&](const char* key, auto&&...) { keys += (keys.empty() ? "{" : ", ") + std::string(key); });
+  S::fields(probe, [&](const char* key, auto&&, auto... option) {
+    if constexpr (!(std::is_same_v<decltype(option), InMemory> || ...)) keys += (keys.empty() ? "{" : ", ") + std::string(key);
+  });
   return keys + "}";
 }
 
@@ -67,9 +84,15 @@ void emit_section(YAML::Emitter& out, const S& section, bool flow);
 
 template <class T>
 void emit_value(YAML::Emitter& out, const T& value) {
-  if constexpr (std::is_same_v<T, Matrix6d>) {  // 36 numbers, row-major (ROS order)
-    const auto numbers = to_row_major_6x6(value);
-    emit_numbers(out, numbers.data(), numbers.size());
+  if constexpr (is_eigen_matrix<T>::value) {  // its numbers in one list, row-major (a Matrix6d's in ROS order)
+    const RowMajorMatrix<T::RowsAtCompileTime, T::ColsAtCompileTime> rows = value;
+    emit_numbers(out, rows.data(), static_cast<std::size_t>(rows.size()));
+  } else if constexpr (std::is_same_v<T, PoseWithCovariance>) {  // the pose's keys and its covariance
+    out << YAML::BeginMap;
+    emit_pose(out, value.pose);
+    out << YAML::Key << "covariance" << YAML::Value;
+    emit_value(out, value.covariance);
+    out << YAML::EndMap;
   } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {  // x, y, z of each, in one list
     std::vector<double> numbers;
     for (const Eigen::Vector3d& p : value) numbers.insert(numbers.end(), {p.x(), p.y(), p.z()});
@@ -117,6 +140,19 @@ template <class T>
 void read_value(const YAML::Node& node, const Location& at, T& value) {
   if constexpr (std::is_same_v<T, Matrix6d>) {
     value = from_row_major_6x6(as_numbers<36>(node, at, "6x6, row-major, ROS order"));
+  } else if constexpr (is_eigen_matrix<T>::value) {
+    constexpr int rows = T::RowsAtCompileTime, cols = T::ColsAtCompileTime;
+    const auto numbers = as_numbers<static_cast<std::size_t>(rows * cols)>(
+        node, at, std::to_string(rows) + " x " + std::to_string(cols) + ", row-major");
+    value = Eigen::Map<const RowMajorMatrix<rows, cols>>(numbers.data());
+  } else if constexpr (std::is_same_v<T, PoseWithCovariance>) {
+    if (!node.IsMap()) {
+      throw HandEyeError(ErrorCode::MalformedFile, "expected a pose with its covariance", at.str(),
+                         "write the pose's keys and `covariance` (36 numbers, row-major, ROS order)");
+    }
+    value.pose = read_pose(node, at);
+    read_value(require(node, "covariance", at, "a pose here carries its `covariance` (36 numbers, row-major, ROS order)"),
+               at / "covariance", value.covariance);
   } else if constexpr (std::is_same_v<T, std::vector<Eigen::Vector3d>>) {
     const std::vector<double> numbers = as_number_list(node, at, "x, y, z of each point");
     if (numbers.size() % 3 != 0) {
@@ -157,9 +193,10 @@ void read_section(const YAML::Node& node, const Location& at, S& section) {
     throw HandEyeError(ErrorCode::MalformedFile, "expected a map", at.str(), "write it as " + keys_of<S>());
   }
   S::fields(section, [&](const char* key, auto& member, auto... option) {
+    if constexpr ((std::is_same_v<decltype(option), InMemory> || ...)) return;
     const YAML::Node child = node[key];
     if (!child) {
-      if constexpr (is_required<decltype(option)...>()) require(node, key, at, "it is " + keys_of<S>());
+      if (is_required(option...)) require(node, key, at, "it is " + keys_of<S>());
       return;
     }
     read_value(child, at / key, member);

@@ -84,7 +84,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     const Calibration::Honesty& h = *c.honesty;
     out += line("OVERCONFIDENT noise model on this session: split-half NEES %s against %s for an honest covariance on "
                 "these poses; the covariances below are the model's x%s (the model's alone: --no-inflation)",
-                number_text(h.split_half_nees, 3).c_str(), number_text(h.reference_mean, 3).c_str(),
+                number_text(h.split_half_nees, 3).c_str(), number_text(h.reference.mean, 3).c_str(),
                 number_text(h.inflation, 3).c_str());
   }
   out += line("Hand-eye calibration%s: X = T_%s_%s (maps %s points into %s)",
@@ -172,21 +172,21 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
 }
 
 std::string honesty_lines(const Calibration::Honesty& h) {
-  if (h.verdict == "not run") return "  honesty check         not run: " + h.text + "\n";
+  if (!h.ran()) return "  honesty check         not run: " + h.text + "\n";
   std::string out = "  honesty check         " + h.text + " (split-half NEES " + number_text(h.split_half_nees, 3) +
-                    " against " + number_text(h.reference_mean, 3) + " for an honest covariance on these poses; ratio " +
+                    " against " + number_text(h.reference.mean, 3) + " for an honest covariance on these poses; ratio " +
                     number_text(h.ratio, 3) + ")\n";
   const std::string halves = h.run_length > 1 ? "halves of runs of " + std::to_string(h.run_length) +
                                                      " consecutive samples, at least " + std::to_string(h.half_size)
                                                : "halves of " + std::to_string(h.half_size);
   out += "                        " + std::to_string(h.splits) + " random splits into " + halves +
-         " (middle 90%); reference: " + std::to_string(h.replicates) + " simulated sessions at the same robot poses, 5-95% " +
-         number_text(h.reference_low, 3) + " to " + number_text(h.reference_high, 3) + "\n";
-  if (h.runs_length > 0) {
+         " (middle 90%); reference: " + std::to_string(h.reference.sessions) + " simulated sessions at the same robot poses, 5-95% " +
+         number_text(h.reference.low, 3) + " to " + number_text(h.reference.high, 3) + "\n";
+  if (h.runs.length > 0) {
     out += "                        the other look: " +
            (h.run_length > 1 ? "random halves, ratio " + number_text(h.random_ratio, 3)
-                             : "halves of runs of " + std::to_string(h.runs_length) + " consecutive samples, ratio " +
-                                   number_text(h.runs_ratio, 3)) +
+                             : "halves of runs of " + std::to_string(h.runs.length) + " consecutive samples, ratio " +
+                                   number_text(h.runs.ratio, 3)) +
            " (the worse look decides)\n";
   } else if (!h.runs_note.empty()) {
     out += "                        no runs look: " + h.runs_note + "\n";
@@ -202,7 +202,7 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
   }
   // The per-view model's X covariance: the calibration's, or, when the model is in
   // use, the one it replaced.
-  const Matrix6d& per_view = e.used ? e.per_view_pose_covariance : c.pose_covariance;
+  const Matrix6d& per_view = e.used ? e.per_view_X.covariance : c.pose_covariance;
   double ratio = 0.0;  // the largest of sigma_X under the model over the per-view model's, per axis
   for (int k = 0; k < 6; ++k) {
     if (per_view(k, k) > 0.0) {
@@ -210,7 +210,7 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
     }
   }
   if (e.used) {
-    const Vector6d step = pose_error(e.T_parent_camera, e.per_view_T_parent_camera);
+    const Vector6d step = pose_error(e.X.pose, e.per_view_X.pose);
     std::string out = line("  shared robot error    used: the likelihood prefers an error shared by nearby poses (BIC gain "
                            "%.1f: %.2f mm and %.3f deg per axis over %.2f m)",
                            e.bic_gain, millimetres(e.translation_sigma), degrees(e.rotation_sigma), e.length_scale);
@@ -228,7 +228,7 @@ std::string shared_error_lines(const Calibration::SharedError& e, const Calibrat
     }
     return out;
   }
-  const Vector6d step = pose_error(e.T_parent_camera, c.T_parent_camera);
+  const Vector6d step = pose_error(e.X.pose, c.T_parent_camera);
   std::string out = line("  shared robot error    the likelihood prefers an error shared by nearby poses (BIC gain %.1f: "
                          "%.2f mm and %.3f deg per axis over %.2f m)",
                          e.bic_gain, millimetres(e.translation_sigma), degrees(e.rotation_sigma), e.length_scale);

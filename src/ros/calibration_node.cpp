@@ -432,11 +432,11 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.turned_samples = c.turned;
   if (c.honesty) {
     const Calibration::Honesty& h = *c.honesty;
-    res.honesty = h.verdict;
+    res.honesty = to_string(h.verdict);
     res.honesty_text = h.text;
     res.split_half_nees = h.split_half_nees;
-    res.honest_nees = h.reference_mean;
-    res.honest_nees_band = {h.reference_low, h.reference_high};
+    res.honest_nees = h.reference.mean;
+    res.honest_nees_band = {h.reference.low, h.reference.high};
     res.covariance_inflation = h.inflation;
   }
   res.shared_robot_error = "off";
@@ -461,7 +461,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
                    number_text(degrees(c.shared_robot_error->rotation_sigma)) + " deg over " +
                    number_text(c.shared_robot_error->length_scale, 2) + " m)";
   }
-  if (c.honesty && c.honesty->verdict != "not run") res.message += "; " + c.honesty->text;
+  if (c.honesty && c.honesty->ran()) res.message += "; " + c.honesty->text;
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);
   if (c.pattern) pattern_pub_.publish(res.pattern);

@@ -326,7 +326,7 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   Calibration c = calibrate_modelled(snapshot);
   const auto not_run = [&c](const std::string& why) {
     Calibration::Honesty h;
-    h.verdict = "not run";
+    h.verdict = Honesty::NotRun;
     h.text = why;
     h.model_pose_covariance = c.pose_covariance;
     c.honesty = h;

@@ -79,7 +79,7 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& kept, 
   // (the same seed and splits: the same figures), and, where it uses the shared robot
   // error's model, the per-view model's own check beside it (a check of new views
   // predicts about the per-view X and Y).
-  if (!r.calibration.honesty || r.calibration.honesty->verdict == "not run") {
+  if (!r.calibration.honesty || !r.calibration.honesty->ran()) {
     record_honesty(r.calibration, r.honesty, session.settings().inflate_when_overconfident);
     session.check_per_view(kept, r.calibration, honesty);
   }

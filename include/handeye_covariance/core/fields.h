@@ -6,8 +6,10 @@
 // The YAML writer and reader (src/io/sections.h) walk it, and test_sections checks
 // that it names every field the struct has (no byte of the struct left out).
 // Field types: double, int, bool, std::string, an enum with to_string (and, to be
-// read, from_string(text, E{})), Matrix6d (36 numbers, row-major), a list of
-// Eigen::Vector3d (3 numbers each, in one list), a section, and std::vector of a section.
+// read, from_string(text, E{})), a fixed-size Eigen matrix of doubles (its numbers in
+// one list, row-major: Matrix6d's 36 in ROS order), a list of Eigen::Vector3d (3 numbers
+// each, in one list), a PoseWithCovariance (the pose's keys and `covariance`, 36
+// numbers), a section, and std::vector of a section.
 #pragma once
 
 #include <type_traits>
@@ -15,11 +17,14 @@
 
 namespace handeye {
 
-/// A field that is written only where `written` holds (a string or list only when
-/// not empty, when no Only is given), and read when present: absent, the field
-/// keeps its default. Fields without it are always written and required when read.
+/// A field that is written only where `written` holds, and required when read where it
+/// holds (evaluated on what was read before it: write the condition inline, on fields
+/// described earlier); elsewhere absent, it keeps its default. `optional`: never required
+/// (files of earlier versions lack it). Fields without options are always written and
+/// required when read.
 struct Only {
   bool written = true;
+  bool optional = false;
 };
 /// A field written only when it holds something (a non-empty string or list, a
 /// true bool, a non-zero number) and optional when read.
@@ -28,6 +33,9 @@ inline constexpr struct WhenSet {
 /// A field always written but optional when read (files of earlier versions lack it).
 inline constexpr struct Optional {
 } kOptional{};
+/// A field that files do not carry: kept in memory for the program that made it.
+inline constexpr struct InMemory {
+} kInMemory{};
 
 /// A visitor that takes any field: what is_section probes with.
 struct AnyField {

@@ -132,8 +132,6 @@ struct SplitCheckReference {
   std::vector<double> means;    // each replicate's trimmed mean NEES
 };
 
-enum class Honesty { Honest, Overconfident, Underconfident };
-const char* to_string(Honesty honesty);  // "honest" / "overconfident" / "underconfident"
 
 /// The session's split-half check against its reference, and what follows.
 struct HonestyCheck {
