@@ -15,6 +15,7 @@
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/outliers.h"
+#include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/simulation/check_study.h"
 
@@ -159,8 +160,11 @@ TEST(CalibrationCheck, SaysWhenTheCalibrationHasNoLeaveOneOutPrediction) {
   Calibration calibration = solve_joint(old_views);
   ASSERT_FALSE(calibration.noise_components.empty()) << "the stated noise's scale and the robot's estimated";
   const auto says = [](const CalibrationCheck& check) {
-    return std::any_of(check.advice.begin(), check.advice.end(),
-                       [](const std::string& a) { return a.find("no leave-one-out prediction") != std::string::npos; });
+    const std::vector<std::string> advice = io::check_advice(check);
+    const bool worded = std::any_of(advice.begin(), advice.end(),
+                                    [](const std::string& a) { return a.find("no leave-one-out prediction") != std::string::npos; });
+    EXPECT_EQ(advice.size(), check.findings.size());
+    return std::count(check.findings.begin(), check.findings.end(), CalibrationCheck::Finding::NoPrediction) == 1 && worded;
   };
   EXPECT_TRUE(says(check_calibration(calibration, new_views)));
   calibration.prediction = prediction_check(old_views, [](const SampleSet& s) { return solve_joint(s); });
@@ -367,13 +371,14 @@ TEST(CalibrationCheck, LeavesOutAWrongDetection) {
   // simulate_session's pattern is fixed: the calibration's Y holds for the new views.
   SimulatedSession more = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 5, check_study_noise());
   const CalibrationCheck clean = check_calibration(calibration, more.samples);
-  EXPECT_FALSE(clean.changed) << clean.verdict;
+  EXPECT_FALSE(clean.changed) << io::check_verdict(clean);
   EXPECT_TRUE(clean.left_out.empty());
   more.samples.samples[2].T_camera_pattern.translation() += Eigen::Vector3d(0.04, 0.0, 0.0);
   const CalibrationCheck check = check_calibration(calibration, more.samples);
-  ASSERT_EQ(check.left_out, std::vector<int>{2}) << check.verdict;
-  EXPECT_FALSE(check.changed) << check.verdict;
-  EXPECT_NE(check.verdict.find("view 2 left out"), std::string::npos) << check.verdict;
+  ASSERT_EQ(check.left_out, std::vector<int>{2}) << io::check_verdict(check);
+  EXPECT_FALSE(check.changed) << io::check_verdict(check);
+  EXPECT_NE(io::check_verdict(check).find("view 2 left out"), std::string::npos) << io::check_verdict(check);
+  EXPECT_EQ(check.findings.front(), CalibrationCheck::Finding::LeftOutView);
   ASSERT_EQ(check.views.size(), 5u);  // the table keeps every view
   EXPECT_GT(std::pow(check.views[2].mahalanobis, 2), OutlierOptions{}.residual_gate);
   // Beyond the gate still once a change is fitted: no move of X or Y explains it.
@@ -396,7 +401,7 @@ TEST(CalibrationCheck, WhatAViewExplainsBeyondTheChange) {
     const SimulatedSession more = simulate_session(rng, Setup::EyeInHand, X, 5, check_study_noise());
     const CalibrationCheck all = check_calibration(calibration, more.samples);
     ASSERT_TRUE(all.left_out.empty());
-    EXPECT_EQ(all.changed, moved) << all.verdict;
+    EXPECT_EQ(all.changed, moved) << io::check_verdict(all);
     const bool x = all.X_alone.chi2_drop >= all.Y_alone.chi2_drop;
     const auto left = [x](const CalibrationCheck& c) { return c.chi2 - (x ? c.X_alone : c.Y_alone).chi2_drop; };
     for (std::size_t i = 0; i < more.samples.samples.size(); ++i) {

@@ -93,10 +93,10 @@ TEST(JointEstimator, RobustModeTakesOverOnHeavyTailedResiduals) {
     const Calibration plain = solve_joint(s.samples, off);
     ASSERT_FALSE(c.residual_checks.empty());
     EXPECT_FALSE(c.residual_checks.back().passed) << c.residual_checks.back().test << " " << c.residual_checks.back().statistic;
-    EXPECT_EQ(c.loss, "huber");
-    EXPECT_EQ(c.covariance_kind, "sandwich");
+    EXPECT_EQ(c.loss, Loss::Huber);
+    EXPECT_EQ(c.covariance_kind, CovarianceKind::Sandwich);
     EXPECT_GE(c.downweighted, 2);
-    EXPECT_EQ(plain.covariance_kind, "information");
+    EXPECT_EQ(plain.covariance_kind, CovarianceKind::Information);
     EXPECT_TRUE(c.pose_covariance.allFinite());
     robust_error += pose_error(c.T_parent_camera, s.X).head<3>().squaredNorm();
     plain_error += pose_error(plain.T_parent_camera, s.X).head<3>().squaredNorm();

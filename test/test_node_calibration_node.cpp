@@ -68,6 +68,21 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   EXPECT_EQ(calibrate.response.calibration.header.frame_id, kParent);
   EXPECT_GE(calibrate.response.samples_used, 10);
   EXPECT_EQ(calibrate.response.noise_origin, kNoiseOrigin);
+  // Every key of the result file comes back in `result`, in the file's order and as it has it.
+  const auto entry = [&](const std::string& key) {
+    for (const auto& kv : calibrate.response.result) {
+      if (kv.key == key) return kv.value;
+    }
+    return std::string("<absent>");
+  };
+  ASSERT_FALSE(calibrate.response.result.empty());
+  const YAML::Node written = YAML::LoadFile(calibrate.response.calibration_file);
+  EXPECT_EQ(calibrate.response.result.front().key, written.begin()->first.as<std::string>());
+  EXPECT_EQ(entry("samples_used"), std::to_string(calibrate.response.samples_used));
+  EXPECT_EQ(entry("method"), calibrate.response.method);
+  EXPECT_EQ(entry("noise.origin"), kNoiseOrigin);
+  EXPECT_EQ(entry("honesty.verdict"), calibrate.response.honesty.empty() ? "<absent>" : calibrate.response.honesty);
+  EXPECT_EQ(entry("solver.rotation.iterations"), std::to_string(calibrate.response.rotation_iterations));
 
   // Within the predicted uncertainty of the truth: the 6-dof NEES below its
   // 99.9% quantile, chi2(6) when the noise is given. When it is estimated from

@@ -153,7 +153,7 @@ Calibration judge(const RealSession& session, const Eigen::Isometry3d& published
     std::printf("  check: %s = %.3g (bound %.3g) %s\n", check.test.c_str(), check.statistic, check.bound,
                 check.passed ? "passed" : "FAILED");
   }
-  std::printf("  covariance: %s, loss: %s, samples used: %d, rejected: %zu\n", c.covariance_kind.c_str(), c.loss.c_str(),
+  std::printf("  covariance: %s, loss: %s, samples used: %d, rejected: %zu\n", to_string(c.covariance_kind), to_string(c.loss),
               c.samples_used, c.rejected.size());
   const char* axes[] = {"x", "y", "z", "rx", "ry", "rz"};
   for (int a = 0; a < 6; ++a) {
@@ -459,14 +459,14 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       EXPECT_EQ(advice.chosen, fit.chosen);
       EXPECT_NEAR(advice.bic_gain, fit.bic_gain, 1e-9 * std::abs(fit.bic_gain));
       EXPECT_NEAR(advice.step_nees, fit.step_nees, 1e-9 * fit.step_nees);
-      EXPECT_TRUE(advice.T_parent_camera.isApprox(fit.T_parent_camera, 1e-12));
-      EXPECT_TRUE(advice.pose_covariance.isApprox(fit.pose_covariance, 1e-9));
+      EXPECT_TRUE(advice.X.pose.isApprox(fit.T_parent_camera, 1e-12));
+      EXPECT_TRUE(advice.X.covariance.isApprox(fit.pose_covariance, 1e-9));
       EXPECT_TRUE(advice.per_view_estimate_covariance.isApprox(fit.per_view_estimate_covariance, 1e-9));
       // Used: the calibration's X, Y and covariances are the model's (times the honesty
       // check's inflation, 1 unless overconfident), the per-view ones kept in the record.
       ASSERT_TRUE(checked.honesty);
       EXPECT_TRUE(advice.used);
-      EXPECT_EQ(checked.covariance_kind, "shared_robot_error");
+      EXPECT_EQ(checked.covariance_kind, CovarianceKind::SharedRobotError);
       EXPECT_TRUE(checked.T_parent_camera.isApprox(fit.T_parent_camera, 1e-12));
       EXPECT_TRUE(checked.pose_covariance.isApprox(checked.honesty->inflation * fit.pose_covariance, 1e-9));
       EXPECT_TRUE(checked.pattern->pose.isApprox(fit.pattern.pose, 1e-12));
@@ -502,8 +502,8 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       const Calibration::Honesty& own = *checked.honesty;
       EXPECT_GE(own.random_ratio, 0.8) << c.name << ", " << path;
       EXPECT_LE(own.random_ratio, 1.25) << c.name << ", " << path;
-      EXPECT_LE(own.runs_ratio, 1.25) << c.name << ", " << path;
-      EXPECT_NE(own.verdict, "overconfident") << c.name << ", " << path;
+      EXPECT_LE(own.runs.ratio, 1.25) << c.name << ", " << path;
+      EXPECT_NE(own.verdict, Honesty::Overconfident) << c.name << ", " << path;
       // The alternatives of how_it_works.md, judged the same way (40 bootstrap sessions):
       // the model with the per-view estimator's halves (its X with H0 C H0^T) and the
       // per-view model; HANDEYE_SHARED_COMPARE=1 prints them (20 s more).
@@ -530,7 +530,7 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
                   "under the model / its own [%.2f %.2f %.2f %.2f %.2f %.2f]\n",
                   c.name, path.c_str(), fit.used.size(), fit.chosen ? 1 : 0, fit.bic_gain, fit.best.length_scale,
                   fit.best.translation_sigma * 1e3, fit.best.rotation_sigma * 180.0 / M_PI, fit.best.view_noise_scale, fit.covariance_inflation,
-                  own.random_ratio, own.runs_ratio, compared.c_str(), s1(0) / s0(0),
+                  own.random_ratio, own.runs.ratio, compared.c_str(), s1(0) / s0(0),
                   s1(1) / s0(1), s1(2) / s0(2), s1(3) / s0(3), s1(4) / s0(4), s1(5) / s0(5), e0(0) / s0(0), e0(1) / s0(1),
                   e0(2) / s0(2), e0(3) / s0(3), e0(4) / s0(4), e0(5) / s0(5), e1(0) / s1(0), e1(1) / s1(1), e1(2) / s1(2),
                   e1(3) / s1(3), e1(4) / s1(4), e1(5) / s1(5), fit.step_nees, s_true(0) / s0(0), s_true(1) / s0(1),
@@ -712,7 +712,7 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const Calibration& cal = *calibrated;
   std::printf("  views 1-6's noise: %s\n", cal.noise_model.c_str());
   const CalibrationCheck moved = check_calibration(cal, after);
-  ASSERT_EQ(moved.change.what, "X") << name;
+  ASSERT_EQ(moved.change.what, ChangedPose::X) << name;
   const EstimatedChange::Delta& d = *moved.change.X_change;
   // Each part of the change against its own covariance: chi2 on 3 dof.
   const auto part_chi2 = [&](int at) {

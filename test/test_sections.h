@@ -81,6 +81,8 @@ struct Fill {
       member = T{};  // its first value, which no section has as its default
     } else if constexpr (is_section_v<T>) {
       T::fields(member, *this);
+    } else if constexpr (io::detail::is_optional<T>::value) {
+      T::value_type::fields(member.emplace(), *this);
     } else if constexpr (std::is_same_v<T, std::vector<typename T::value_type>>) {
       member.resize(1);
       if constexpr (is_section_v<typename T::value_type>) T::value_type::fields(member[0], *this);
@@ -89,14 +91,14 @@ struct Fill {
 };
 
 /// The section's written fields as "key=value" lines, nested sections and lists
-/// included: a field its description says is not written (io/sections.h is_written,
+/// included: a field its description says is not written (io/sections.h written,
 /// e.g. one of two exclusive keys) is left out.
 struct Flatten {
   std::vector<std::string> lines;
   std::string prefix;
   template <class T, class... Option>
   void operator()(const char* key, const T& member, Option... option) {
-    if (!io::detail::is_written(member, option...)) return;
+    if (!io::detail::written(member, option...)) return;
     const std::string name = prefix + key;
     char text[64];
     if constexpr (std::is_same_v<T, double>) {
@@ -133,6 +135,8 @@ struct Flatten {
       prefix = name + ".";
       T::fields(member, *this);
       prefix = outer;
+    } else if constexpr (io::detail::is_optional<T>::value) {
+      (*this)(key, *member);
     } else {
       lines.push_back(name + " entries=" + std::to_string(member.size()));
       const std::string outer = prefix;

@@ -8,6 +8,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
+#include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/calibration_monitor.h"
 #include "handeye_covariance/session/calibration_session.h"
@@ -133,11 +134,11 @@ TEST(Session, ChecksCollectTheirOwnViewsAndLeaveTheSamplesAlone) {
     EXPECT_FALSE(state.collecting);
     ASSERT_TRUE(state.result);
     EXPECT_EQ(state.result->views.size(), 5u);
-    EXPECT_EQ(state.result->changed, moved_mm > 0.0) << state.result->verdict;
+    EXPECT_EQ(state.result->changed, moved_mm > 0.0) << io::check_verdict(*state.result);
     if (moved_mm > 0.0) {
-      EXPECT_EQ(state.result->change.what, "X") << state.result->verdict;
+      EXPECT_EQ(state.result->change.what, ChangedPose::X) << io::check_verdict(*state.result);
     }
-    EXPECT_NE(last.find(state.result->verdict), std::string::npos) << last;
+    EXPECT_NE(last.find(io::check_verdict(*state.result)), std::string::npos) << last;
   }
   ASSERT_TRUE(session.start_check(calibration, 5).success);
   EXPECT_TRUE(session.check_state().collecting);
@@ -208,7 +209,7 @@ TEST(Monitor, ErrorWithin10StillViewsAfterTheCameraMoves3mm) {
   }
   ASSERT_EQ(monitor.latest().level, MonitorLevel::Error) << monitor.latest().message;
   EXPECT_LE(until_error, 10);
-  EXPECT_EQ(monitor.latest().check->change.what, "X") << monitor.latest().message;
+  EXPECT_EQ(monitor.latest().check->change.what, ChangedPose::X) << monitor.latest().message;
   std::printf("[monitor] the camera moved 3 mm: ERROR after %d still views: %s\n", until_error,
               monitor.latest().message.c_str());
 }

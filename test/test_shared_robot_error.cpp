@@ -159,7 +159,7 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   const Calibration c = session.calibrate_checked(snapshot);
   ASSERT_TRUE(c.shared_robot_error && c.honesty);
   EXPECT_TRUE(c.shared_robot_error->used);
-  EXPECT_EQ(c.covariance_kind, "shared_robot_error");
+  EXPECT_EQ(c.covariance_kind, CovarianceKind::SharedRobotError);
   EXPECT_TRUE(c.T_parent_camera.isApprox(fit.T_parent_camera, 1e-12));
   EXPECT_TRUE(c.pattern->pose.isApprox(fit.pattern.pose, 1e-12));
   const double k = c.honesty->inflation;

@@ -105,7 +105,7 @@ Judged judge(const Scenario& scenario, Setup setup, bool noise_given, int robots
       j.robust.add(pose_error(c.T_parent_camera, robust_limit), c.pose_covariance);
       j.robust_vs_true.add(pose_error(c.T_parent_camera, X), c.pose_covariance);
       ++j.sessions;
-      j.sandwich += c.covariance_kind == "sandwich" ? 1 : 0;
+      j.sandwich += c.covariance_kind == CovarianceKind::Sandwich ? 1 : 0;
       j.missing_noise += noise_given && !c.noise_components.empty() ? 1 : 0;
     }
   }

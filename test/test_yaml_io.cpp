@@ -400,6 +400,40 @@ TEST(YamlIo, AHomeRelativePathIsExpanded) {
   EXPECT_EQ(io::expand_home("~user/x.yaml"), "~user/x.yaml");
 }
 
+/// The one guard of the three checks (handeye check, handeye images check, the node): a saved
+/// calibration of another setup or other frames than the views' is refused, naming both;
+/// what either side does not say agrees.
+TEST(YamlIo, ACalibrationIsCheckedOnlyWithViewsOfItsOwnRig) {
+  const std::string path = test::scratch_directory() + "/to_check.yaml";
+  io::ResultContext context;
+  context.setup = Setup::EyeInHand;
+  context.parent = "tool0";
+  context.child = "camera_optical_frame";
+  PoseWithCovariance X;
+  X.covariance = 1e-6 * Matrix6d::Identity();
+  io::write_file_atomically(path, io::format_pose_file(X, context));
+  Rig rig;
+  rig.setup = Setup::EyeInHand;
+  rig.frames = {"base_link", "tool0", "camera_optical_frame", "board"};
+  EXPECT_NO_THROW(io::read_calibration_to_check(path, rig));
+  Rig unnamed = rig;
+  unnamed.frames = {};
+  EXPECT_NO_THROW(io::read_calibration_to_check(path, unnamed)) << "views that do not name their frames agree";
+  Rig flange = rig;
+  flange.frames.effector = "flange";
+  Rig eye_to_hand = rig;
+  eye_to_hand.setup = Setup::EyeToHand;
+  for (const Rig& other : {flange, eye_to_hand}) {
+    try {
+      io::read_calibration_to_check(path, other);
+      ADD_FAILURE() << "a calibration of another rig was taken";
+    } catch (const HandEyeError& e) {
+      EXPECT_EQ(e.code(), ErrorCode::MalformedFile);
+      EXPECT_NE(std::string(e.what()).find("T_tool0_camera_optical_frame (eye_in_hand)"), std::string::npos) << e.what();
+    }
+  }
+}
+
 /// Every section of a result: its description names each of its fields, and it reads back
 /// as written. A field added to a struct but not to its `fields` fails the first.
 template <class S>
@@ -431,6 +465,9 @@ TEST(Sections, EachIsDescribedWholeAndReadsBackAsWritten) {
                                                              [](Calibration::SharedError& e) { e.not_fitted.clear(); });
   expect_described_and_round_trips<Calibration::SharedError>("shared robot error, not fitted");
   expect_described_and_round_trips<Calibration::SharedError::View>("shared robot error view");
+  expect_described_and_round_trips<Calibration::CornerFit>("corner fit");
+  expect_described_and_round_trips<Calibration::CornerFit>("corner fit, intrinsics kept",
+                                                           [](Calibration::CornerFit& f) { f.intrinsics.reset(); });
   EXPECT_EQ(test::undescribed(StageDiagnostics{}), std::vector<std::string>{});  // written, not read
 }
 

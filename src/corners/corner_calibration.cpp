@@ -494,6 +494,7 @@ CornerResiduals corner_residuals(const Rig& rig, const CameraModel& camera, cons
   return out;
 }
 
+// Over 150 lines: one Ceres problem whose blocks, priors and per-round pixel sigmas share some twenty locals; its stages are commented.
 CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, const std::vector<CornerView>& views,
                                     const Isometry3d& X0, const Isometry3d& Y0, const CornerOptions& options) {
   if (views.size() < 3) {
@@ -937,8 +938,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   c.noise_components.clear();
   c.residual_checks.clear();
   c.warnings.clear();  // the pose-level fit's
-  c.loss = "squared";
-  c.covariance_kind = "information";
+  c.loss = Loss::Squared;
+  c.covariance_kind = CovarianceKind::Information;
   c.downweighted = 0;
   c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
   c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
@@ -979,9 +980,10 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     fit.pixel_noise = "each image its own pixel sigma (robust on)";
   }
   if (f.intrinsics) {
+    Calibration::CornerFit::Intrinsics& refined = fit.intrinsics.emplace();
+    Eigen::Vector2d* entries[] = {&refined.fx, &refined.fy, &refined.cx, &refined.cy, &refined.k1, &refined.k2};
     for (int k = 0; k < 6; ++k) {
-      fit.intrinsics.push_back((*f.intrinsics)[k]);
-      fit.intrinsics_sigma.push_back(std::sqrt(std::max(0.0, f.intrinsics_covariance(k, k))));
+      *entries[k] = {(*f.intrinsics)[k], std::sqrt(std::max(0.0, f.intrinsics_covariance(k, k)))};
     }
   }
   c.corner_fit = fit;

@@ -27,6 +27,19 @@ constexpr double kAlikeOverlap = 0.95;
 /// exp's argument cap for the naming odds (exp(709.8) is the largest double).
 constexpr double kLargestOddsExponent = 690.0;
 
+}  // namespace
+
+const char* to_string(ChangedPose pose) {
+  switch (pose) {
+    case ChangedPose::X: return "X";
+    case ChangedPose::Y: return "Y";
+    case ChangedPose::Both: return "both";
+  }
+  return "X";
+}
+
+namespace {
+
 double chi2_upper(double statistic, int dof) { return dof <= 0 ? 1.0 : chi2_upper_tail(dof, statistic); }
 
 /// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters,
@@ -224,18 +237,6 @@ EstimatedChange::Delta delta_of(const Fit& fit, int offset) {
   return d;
 }
 
-std::string p_text(double p) { return number_text(p, 2); }
-
-std::string change_text(const EstimatedChange::Delta& d) {
-  const Eigen::Vector3d t = d.value.head<3>(), r = d.value.tail<3>();
-  const double t_sigma = std::sqrt(std::max(0.0, t.dot(d.covariance.topLeftCorner<3, 3>() * t)) /
-                                   std::max(t.squaredNorm(), 1e-300));
-  const double r_sigma = std::sqrt(std::max(0.0, r.dot(d.covariance.bottomRightCorner<3, 3>() * r)) /
-                                   std::max(r.squaredNorm(), 1e-300));
-  return number_text(millimetres(t.norm()), 3) + " mm (1 sigma " + number_text(millimetres(t_sigma), 2) + " mm) and " +
-         number_text(degrees(r.norm()), 3) + " deg (1 sigma " + number_text(degrees(r_sigma), 2) + " deg)";
-}
-
 }  // namespace
 
 void require_checkable(const Calibration& calibration) {
@@ -293,6 +294,7 @@ namespace {
 /// `shared`: the robot error shared by nearby poses that the calibration uses
 /// (shared_robot_error.h), with the views it was fitted on, or null; `shared_inflation`
 /// its own honesty check's factor.
+// Over 150 lines: the views' predicted covariance, its whitening and the three hypotheses' fits share C's Cholesky factor and the whitened noise parts.
 CalibrationCheck check_all(const Calibration& calibration, const SampleSet& views, const CheckOptions& options,
                            const Calibration::SharedError* shared, double shared_inflation) {
   require_checkable(calibration);
@@ -449,7 +451,7 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
       check.views[static_cast<std::size_t>(i)].chi2_beyond_the_change = fit_change(with_view, z).drop - larger.drop;
     }
   }
-  const auto hypothesis = [&](const char* what, const Fit& fit, int dof) {
+  const auto hypothesis = [&](ChangedPose what, const Fit& fit, int dof) {
     EstimatedChange c;
     c.what = what;
     c.chi2_drop = fit.drop;
@@ -458,14 +460,14 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
     c.residual_p_value = chi2_upper(c.residual_chi2, n - dof);
     return c;
   };
-  check.X_alone = hypothesis("X", fx, 6);
+  check.X_alone = hypothesis(ChangedPose::X, fx, 6);
   check.X_alone.X_change = delta_of(fx, 0);
-  check.Y_alone = hypothesis("Y", fy, 6);
+  check.Y_alone = hypothesis(ChangedPose::Y, fy, 6);
   check.Y_alone.Y_change = delta_of(fy, 0);
   const bool both_identified = n > 12;
   if (both_identified) {
     const Fit fxy = fit_change(H, z);
-    check.both = hypothesis("both", fxy, 12);
+    check.both = hypothesis(ChangedPose::Both, fxy, 12);
     check.both.X_change = delta_of(fxy, 0);
     check.both.Y_change = delta_of(fxy, 6);
   }
@@ -483,57 +485,20 @@ CalibrationCheck check_all(const Calibration& calibration, const SampleSet& view
   check.change = second_explains ? check.both : single;
 
   // Beyond every null draw: the Monte-Carlo says only that p is below its resolution.
-  const bool beyond_all = check.p_value <= 1.0001 / (options.null_draws + 1.0);
-  const std::string p = (beyond_all ? "p < " : "p = ") + p_text(check.p_value);
-  if (!check.changed) {
-    check.verdict = "consistent (" + p + "): the " + std::to_string(k) +
-                    " new views fit the calibration within its covariance and noise";
-  } else if (check.change.what == "both") {
-    check.verdict = "X and Y both changed (" + p + "): X by " + change_text(*check.change.X_change) + ", Y by " +
-                    change_text(*check.change.Y_change);
-  } else if (check.change.what == "X") {
-    check.verdict = "X changed (" + p + "): the camera moved on its mount by " + change_text(*check.change.X_change);
-  } else {
-    check.verdict = "Y changed (" + p + "): the target moved by " + change_text(*check.change.Y_change);
-  }
-  const bool uncertain_name = check.changed && check.change.what != "both" && check.naming_odds < kNamingOddsBar;
-  if (uncertain_name) {
-    check.verdict += std::string("; or ") + (check.change.what == "X" ? "Y" : "X") +
-                     " changed instead: these views barely tell which (odds " + number_text(check.naming_odds, 2) + " : 1)";
-  }
+  check.p_below_resolution = check.p_value <= 1.0001 / (options.null_draws + 1.0);
+  check.naming_uncertain = check.changed && check.change.what != ChangedPose::Both && check.naming_odds < kNamingOddsBar;
+  using Finding = CalibrationCheck::Finding;
   if (check.changed) {
-    check.advice.push_back(check.change.what == "Y"
-                               ? "the target moved: its pose Y is estimated again in a new session; X may still hold "
-                                 "(calibrate again to be sure)"
-                               : "calibrate again: the published X is off by more than its covariance allows");
-    if (check.change.residual_p_value < options.alpha) {
-      check.advice.push_back("even the estimated change leaves the views " +
-                             number_text(check.change.residual_chi2 / std::max(1, n - check.change.dof), 3) +
-                             "x their expected chi2: a wrong detection or a noisier camera, not only a moved mount");
-    }
+    check.findings.push_back(check.change.what == ChangedPose::Y ? Finding::TargetMoved : Finding::CameraMoved);
+    if (check.change.residual_p_value < options.alpha) check.findings.push_back(Finding::ResidualBeyondChange);
   } else if (check.chi2_p_value < options.alpha) {
-    check.advice.push_back("the views scatter beyond the noise model (chi2 " + number_text(check.chi2, 3) + " on " +
-                           std::to_string(n) + " dof, p = " + p_text(check.chi2_p_value) +
-                           ") but not as a moved X or Y would: look at the view with the largest sigma");
+    check.findings.push_back(Finding::ScatterBeyondNoise);
   }
-  if (uncertain_name || (check.changed && check.x_y_overlap > kAlikeOverlap)) {
-    check.advice.push_back("to tell a moved camera from a moved target, take the views turned about different axes "
-                           "(rolled about the optical axis and tilted both ways): at these views the two look alike "
-                           "(overlap " + number_text(check.x_y_overlap, 3) + ")");
-  }
+  if (check.naming_uncertain || (check.changed && check.x_y_overlap > kAlikeOverlap)) check.findings.push_back(Finding::XAndYAlike);
   // A noise model fitted from few views predicts too narrow (FalseAlarmsOfAFourViewCalibration:
   // about 6% at alpha 1% from 4 views); only the leave-one-out scale measures that.
-  if (!shared && !calibration.prediction && !calibration.noise_components.empty()) {
-    check.advice.push_back("the calibration carries no leave-one-out prediction (it takes 4 views or more, each left "
-                           "out in turn with the rest still calibrating): its noise model alone may predict too narrow, and a p near "
-                           "alpha says less than it seems; solve it again from more views (handeye solve or the node "
-                           "save one)");
-  }
-  if (k < 3) {
-    check.advice.push_back("with " + std::to_string(k) +
-                           " view(s) a change of X cannot be told well from one of Y: take 5 views, turned about "
-                           "different axes");
-  }
+  if (!shared && !calibration.prediction && !calibration.noise_components.empty()) check.findings.push_back(Finding::NoPrediction);
+  if (k < 3) check.findings.push_back(Finding::FewViews);
   return check;
 }
 
@@ -574,10 +539,7 @@ CalibrationCheck check_calibration(const Calibration& used, const SampleSet& vie
   if (without.changed) return check;
   without.views = check.views;  // the table keeps every view, the left-out one marked
   without.left_out = {static_cast<int>(worst)};
-  without.verdict += "; view " + std::to_string(worst) + " left out: " + number_text(check.views[worst].mahalanobis, 3) +
-                     " sigma off alone, a wrong detection (the others fit)";
-  without.advice.insert(without.advice.begin(), "look at view " + std::to_string(worst) +
-                                                     ": its detection disagrees with the calibration and the other views");
+  without.findings.insert(without.findings.begin(), CalibrationCheck::Finding::LeftOutView);
   return without;
 }
 

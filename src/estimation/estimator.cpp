@@ -31,6 +31,19 @@ const char* to_string(Method method) {
   return "unknown";
 }
 
+const char* to_string(NoiseOrigin origin) { return origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals"; }
+
+const char* to_string(Loss loss) { return loss == Loss::Huber ? "huber" : "squared"; }
+
+const char* to_string(CovarianceKind kind) {
+  switch (kind) {
+    case CovarianceKind::Information: return "information";
+    case CovarianceKind::Sandwich: return "sandwich";
+    case CovarianceKind::SharedRobotError: return "shared_robot_error";
+  }
+  return "information";
+}
+
 HandEyeError corners_need_images() {
   return HandEyeError(ErrorCode::MalformedFile,
                       "method `corners` needs the images' corners and the corner estimator, which this program does not have",

@@ -802,6 +802,7 @@ struct NoisePass {
 /// round's scatter M_i = e e^T + J Sigma J^T (component_data), A M A = (A e)(A e)^T +
 /// B Sigma B^T (through V and the Y block's conditional root); a number at its bound counts only when its score points inwards
 /// (by score / sqrt(information)). s must be linearised under the fit's theta.
+// Over 150 lines: the REML trace terms share the per-view roots and fixed-size column blocks of the hot loop (docs/how_it_works.md, The joint estimator's noise).
 NoisePass noise_pass(const JointProblem& problem, const std::vector<Free>& free, const VarianceComponentFit& fit,
                      const Solution& s) {
   NoisePass out;
@@ -1313,6 +1314,7 @@ NoiseFit fit_noise(const JointProblem& problem, std::vector<Free> free, NoiseMod
   return NoiseFit{std::move(free), std::move(inseparable), std::move(theta), std::move(fit), pass, model, std::move(s)};
 }
 
+// Over 150 lines: the start, the noise candidates' sequential score-and-BIC choice and the robust stage read one fit in turn; each stage is commented.
 Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
   const int n = static_cast<int>(samples.samples.size());
   for (int i = 0; i < n; ++i) {
@@ -1569,8 +1571,8 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       const double small_sample = n / (n - 7.0);  // n > 12 here
       covariance = sandwich(s, k_scaled) * small_sample;
       inflation = pattern_inflation = small_sample;
-      result.loss = "huber";
-      result.covariance_kind = "sandwich";
+      result.loss = Loss::Huber;
+      result.covariance_kind = CovarianceKind::Sandwich;
       result.downweighted = static_cast<int>(std::count_if(s.weight.begin(), s.weight.end(), [](double w) { return w < 1.0; }));
     }
   }

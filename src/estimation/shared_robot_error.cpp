@@ -434,7 +434,7 @@ Calibration per_view_calibration(const Calibration& calibration) {
   c.pattern->pose = e.per_view_pattern.pose;
   c.pattern->covariance = e.per_view_pattern.covariance;
   c.cross_covariance = e.per_view_cross_covariance;
-  c.covariance_kind = "information";
+  c.covariance_kind = CovarianceKind::Information;
   c.covariance_inflation = e.per_view_covariance_inflation;
   c.pattern_covariance_inflation = e.per_view_pattern_covariance_inflation;
   if (!e.per_view_noise_model.empty()) c.noise_model = e.per_view_noise_model;
@@ -513,7 +513,7 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   c.cross_covariance = fit.cross_covariance;
   c.pattern->pose = fit.pattern.pose;
   c.pattern->covariance = fit.pattern.covariance;
-  c.covariance_kind = "shared_robot_error";
+  c.covariance_kind = CovarianceKind::SharedRobotError;
   c.covariance_inflation = fit.covariance_inflation;
   c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
   c.noise_model += "; with a robot error shared by nearby poses (" + number_text(millimetres(fit.best.translation_sigma), 3) +

@@ -37,14 +37,13 @@ SettingsFile::SettingsFile(const std::string& path) : yaml_(std::make_unique<Yam
 
 SettingsFile::~SettingsFile() = default;
 
-namespace {
-
 /// `key`'s value as T (yaml-cpp's conversion), nothing when absent or null.
-template <typename T>
-std::optional<T> setting(const YAML::Node& root, const std::string& path, const std::string& key) {
-  const YAML::Node node = root[key];
+template <class T>
+std::optional<T> SettingsFile::value(const std::string& key) {
+  asked_.insert(key);
+  const YAML::Node node = yaml_->root[key];
   if (!node || node.IsNull()) return std::nullopt;
-  const Location at = Location{path, ""} / key;
+  const Location at = Location{path_, ""} / key;
   try {
     if constexpr (std::is_same_v<T, double>) {
       return as_double(node, at);
@@ -56,29 +55,11 @@ std::optional<T> setting(const YAML::Node& root, const std::string& path, const 
                        "see config/calibration_defaults.yaml for the expected value");
   }
 }
-
-}  // namespace
-
-std::optional<double> SettingsFile::number(const std::string& key) {
-  asked_.insert(key);
-  return setting<double>(yaml_->root, path_, key);
-}
-std::optional<bool> SettingsFile::flag(const std::string& key) {
-  asked_.insert(key);
-  return setting<bool>(yaml_->root, path_, key);
-}
-std::optional<int> SettingsFile::whole_number(const std::string& key) {
-  asked_.insert(key);
-  return setting<int>(yaml_->root, path_, key);
-}
-std::optional<std::string> SettingsFile::text(const std::string& key) {
-  asked_.insert(key);
-  return setting<std::string>(yaml_->root, path_, key);
-}
-std::optional<std::vector<int>> SettingsFile::whole_numbers(const std::string& key) {
-  asked_.insert(key);
-  return setting<std::vector<int>>(yaml_->root, path_, key);
-}
+template std::optional<double> SettingsFile::value(const std::string&);
+template std::optional<bool> SettingsFile::value(const std::string&);
+template std::optional<int> SettingsFile::value(const std::string&);
+template std::optional<std::string> SettingsFile::value(const std::string&);
+template std::optional<std::vector<int>> SettingsFile::value(const std::string&);
 
 void SettingsFile::refuse_unknown(const std::string& fix) const {
   for (const auto& entry : yaml_->root) {

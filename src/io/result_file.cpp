@@ -7,6 +7,7 @@
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
+#include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/files.h"
 #include "sections.h"
 #include "yaml_primitives.h"
@@ -186,35 +187,14 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     emit_numbers(out, cross.data(), cross.size());
   }
   if (calibration.corner_fit) {  // method corners: the reprojection fit, per image
-    const Calibration::CornerFit& fit = *calibration.corner_fit;
-    out << YAML::Key << "corners" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "pixel_sigma" << YAML::Value << fit.pixel_sigma;
-    out << YAML::Key << "pixel_sigma_estimated" << YAML::Value << fit.pixel_sigma_estimated;
-    out << YAML::Key << "rms_px" << YAML::Value << fit.rms_px;
-    out << YAML::Key << "corners" << YAML::Value << fit.corners;
-    out << YAML::Key << "robot_poses" << YAML::Value << fit.robot;
-    out << YAML::Key << "target_point_sigma" << YAML::Value << fit.target_point_sigma;  // m, per axis
-    if (!fit.target_points.empty()) out << YAML::Key << "target_points" << YAML::Value << fit.target_points;
-    if (!fit.pixel_noise.empty()) out << YAML::Key << "pixel_noise" << YAML::Value << fit.pixel_noise;
-    out << YAML::Key << "per_image_sigma" << YAML::Value << fit.per_image_sigma;
-    if (!fit.intrinsics.empty()) {  // refined: fx, fy, cx, cy (px), k1, k2, each with its 1 sigma
-      const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2"};
-      out << YAML::Key << "intrinsics" << YAML::Value << YAML::BeginMap;
-      for (std::size_t k = 0; k < fit.intrinsics.size(); ++k) {
-        out << YAML::Key << names[k] << YAML::Value << YAML::Flow << YAML::BeginSeq << fit.intrinsics[k]
-            << fit.intrinsics_sigma[k] << YAML::EndSeq;
-      }
-      out << YAML::EndMap;
-    }
-    out << YAML::Key << "images" << YAML::Value;
-    emit_value(out, fit.images);
-    out << YAML::EndMap;
+    out << YAML::Key << "corners" << YAML::Value;
+    emit_section(out, *calibration.corner_fit, false);
   }
 
   const bool samples = context.setup.has_value();
   out << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "origin" << YAML::Value
-      << (calibration.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals");
+      << to_string(calibration.noise_origin);
   out << YAML::Key << "model" << YAML::Value;
   emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
   if (!calibration.noise_model.empty()) out << YAML::Key << "how" << YAML::Value << calibration.noise_model;
@@ -252,8 +232,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     out << YAML::Key << "residual_checks" << YAML::Value;
     emit_value(out, calibration.residual_checks);
     out << YAML::Key << "robust" << YAML::Value << YAML::Flow << YAML::BeginMap;
-    out << YAML::Key << "loss" << YAML::Value << calibration.loss;
-    out << YAML::Key << "covariance" << YAML::Value << calibration.covariance_kind;
+    out << YAML::Key << "loss" << YAML::Value << to_string(calibration.loss);
+    out << YAML::Key << "covariance" << YAML::Value << to_string(calibration.covariance_kind);
     out << YAML::Key << "downweighted" << YAML::Value << calibration.downweighted;
     out << YAML::Key << "covariance_inflation" << YAML::Value << calibration.covariance_inflation;
     out << YAML::Key << "pattern_covariance_inflation" << YAML::Value << calibration.pattern_covariance_inflation;
@@ -274,6 +254,28 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   return std::string(out.c_str()) + "\n";
 }
 
+namespace {
+void flatten(const YAML::Node& node, const std::string& path, std::vector<std::pair<std::string, std::string>>& out) {
+  if (node.IsMap()) {
+    for (const auto& entry : node) flatten(entry.second, (path.empty() ? "" : path + ".") + entry.first.Scalar(), out);
+  } else if (node.IsSequence() && std::all_of(node.begin(), node.end(), [](const YAML::Node& e) { return e.IsScalar(); })) {
+    YAML::Emitter text;
+    new_emitter(text) << YAML::Flow << node;
+    out.emplace_back(path, text.c_str());
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) flatten(node[i], path + "[" + std::to_string(i) + "]", out);
+  } else {
+    out.emplace_back(path, node.IsScalar() ? node.Scalar() : std::string());
+  }
+}
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> result_entries(const Calibration& calibration, const ResultContext& context) {
+  std::vector<std::pair<std::string, std::string>> entries;
+  flatten(YAML::Load(format_result(calibration, context)), "", entries);
+  return entries;
+}
+
 std::string format_check(const CalibrationCheck& check, const std::string& calibration_path) {
   YAML::Emitter out;
   new_emitter(out) << YAML::BeginMap;
@@ -290,13 +292,13 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   out << YAML::Key << "verdict" << YAML::Value << (check.changed ? "changed" : "consistent");
   out << YAML::Key << "p_value" << YAML::Value << check.p_value;
   out << YAML::Key << "alpha" << YAML::Value << check.alpha;
-  out << YAML::Key << "text" << YAML::Value << check.verdict;
+  out << YAML::Key << "text" << YAML::Value << check_verdict(check);
   if (check.changed) {
-    out << YAML::Key << "changed" << YAML::Value << check.change.what;
+    out << YAML::Key << "changed" << YAML::Value << to_string(*check.change.what);
     const EstimatedChange::Delta& main = check.change.reported();
     emit_6("change", main.value);  // ROS order, m and rad: the new pose is exp(change) times the saved one
     emit_6x6("change_covariance", main.covariance);
-    if (check.change.what == "both") {
+    if (check.change.what == ChangedPose::Both) {
       emit_6("pattern_change", check.change.Y_change->value);
       emit_6x6("pattern_change_covariance", check.change.Y_change->covariance);
     }
@@ -307,8 +309,8 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   out << YAML::Key << "chi2_p_value" << YAML::Value << check.chi2_p_value;
   out << YAML::Key << "hypotheses" << YAML::Value << YAML::BeginSeq;
   for (const EstimatedChange* h : {&check.X_alone, &check.Y_alone, &check.both}) {
-    if (h->what.empty()) continue;  // both: not identified from one or two views
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "changed" << YAML::Value << h->what << YAML::Key << "chi2_drop"
+    if (!h->what) continue;  // both: not identified from one or two views
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "changed" << YAML::Value << to_string(*h->what) << YAML::Key << "chi2_drop"
         << YAML::Value << h->chi2_drop << YAML::Key << "dof" << YAML::Value << h->dof << YAML::Key << "residual_chi2"
         << YAML::Value << h->residual_chi2 << YAML::Key << "residual_p_value" << YAML::Value << h->residual_p_value
         << YAML::EndMap;
@@ -326,7 +328,7 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   }
   out << YAML::EndSeq;
   out << YAML::Key << "advice" << YAML::Value << YAML::BeginSeq;
-  for (const std::string& a : check.advice) out << a;
+  for (const std::string& a : check_advice(check)) out << a;
   out << YAML::EndSeq << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
@@ -496,6 +498,29 @@ Calibration calibration_of(const CalibrationFile& file) {
     c.honesty = h;
   }
   return c;
+}
+
+bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent, const std::string& child) {
+  const auto agree = [](const std::string& a, const std::string& b) { return a.empty() || b.empty() || a == b; };
+  return (!setup || *setup == rig.setup) && agree(parent, rig.camera_parent_frame()) && agree(child, rig.frames.camera);
+}
+
+Calibration read_calibration_to_check(const std::string& path, const Rig& rig) {
+  const CalibrationFile file = read_result(path);
+  const ResultContext& c = file.context;
+  if (!is_calibration_of(rig, c.setup, c.parent, c.child)) {
+    const auto name = [](const std::optional<Setup>& setup, const std::string& parent, const std::string& child) {
+      return "T_" + (parent.empty() ? std::string("?") : parent) + "_" + (child.empty() ? std::string("?") : child) + " (" +
+             (setup ? to_string(*setup) : "setup not given") + ")";
+    };
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       "the saved calibration is " + name(c.setup, c.parent, c.child) + ", the new views are of " +
+                           name(rig.setup, rig.camera_parent_frame(), rig.frames.camera),
+                       path,
+                       "check with views of the setup and frames the calibration was made with (the node: the node of its "
+                       "frames, or set ~calibration_file)");
+  }
+  return calibration_of(file);
 }
 
 StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source) {

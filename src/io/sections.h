@@ -2,6 +2,7 @@
 // the result file's blocks. Internal to io, as yaml_primitives.h.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -14,6 +15,10 @@ namespace handeye {
 namespace io {
 namespace detail {
 
+template <class T>
+struct is_optional : std::false_type {};
+template <class T>
+struct is_optional<std::optional<T>> : std::true_type {};
 template <class T>
 struct is_vector : std::false_type {};
 template <class T>
@@ -51,6 +56,11 @@ template <class T>
 bool is_written(const T&, InMemory) {
   return false;
 }
+template <class T>
+bool is_written(const T&, Block) {
+  return true;
+}
+
 
 /// Whether a reader needs the key: fields with no option, and Only's where it holds.
 inline bool is_required() { return true; }
@@ -58,6 +68,17 @@ inline bool is_required(Only only) { return only.written && !only.optional; }
 inline bool is_required(WhenSet) { return false; }
 inline bool is_required(Optional) { return false; }
 inline bool is_required(InMemory) { return false; }
+inline bool is_required(Block) { return true; }
+
+/// Whether a field is written: an optional only when set, then as its options say.
+template <class T, class... Option>
+bool written(const T& value, Option... option) {
+  if constexpr (is_optional<T>::value) {
+    return value.has_value() && is_written(*value, option...);
+  } else {
+    return is_written(value, option...);
+  }
+}
 
 /// A fixed-size matrix's row-major twin (a column vector stays as it is).
 template <int Rows, int Cols>
@@ -118,9 +139,21 @@ void emit_value(YAML::Emitter& out, const T& value) {
 template <class S>
 void emit_fields(YAML::Emitter& out, const S& section) {
   S::fields(section, [&](const char* key, const auto& member, auto... option) {
-    if (!is_written(member, option...)) return;
+    if (!written(member, option...)) return;
     out << YAML::Key << key << YAML::Value;
-    emit_value(out, member);
+    const auto& value = [&]() -> const auto& {
+      if constexpr (is_optional<std::decay_t<decltype(member)>>::value) {
+        return *member;
+      } else {
+        return member;
+      }
+    }();
+    using T = std::decay_t<decltype(value)>;
+    if constexpr (is_section_v<T> && (std::is_same_v<decltype(option), Block> || ...)) {
+      emit_section(out, value, false);
+    } else {
+      emit_value(out, value);
+    }
   });
 }
 
@@ -194,12 +227,17 @@ void read_section(const YAML::Node& node, const Location& at, S& section) {
   }
   S::fields(section, [&](const char* key, auto& member, auto... option) {
     if constexpr ((std::is_same_v<decltype(option), InMemory> || ...)) return;
+    using T = std::decay_t<decltype(member)>;
     const YAML::Node child = node[key];
     if (!child) {
-      if (is_required(option...)) require(node, key, at, "it is " + keys_of<S>());
+      if (!is_optional<T>::value && is_required(option...)) require(node, key, at, "it is " + keys_of<S>());
       return;
     }
-    read_value(child, at / key, member);
+    if constexpr (is_optional<T>::value) {
+      read_value(child, at / key, member.emplace());
+    } else {
+      read_value(child, at / key, member);
+    }
   });
 }
 

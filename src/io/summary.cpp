@@ -144,10 +144,10 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                 number_text(check.bound, 3) + (check.passed ? ", passed)" : ", FAILED)");
     }
     if (!checks.empty()) out += "  residual checks       " + checks + "\n";
-    out += c.covariance_kind == "sandwich"
+    out += c.covariance_kind == CovarianceKind::Sandwich
                ? line("  covariance            ROBUST: Huber loss (%d sample(s) down-weighted), sandwich x%.2f", c.downweighted,
                       c.covariance_inflation)
-           : c.covariance_kind == "shared_robot_error"
+           : c.covariance_kind == CovarianceKind::SharedRobotError
                ? line("  covariance            a robot error shared by nearby poses: generalised least squares x%.3f (X), "
                       "x%.3f (pattern)", c.covariance_inflation, c.pattern_covariance_inflation)
                : line("  covariance            inverse information x%.3f (X), x%.3f (pattern)", c.covariance_inflation,
@@ -272,7 +272,7 @@ std::string report_summary(const CalibrationReport& report) {
 }
 
 std::string check_summary(const CalibrationCheck& check) {
-  std::string text = std::string(check.changed ? "CHANGED: " : "") + check.verdict + "\n";
+  std::string text = std::string(check.changed ? "CHANGED: " : "") + check_verdict(check) + "\n";
   text += line("  %zu new views: chi2 %.1f on %d dof (p = %.2g); the best change of X alone explains %.1f, of Y "
                "alone %.1f",
                  check.views.size(), check.chi2, check.dof, check.chi2_p_value, check.X_alone.chi2_drop,
@@ -287,7 +287,7 @@ std::string check_summary(const CalibrationCheck& check) {
   }
   text += "  (1 sigma: the error's RMS the calibration predicts for that view, its own noise and X's and Y's "
           "uncertainty; sigma: the view's Mahalanobis length, about 2.3 on average when nothing changed)\n";
-  for (const std::string& a : check.advice) text += "  advice: " + a + "\n";
+  for (const std::string& a : check_advice(check)) text += "  advice: " + a + "\n";
   return text;
 }
 

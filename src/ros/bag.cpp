@@ -315,6 +315,7 @@ BagReplay replay_bag(const std::string& path, const SessionConfig& config, std::
   return replay_bag(path, config, session, std::move(progress));
 }
 
+// Over 150 lines: the bag's two passes (the transforms into one buffer, then the detections through the session) share the buffer, the view and the counts it reports.
 BagReplay replay_bag(const std::string& path, const SessionConfig& config, CalibrationSession& session,
                      std::function<void(double)> progress) {
   rosbag::Bag bag;

@@ -120,7 +120,7 @@ void CalibrationMonitorNode::publish_diagnostics() {  // mutex_ held
       value("p_value", number_text(v.check->p_value, 3));
       value("chi2_per_dof", number_text(v.check->chi2 / std::max(1, v.check->dof), 3));
       if (v.check->changed) {
-        value("changed", v.check->change.what);
+        value("changed", to_string(*v.check->change.what));
         const EstimatedChange::Delta& d = v.check->change.reported();
         value("change_mm", number_text(millimetres(d.value.head<3>().norm()), 3));
         value("change_deg", number_text(degrees(d.value.tail<3>().norm()), 3));

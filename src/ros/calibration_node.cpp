@@ -25,14 +25,6 @@ namespace {
 
 constexpr std::size_t kAgeWindow = 300;  // detections: 10 s at 30 Hz
 
-/// A saved calibration of another setup or other frames than this node's (what the
-/// file does not say is taken to agree): the start-up publication and a check refuse it.
-bool is_other_calibration(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent,
-                          const std::string& child) {
-  return (setup && *setup != rig.setup) || (!parent.empty() && parent != rig.camera_parent_frame()) ||
-         (!child.empty() && child != rig.frames.camera);
-}
-
 /// The session's settings, with the corner estimator for method corners.
 SessionSettings node_session_settings(const SessionConfig& config) {
   SessionSettings settings = session_settings(config);
@@ -368,7 +360,7 @@ void CalibrationNode::republish_saved_calibration() {
     return;
   }
   const Rig& rig = config_.rig;
-  if (is_other_calibration(rig, stored.setup, stored.parent, stored.child)) {
+  if (!io::is_calibration_of(rig, stored.setup, stored.parent, stored.child)) {
     ROS_WARN("the saved calibration %s is T_%s_%s (%s), this node calibrates T_%s_%s (%s): not published; "
              "/calibrate replaces it", path.c_str(), stored.parent.c_str(), stored.child.c_str(),
              stored.setup ? to_string(*stored.setup) : "setup not given", rig.camera_parent_frame().c_str(),
@@ -417,7 +409,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.translation_stop_reason = to_string(c.translation_stage.stop_reason);
   res.rotation_chi2_per_dof = c.rotation_stage.chi2 / std::max(1, c.rotation_stage.dof);
   res.translation_chi2_per_dof = c.translation_stage.chi2 / std::max(1, c.translation_stage.dof);
-  res.noise_origin = c.noise_origin == NoiseOrigin::Given ? "given" : "estimated_from_residuals";
+  res.noise_origin = to_string(c.noise_origin);
   res.method = to_string(c.method);
   if (c.corner_fit) {
     res.corner_pixel_sigma = c.corner_fit->pixel_sigma;
@@ -471,6 +463,12 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   if (config_.publish_pattern_tf && c.pattern) {
     tf_edges_.publish(conversions::to_transform_stamped(c.pattern->pose, res.pattern.header.frame_id,
                                                         config_.rig.frames.pattern, res.pattern.header.stamp));
+  }
+  for (const auto& [key, value] : io::result_entries(c, io::context_of(snapshot.samples))) {
+    diagnostic_msgs::KeyValue entry;
+    entry.key = key;
+    entry.value = value;
+    res.result.push_back(entry);
   }
   try {
     io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));
@@ -590,15 +588,7 @@ Calibration CalibrationNode::calibration_to_check() const {  // lock held
     throw HandEyeError(ErrorCode::IoError, "no calibration to check: none was solved here and none is saved", path,
                        "calibrate first (/calibrate), or set ~calibration_file to the saved result file");
   }
-  const io::CalibrationFile file = io::read_result(path);
-  const Rig& rig = config_.rig;
-  if (is_other_calibration(rig, file.context.setup, file.context.parent, file.context.child)) {
-    throw HandEyeError(ErrorCode::MalformedFile,
-                       "the saved calibration is T_" + file.context.parent + "_" + file.context.child +
-                           ", this node calibrates T_" + rig.camera_parent_frame() + "_" + rig.frames.camera,
-                       path, "check it with the node of its own frames, or set ~calibration_file");
-  }
-  return io::calibration_of(file);
+  return io::read_calibration_to_check(path, config_.rig);
 }
 
 CalibrationCheckMsg CalibrationNode::check_message() const {  // lock held

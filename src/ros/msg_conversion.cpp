@@ -2,6 +2,7 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/check_text.h"
 
 #include <cmath>
 
@@ -203,14 +204,14 @@ CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp
   CalibrationCheckMsg msg;
   msg.header.stamp = stamp;
   msg.state = check.changed ? "changed" : "consistent";
-  msg.text = check.verdict;
+  msg.text = io::check_verdict(check);
   msg.views_taken = msg.views_needed = static_cast<int>(check.views.size());
   msg.p_value = check.p_value;
   msg.alpha = check.alpha;
   msg.chi2 = check.chi2;
   msg.dof = check.dof;
   if (check.changed) {
-    msg.changed = check.change.what;
+    msg.changed = to_string(*check.change.what);
     const EstimatedChange::Delta& d = check.change.reported();
     for (int k = 0; k < 6; ++k) msg.change[static_cast<std::size_t>(k)] = d.value(k);
     const std::array<double, 36> c = to_row_major_6x6(d.covariance);
@@ -224,7 +225,7 @@ CalibrationCheckMsg to_msg(const CalibrationCheck& check, const ros::Time& stamp
     msg.view_mahalanobis.push_back(v.mahalanobis);
   }
   msg.left_out = check.left_out;
-  msg.advice = check.advice;
+  msg.advice = io::check_advice(check);
   return msg;
 }
 

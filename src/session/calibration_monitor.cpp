@@ -1,6 +1,7 @@
 #include "handeye_covariance/session/calibration_monitor.h"
 
 #include "handeye_covariance/core/errors.h"
+#include "handeye_covariance/io/check_text.h"
 
 namespace handeye {
 
@@ -56,7 +57,7 @@ std::optional<MonitorVerdict> CalibrationMonitor::observe(const Observation& obs
   verdict.level = p < options_.error_alpha ? MonitorLevel::Error
                   : p < options_.warn_alpha ? MonitorLevel::Warn
                                             : MonitorLevel::Ok;
-  verdict.message = verdict.check->verdict;
+  verdict.message = io::check_verdict(*verdict.check);
   if (verdict.check->changed && verdict.views == options_.window) {
     verdict.message += " (a window of views that straddles the change names it only once all its views come after it)";
   }

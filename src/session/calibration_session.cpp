@@ -9,6 +9,7 @@
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
+#include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
@@ -164,7 +165,7 @@ SessionEvent CalibrationSession::check_view(const SampleOutcome& outcome) {
   } catch (const HandEyeError& e) {
     return {false, false, std::string("check: ") + e.what(), "", true};
   }
-  return {true, false, "check: " + check_result_->verdict, "", true};
+  return {true, false, "check: " + io::check_verdict(*check_result_), "", true};
 }
 
 SessionEvent CalibrationSession::remove(int index) {
@@ -281,7 +282,7 @@ std::optional<SharedRobotErrorFit> CalibrationSession::shared_error_fit(const Se
     *not_fitted = "it is a model of the joint estimator's residuals (method " + std::string(to_string(c.method)) + ")";
     return std::nullopt;
   }
-  if (c.covariance_kind == "sandwich") {
+  if (c.covariance_kind == CovarianceKind::Sandwich) {
     *not_fitted = "robust mode: the Huber-weighted fit is not the least-squares one the model is linearised at";
     return std::nullopt;
   }

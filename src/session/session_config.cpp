@@ -11,18 +11,11 @@ void read_session_config(const std::string& path, SessionConfig& config) {
   for_each_setting(config, [&](const char* key, auto& member, double scale) {
     using T = std::decay_t<decltype(member)>;
     if constexpr (std::is_same_v<T, double>) {
-      if (const auto v = file.number(key)) member = *v * scale;
+      if (const auto v = file.value<double>(key)) member = *v * scale;
     } else if constexpr (std::is_same_v<T, Setup>) {
-      if (const auto v = file.flag(key)) member = setup_from_eye_on_hand(*v);
-    } else if constexpr (std::is_same_v<T, bool>) {
-      if (const auto v = file.flag(key)) member = *v;
-    } else if constexpr (std::is_same_v<T, int>) {
-      if (const auto v = file.whole_number(key)) member = *v;
-    } else if constexpr (std::is_same_v<T, std::string>) {
-      if (const auto v = file.text(key)) member = *v;
+      if (const auto v = file.value<bool>(key)) member = setup_from_eye_on_hand(*v);
     } else {
-      static_assert(std::is_same_v<T, std::vector<int>>, "a setting's type SettingsFile cannot read");
-      if (const auto v = file.whole_numbers(key)) member = *v;
+      if (const auto v = file.value<T>(key)) member = *v;
     }
   });
   file.refuse_unknown("use the node's parameter names (config/calibration_defaults.yaml, launch/calibrate.launch)");

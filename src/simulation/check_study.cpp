@@ -284,9 +284,9 @@ CheckStudyResult run_check_study(const CheckStudyOptions& options) {
     }
     if (check.changed) {
       ++result.changed;
-      if (check.change.what == "X") ++result.named_X;
-      if (check.change.what == "Y") ++result.named_Y;
-      if (check.change.what == "both") ++result.named_both;
+      if (check.change.what == ChangedPose::X) ++result.named_X;
+      if (check.change.what == ChangedPose::Y) ++result.named_Y;
+      if (check.change.what == ChangedPose::Both) ++result.named_both;
     }
   }
   return result;

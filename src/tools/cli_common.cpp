@@ -111,16 +111,9 @@ void HonestyArgs::apply(SessionSettings& settings) const {
 
 int run_check(const std::string& calibration_path, const SampleSet& views, const std::string& output, double alpha,
               std::ostream& out) {
-  const io::CalibrationFile file = io::read_result(calibration_path);
-  if (file.context.setup && *file.context.setup != views.rig.setup) {
-    throw HandEyeError(ErrorCode::MalformedFile,
-                       std::string("the calibration is ") + to_string(*file.context.setup) + " and the new views " +
-                           to_string(views.rig.setup),
-                       calibration_path, "check with views of the same setup the calibration was made with");
-  }
   CheckOptions options;
   options.alpha = alpha;
-  const CalibrationCheck check = check_calibration(io::calibration_of(file), views, options);
+  const CalibrationCheck check = check_calibration(io::read_calibration_to_check(calibration_path, views.rig), views, options);
   out << io::check_summary(check);
   if (!output.empty()) {
     io::write_file_atomically(output, io::format_check(check, calibration_path));

@@ -147,13 +147,12 @@ int images_command(const Args& args, std::ostream& out, std::ostream& err) {
                     image.corners, image.rms_px);
       out << line;
     }
-    const std::vector<double>& k = calibration.corner_fit->intrinsics;
-    const std::vector<double>& s = calibration.corner_fit->intrinsics_sigma;
-    if (!k.empty()) {
+    if (const auto& k = calibration.corner_fit->intrinsics) {
       std::snprintf(line, sizeof line,
                     "  intrinsics refined: fx %.2f +- %.2f, fy %.2f +- %.2f, cx %.2f +- %.2f, cy %.2f +- %.2f px, "
                     "k1 %.4f +- %.4f, k2 %.4f +- %.4f\n",
-                    k[0], s[0], k[1], s[1], k[2], s[2], k[3], s[3], k[4], s[4], k[5], s[5]);
+                    k->fx(0), k->fx(1), k->fy(0), k->fy(1), k->cx(0), k->cx(1), k->cy(0), k->cy(1), k->k1(0), k->k1(1),
+                    k->k2(0), k->k2(1));
       out << line;
     }
   }

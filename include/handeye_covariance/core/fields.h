@@ -9,7 +9,8 @@
 // read, from_string(text, E{})), a fixed-size Eigen matrix of doubles (its numbers in
 // one list, row-major: Matrix6d's 36 in ROS order), a list of Eigen::Vector3d (3 numbers
 // each, in one list), a PoseWithCovariance (the pose's keys and `covariance`, 36
-// numbers), a section, and std::vector of a section.
+// numbers), a section, std::vector of a section, and std::optional of a section
+// (written when set, optional when read).
 #pragma once
 
 #include <type_traits>
@@ -36,6 +37,9 @@ inline constexpr struct Optional {
 /// A field that files do not carry: kept in memory for the program that made it.
 inline constexpr struct InMemory {
 } kInMemory{};
+/// A section field written as an indented map rather than on one line.
+inline constexpr struct Block {
+} kBlock{};
 
 /// A visitor that takes any field: what is_section probes with.
 struct AnyField {

@@ -67,9 +67,13 @@ struct CheckedView {
   double chi2_beyond_the_change = 0.0;
 };
 
+/// Which pose a change is of.
+enum class ChangedPose { X, Y, Both };
+const char* to_string(ChangedPose pose);  // "X" / "Y" / "both"
+
 /// A change of X or Y (or both) as the new views estimate it.
 struct EstimatedChange {
-  std::string what;                   // "X", "Y" or "both"
+  std::optional<ChangedPose> what;    // none: not fitted (both, from one or two views)
   double chi2_drop = 0.0;             // T_X, T_Y or T_XY
   int dof = 6;                        // 6, or 12 for both
   double residual_chi2 = 0.0;         // the joint chi2 the change leaves ...
@@ -111,8 +115,22 @@ struct CalibrationCheck {
   /// changed, the verdict's; otherwise the largest one, for the record.
   EstimatedChange change;
   EstimatedChange X_alone, Y_alone, both;  // each hypothesis, as fitted
-  std::string verdict;      // the plain sentence: "consistent (p = 0.43)", "X changed (p = 2e-05): ..."
-  std::vector<std::string> advice;
+  /// What the words need beyond the numbers (io/summary.h check_verdict and check_advice
+  /// write them): p is below the null draws' resolution; the name is uncertain (changed,
+  /// X or Y named, naming_odds below 19 : 1); and the findings advice is given for, in order.
+  bool p_below_resolution = false;
+  bool naming_uncertain = false;
+  enum class Finding {
+    LeftOutView,           // left_out's view disagrees with the calibration and the other views
+    TargetMoved,           // Y changed: X may still hold
+    CameraMoved,           // X (or both) changed: calibrate again
+    ResidualBeyondChange,  // the estimated change leaves the views beyond their chi2
+    ScatterBeyondNoise,    // no change, yet the views scatter beyond the noise model
+    XAndYAlike,            // the views barely tell a moved camera from a moved target
+    NoPrediction,          // the calibration has no leave-one-out prediction scale
+    FewViews,              // fewer than 3 views
+  };
+  std::vector<Finding> findings;
 };
 
 /// The test above. `calibration` needs Y (calibration.pattern), the cross block and

@@ -87,6 +87,7 @@ struct StageDiagnostics {
 
 /// Where the noise came from.
 enum class NoiseOrigin { Given, EstimatedFromResiduals };
+const char* to_string(NoiseOrigin origin);  // "given" / "estimated_from_residuals"
 
 /// Which estimator made a Calibration.
 enum class Method {
@@ -102,6 +103,14 @@ Method method_from_string(const std::string& name);
 /// The refusal of method corners where only poses can be solved (estimate, and a
 /// session without a CornerRefiner): HandEyeError(MalformedFile) with the fix.
 HandEyeError corners_need_images();
+
+/// How samples far out weigh: each alike (least squares), or less (Huber, robust mode).
+enum class Loss { Squared, Huber };
+const char* to_string(Loss loss);  // "squared" / "huber"
+/// What the covariance is: the inverse information; the model-robust sandwich (robust
+/// mode); or the GLS covariance of a robot error shared by nearby poses (shared_robot_error.h).
+enum class CovarianceKind { Information, Sandwich, SharedRobotError };
+const char* to_string(CovarianceKind kind);  // "information" / "sandwich" / "shared_robot_error"
 
 struct Calibration {
   /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
@@ -213,10 +222,8 @@ struct Calibration {
     }
   };
   std::vector<ResidualCheck> residual_checks;
-  std::string loss = "squared";              // or "huber": samples far out weigh less (robust mode)
-  /// "information", "sandwich" (model-robust, robust mode) or "shared_robot_error" (the
-  /// GLS covariance of a robot error shared by nearby poses, shared_robot_error.h)
-  std::string covariance_kind = "information";
+  Loss loss = Loss::Squared;
+  CovarianceKind covariance_kind = CovarianceKind::Information;
   int downweighted = 0;                      // robust mode: samples the Huber loss weighed below 1
   /// Joint: the factors on the inverse information for the noise estimate's (or the
   /// sandwich's) own uncertainty, X's and the pattern pose's (the X-pattern block
@@ -384,8 +391,36 @@ struct Calibration {
     /// exact) and how it entered the covariance.
     double target_point_sigma = 0.0;
     std::string target_points;
-    /// Refined intrinsics fx, fy, cx, cy (px), k1, k2 and their 1 sigma; empty when kept.
-    std::vector<double> intrinsics, intrinsics_sigma;
+    /// Refined intrinsics, each (value, 1 sigma): fx, fy, cx, cy (px), k1, k2; none when kept.
+    struct Intrinsics {
+      Eigen::Vector2d fx = Eigen::Vector2d::Zero(), fy = Eigen::Vector2d::Zero(), cx = Eigen::Vector2d::Zero(),
+                      cy = Eigen::Vector2d::Zero(), k1 = Eigen::Vector2d::Zero(), k2 = Eigen::Vector2d::Zero();
+      template <class Self, class Visit>
+      static void fields(Self& s, Visit&& visit) {
+        visit("fx", s.fx);
+        visit("fy", s.fy);
+        visit("cx", s.cx);
+        visit("cy", s.cy);
+        visit("k1", s.k1);
+        visit("k2", s.k2);
+      }
+    };
+    std::optional<Intrinsics> intrinsics;
+    template <class Self, class Visit>
+    static void fields(Self& s, Visit&& visit) {
+      visit("pixel_sigma", s.pixel_sigma);
+      visit("pixel_sigma_estimated", s.pixel_sigma_estimated);
+      visit("rms_px", s.rms_px);
+      visit("corners", s.corners);
+      visit("robot_poses", s.robot);
+      visit("target_point_sigma", s.target_point_sigma);  // m, per axis
+      visit("target_points", s.target_points, kWhenSet);
+      visit("pixel_noise", s.pixel_noise, kWhenSet);
+      visit("per_image_sigma", s.per_image_sigma);
+      visit("intrinsics", s.intrinsics, kBlock);
+      visit("images", s.images);
+      visit("robot_noise_estimated", s.robot_noise_estimated, kInMemory);
+    }
   };
   std::optional<CornerFit> corner_fit;
 };

@@ -11,19 +11,17 @@
 namespace handeye {
 namespace io {
 
-/// A YAML file of `setting: value` lines, read key by key: each accessor returns the
-/// key's value, nothing when the key is absent or null, and throws MalformedFile
-/// naming the file and key when the value has the wrong type. refuse_unknown()
-/// throws for a key no accessor asked for (a typo), with `fix` as the advice.
+/// A YAML file of `setting: value` lines, read key by key: value<T>(key) returns the
+/// key's value (T: double, bool, int, std::string or std::vector<int>), nothing when the
+/// key is absent or null, and throws MalformedFile naming the file and key when the
+/// value has the wrong type. refuse_unknown() throws for a key no one asked for (a
+/// typo), with `fix` as the advice.
 class SettingsFile {
  public:
   explicit SettingsFile(const std::string& path);
   ~SettingsFile();
-  std::optional<double> number(const std::string& key);
-  std::optional<bool> flag(const std::string& key);
-  std::optional<int> whole_number(const std::string& key);
-  std::optional<std::string> text(const std::string& key);
-  std::optional<std::vector<int>> whole_numbers(const std::string& key);
+  template <class T>
+  std::optional<T> value(const std::string& key);
   void refuse_unknown(const std::string& fix) const;
 
  private:

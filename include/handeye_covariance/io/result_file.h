@@ -11,6 +11,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "handeye_covariance/core/measurements.h"
@@ -33,6 +34,10 @@ ResultContext context_of(const SampleSet& samples);
 ResultContext context_of(const MotionSet& motions);
 
 std::string format_result(const Calibration& calibration, const ResultContext& context);
+/// The result file's keys as (path, value) pairs in its order: every section as its
+/// description writes it, "honesty.reference.mean" -> "6.17", lists of numbers as one
+/// value "[a, b, ...]", list entries as "key[i]". What /calibrate returns beside its fields.
+std::vector<std::pair<std::string, std::string>> result_entries(const Calibration& calibration, const ResultContext& context);
 
 /// A check of a saved calibration (calibration_check.h) as `handeye check --output`
 /// writes it: verdict (consistent | changed), p_value, changed (X | Y | both),
@@ -76,6 +81,13 @@ CalibrationFile read_result(const std::string& path);
 /// The file as the Calibration a check tests (calibration_check.h): X, Y, their
 /// covariances and cross block, the noise model and the inflation.
 Calibration calibration_of(const CalibrationFile& file);
+/// Whether a saved calibration of this setup and X = T_parent_child is `rig`'s: what
+/// either does not say (no setup, empty frames) is taken to agree.
+bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent, const std::string& child);
+/// The calibration at `path` to check new views of `rig` against: the one guard of
+/// `handeye check`, `handeye images check` and the node's check. Refuses
+/// (MalformedFile, naming both) a file of another setup or other frames.
+Calibration read_calibration_to_check(const std::string& path, const Rig& rig);
 
 /// A saved calibration to publish at start-up (publish.launch, the calibration
 /// node): ours (a result file) or easy_handeye's, whose users switch to us:

@@ -9,6 +9,7 @@
 #include "handeye_covariance/core/object_pose.h"
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
