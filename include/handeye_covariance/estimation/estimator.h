@@ -112,6 +112,22 @@ const char* to_string(Loss loss);  // "squared" / "huber"
 enum class CovarianceKind { Information, Sandwich, SharedRobotError };
 const char* to_string(CovarianceKind kind);  // "information" / "sandwich" / "shared_robot_error"
 
+/// A corner fit's refined intrinsics, each (value, 1 sigma): fx, fy, cx, cy (px), k1, k2.
+/// At namespace scope: an optional of it is built while Calibration is incomplete.
+struct RefinedIntrinsics {
+  Eigen::Vector2d fx = Eigen::Vector2d::Zero(), fy = Eigen::Vector2d::Zero(), cx = Eigen::Vector2d::Zero(),
+                  cy = Eigen::Vector2d::Zero(), k1 = Eigen::Vector2d::Zero(), k2 = Eigen::Vector2d::Zero();
+  template <class Self, class Visit>
+  static void fields(Self& s, Visit&& visit) {
+    visit("fx", s.fx);
+    visit("fy", s.fy);
+    visit("cx", s.cx);
+    visit("cy", s.cy);
+    visit("k1", s.k1);
+    visit("k2", s.k2);
+  }
+};
+
 struct Calibration {
   /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
   /// input, the X of A X = X B.
@@ -391,20 +407,8 @@ struct Calibration {
     /// exact) and how it entered the covariance.
     double target_point_sigma = 0.0;
     std::string target_points;
-    /// Refined intrinsics, each (value, 1 sigma): fx, fy, cx, cy (px), k1, k2; none when kept.
-    struct Intrinsics {
-      Eigen::Vector2d fx = Eigen::Vector2d::Zero(), fy = Eigen::Vector2d::Zero(), cx = Eigen::Vector2d::Zero(),
-                      cy = Eigen::Vector2d::Zero(), k1 = Eigen::Vector2d::Zero(), k2 = Eigen::Vector2d::Zero();
-      template <class Self, class Visit>
-      static void fields(Self& s, Visit&& visit) {
-        visit("fx", s.fx);
-        visit("fy", s.fy);
-        visit("cx", s.cx);
-        visit("cy", s.cy);
-        visit("k1", s.k1);
-        visit("k2", s.k2);
-      }
-    };
+    /// Refined intrinsics; none when kept.
+    using Intrinsics = RefinedIntrinsics;
     std::optional<Intrinsics> intrinsics;
     template <class Self, class Visit>
     static void fields(Self& s, Visit&& visit) {
