@@ -259,6 +259,11 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
     return std::string("accepted");
   };
   EXPECT_NE(refusal("\n  chosen: true", "\n  chosen: false").find("used but not chosen"), std::string::npos);
+  EXPECT_NE(refusal("\nshared_robot_error:\n", "\nshared_robot_error:\n  not_fitted: robust mode\n").find("used but not fitted"),
+            std::string::npos);
+  const std::string missing = refusal("\n  per_view_cross_covariance_under_it:", "\n  renamed_key:");
+  EXPECT_NE(missing.find("per_view_cross_covariance_under_it"), std::string::npos) << missing;
+  EXPECT_EQ(missing.find("accepted"), std::string::npos) << "views without what predicts them were read";
   const std::size_t l_at = file.find("\n  length_scale: ");
   ASSERT_NE(l_at, std::string::npos);
   const std::string l_line = file.substr(l_at, file.find('\n', l_at + 1) - l_at);

@@ -374,8 +374,10 @@ namespace {
 /// chosen, covariances that are covariances, a model a check can predict with, the
 /// per-view inflation >= 1, and views (when given) that are some.
 void check_shared_error(const Calibration::SharedError& e, const YAML::Node& node, const Location& at) {
-  if (e.used && !e.chosen) {
-    throw HandEyeError(ErrorCode::MalformedFile, "the shared robot error is used but not chosen", (at / "used").str(),
+  if (e.used && (!e.fitted() || !e.chosen)) {
+    throw HandEyeError(ErrorCode::MalformedFile,
+                       std::string("the shared robot error is used but ") + (e.fitted() ? "not chosen" : "not fitted"),
+                       (at / "used").str(),
                        "a model is used only where its fit chose it: write `used: false`, or save the calibration again");
   }
   if (!e.fitted() || !e.chosen) return;
@@ -390,6 +392,9 @@ void check_shared_error(const Calibration::SharedError& e, const YAML::Node& nod
                        (at / "per_view_inflation").str(), "write the factor its honesty check gave (1: none)");
   }
   if (!node["views"]) return;  // a file of an earlier version: a check predicts with the per-view model alone
+  for (const char* key : {"per_view_pattern_covariance_under_it", "per_view_cross_covariance_under_it"}) {
+    require(node, key, at, "a model with `views` carries what a check predicts them with: save the calibration again");
+  }
   if (e.views.empty()) {
     throw HandEyeError(ErrorCode::MalformedFile, "`views` must be a list of the views the model was fitted on",
                        (at / "views").str(), "write one " + keys_of<Calibration::SharedError::View>() +

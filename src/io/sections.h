@@ -218,8 +218,9 @@ void read_value(const YAML::Node& node, const Location& at, T& value) {
   }
 }
 
-/// The section from the map `node`: every field without an option is required
-/// (MissingKey naming the section's keys), the others keep their default when absent.
+/// The section from the map `node`: a field without an option is required, and an
+/// Only field where its condition holds on what was read before it (MissingKey naming
+/// the section's keys); the others keep their default when absent.
 template <class S>
 void read_section(const YAML::Node& node, const Location& at, S& section) {
   if (!node.IsMap()) {

@@ -10,8 +10,9 @@
 // the views share the calibration's error, and are not independent of each other.
 //
 // If X moved by d (its left perturbation in its parent frame, ROS order: the new X is
-// exp(d) X), e gains J_X d. Its generalised-least-squares estimate and covariance
-//     d_X = (J_X^T C^-1 J_X)^-1 J_X^T C^-1 e,   Cov(d_X) = (J_X^T C^-1 J_X)^-1,
+// exp(d) X), e gains -J_X d (J_X = de/dxi_X at the saved X). Its generalised-least-squares
+// estimate and covariance
+//     d_X = -(J_X^T C^-1 J_X)^-1 J_X^T C^-1 e,   Cov(d_X) = (J_X^T C^-1 J_X)^-1,
 // and the drop of the joint chi2 e^T C^-1 e it buys, T_X = d_X^T Cov(d_X)^-1 d_X, is
 // chi2(6) when nothing changed; it is the most powerful test of a change of X alone
 // (noncentral chi2(6) with d^T Cov^-1 d under the change). Likewise Y (T_Y), and
@@ -115,7 +116,7 @@ struct CalibrationCheck {
   /// changed, the verdict's; otherwise the largest one, for the record.
   EstimatedChange change;
   EstimatedChange X_alone, Y_alone, both;  // each hypothesis, as fitted
-  /// What the words need beyond the numbers (io/summary.h check_verdict and check_advice
+  /// What the words need beyond the numbers (io/check_text.h check_verdict and check_advice
   /// write them): p is below the null draws' resolution; the name is uncertain (changed,
   /// X or Y named, naming_odds below 19 : 1); and the findings advice is given for, in order.
   bool p_below_resolution = false;

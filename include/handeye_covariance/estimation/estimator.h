@@ -329,7 +329,7 @@ struct Calibration {
     static void fields(Self& s, Visit&& visit) {
       visit("not_fitted", s.not_fitted, kWhenSet);
       visit("chosen", s.chosen, Only{s.fitted()});
-      visit("used", s.used, Only{s.fitted()});
+      visit("used", s.used, Only{s.fitted(), true});  // files of earlier versions lack it: not used
       visit("bic_gain", s.bic_gain, Only{s.fitted()});
       visit("length_scale", s.length_scale, Only{s.chosen_fit()});
       visit("translation_sigma", s.translation_sigma, Only{s.chosen_fit()});

@@ -59,20 +59,20 @@ struct HonestyRecord {
 
   template <class Self, class Visit>
   static void fields(Self& s, Visit&& visit) {
-    const bool ran = s.ran();
+    // Conditions inline: a reader evaluates each on the fields read before it.
     visit("verdict", s.verdict);
     visit("text", s.text);
-    visit("splits", s.splits, Only{ran});
-    visit("half_size", s.half_size, Only{ran});
-    visit("run_length", s.run_length, Only{ran && s.run_length > 1});  // the runs decided
-    visit("split_half_nees", s.split_half_nees, Only{ran});
-    visit("reference", s.reference, Only{ran});
-    visit("ratio", s.ratio, Only{ran});
-    visit("random_halves_ratio", s.random_ratio, Only{ran});
-    visit("runs", s.runs, Only{ran && s.runs.length > 0});
-    visit("runs_not_run", s.runs_note, Only{ran && s.runs.length == 0 && !s.runs_note.empty()});
-    visit("inflation", s.inflation, Only{ran});
-    visit("model_covariance", s.model_pose_covariance, Only{ran && s.inflation > 1.0});  // the one above is inflated
+    visit("splits", s.splits, Only{s.ran()});
+    visit("half_size", s.half_size, Only{s.ran()});
+    visit("run_length", s.run_length, Only{s.ran() && s.run_length > 1, true});  // the runs decided (absent: 1)
+    visit("split_half_nees", s.split_half_nees, Only{s.ran()});
+    visit("reference", s.reference, Only{s.ran()});
+    visit("ratio", s.ratio, Only{s.ran()});
+    visit("random_halves_ratio", s.random_ratio, Only{s.ran()});
+    visit("runs", s.runs, Only{s.ran() && s.runs.length > 0, true});
+    visit("runs_not_run", s.runs_note, Only{s.ran() && s.runs.length == 0 && !s.runs_note.empty(), true});
+    visit("inflation", s.inflation, Only{s.ran()});
+    visit("model_covariance", s.model_pose_covariance, Only{s.ran() && s.inflation > 1.0});  // the one above is inflated
   }
 };
 
