@@ -349,7 +349,7 @@ TEST(CalibrationCheck, TheResultFileCarriesTheCheck) {
     const CalibrationCheck direct = check_calibration(calibration, more.samples, every_draw);
     const io::CalibrationFile file =
         io::parse_result(io::format_result(calibration, io::context_of(session.samples)), "result.yaml");
-    const Calibration read = io::calibration_of(file);
+    const Calibration read = file.calibration;
     EXPECT_EQ(read.noise_components.size(), calibration.noise_components.size());
     const CalibrationCheck again = check_calibration(read, more.samples, every_draw);
     EXPECT_NEAR(again.statistic, direct.statistic, 1e-6 * direct.statistic) << given;

@@ -210,7 +210,7 @@ TEST(SharedRobotError, TheSessionUsesTheChosenModelAndItsCheck) {
   EXPECT_TRUE(per_view_basis.T_parent_camera.isApprox(per_view.T_parent_camera, 1e-12));
   EXPECT_TRUE(per_view_basis.pose_covariance.isApprox(c.shared_robot_error->per_view_inflation * per_view.pose_covariance, 1e-9));
   const std::string file = io::format_result(c, io::context_of(s.samples));
-  const Calibration read = io::calibration_of(io::parse_result(file, "calibration.yaml"));
+  const Calibration read = io::parse_result(file, "calibration.yaml").calibration;
   ASSERT_TRUE(read.shared_robot_error);
   const Calibration::SharedError& back = *read.shared_robot_error;
   EXPECT_TRUE(back.used && back.chosen);

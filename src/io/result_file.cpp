@@ -143,7 +143,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
         << h.runs_length << YAML::Key << "ratio" << YAML::Value << h.runs_ratio << YAML::Key << "verdict" << YAML::Value
         << to_string(h.runs_verdict) << YAML::EndMap;
   }
-  out << YAML::Key << "honesty" << YAML::Value << (h.ran() ? to_string(h.verdict) : "not run");
+  out << YAML::Key << "honesty" << YAML::Value << to_string(h.ran() ? h.verdict : Honesty::NotRun);
   out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
   if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
   out << YAML::EndMap;
@@ -270,9 +270,9 @@ void flatten(const YAML::Node& node, const std::string& path, std::vector<std::p
 }
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> result_entries(const Calibration& calibration, const ResultContext& context) {
+std::vector<std::pair<std::string, std::string>> result_entries(const std::string& result_text) {
   std::vector<std::pair<std::string, std::string>> entries;
-  flatten(YAML::Load(format_result(calibration, context)), "", entries);
+  flatten(YAML::Load(result_text), "", entries);
   return entries;
 }
 
@@ -408,19 +408,22 @@ void check_shared_error(const Calibration::SharedError& e, const YAML::Node& nod
 
 CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   CalibrationFile file;
+  Calibration& c = file.calibration;
+  c.method = Method::Joint;
   if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
   if (root["parent"] && root["parent"].IsScalar()) file.context.parent = root["parent"].Scalar();
   if (root["child"] && root["child"].IsScalar()) file.context.child = root["child"].Scalar();
   file.T_parent_camera.pose = read_pose(root, top);
   const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
   file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
-  if (root["samples_used"]) file.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
+  if (root["samples_used"]) c.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
   // The noise model the calibration used (samples results only).
   if (const YAML::Node noise = root["noise"];
       noise && noise.IsMap() && noise["model"] && noise["model"].IsMap() && noise["model"]["effector"]) {
     file.noise = read_noise(noise["model"], top / "noise" / "model", "effector", "pattern");
+    c.noise = *file.noise;
     if (noise["origin"] && noise["origin"].IsScalar() && noise["origin"].Scalar() != "given") {
-      file.noise_origin = NoiseOrigin::EstimatedFromResiduals;
+      c.noise_origin = NoiseOrigin::EstimatedFromResiduals;
     }
   }
   if (const YAML::Node pattern = root["pattern"]; pattern && pattern.IsMap()) {  // a joint result: Y and Cov(X, Y)
@@ -428,10 +431,10 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
     PoseWithCovariance Y;
     Y.pose = read_pose(pattern, at);
     Y.covariance = read_pose_covariance(require(pattern, "covariance", at, hint), at / "covariance");
-    file.pattern = Y;
+    c.pattern = Y;
     file.context.pattern_parent = pattern["parent"] && pattern["parent"].IsScalar() ? pattern["parent"].Scalar() : "";
     file.context.pattern_child = pattern["child"] && pattern["child"].IsScalar() ? pattern["child"].Scalar() : "";
-    file.cross_covariance = from_row_major_6x6(as_numbers<36>(
+    c.cross_covariance = from_row_major_6x6(as_numbers<36>(
         require(root, "cross_covariance", top, "a joint result with `pattern` has `cross_covariance` (36 numbers)"),
         top / "cross_covariance", "6x6 Cov(X, Y), X's ROS order in rows"));
   }
@@ -442,11 +445,11 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
     read_section(model, at, m);
     check_covariance(m.camera, (at / "camera").str());
     check_covariance(m.robot, (at / "robot").str());
-    file.residual_noise = m;
+    c.residual_noise = m;
   }
   if (const YAML::Node estimated = root["noise"] && root["noise"].IsMap() ? root["noise"]["estimated"] : YAML::Node();
       estimated && estimated.IsSequence()) {  // each estimated noise number with its 1 sigma: how well the noise is known
-    read_value(estimated, top / "noise" / "estimated", file.noise_components);
+    read_value(estimated, top / "noise" / "estimated", c.noise_components);
   }
   if (const YAML::Node prediction = root["prediction"]; prediction && prediction.IsMap()) {
     const Location at = top / "prediction";
@@ -456,7 +459,7 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       throw HandEyeError(ErrorCode::MalformedFile, "the prediction scale and dof must be positive", at.str(),
                          "`prediction` is " + keys_of<Calibration::Prediction>() + ": the leave-one-out of the calibration's views");
     }
-    file.prediction = p;
+    c.prediction = p;
   }
   // The shared robot error's block (format_result writes it): its numbers, X under
   // it, and where the calibration uses it, the per-view X, Y and covariances kept
@@ -466,12 +469,20 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
     Calibration::SharedError e;
     read_section(shared, at, e);
     check_shared_error(e, shared, at);
-    file.shared_robot_error = e;
+    c.shared_robot_error = e;
   }
   if (const YAML::Node honesty = root["honesty"]; honesty && honesty.IsMap() && honesty["inflation"]) {
-    file.inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
-                               "the honesty check's inflation is a number >= 1");
+    const double inflation = as_finite(honesty["inflation"], top / "honesty" / "inflation", "NaN in the inflation",
+                                       "the honesty check's inflation is a number >= 1");
+    if (inflation > 1.0) {  // a check predicts with the inflated covariance it was saved with
+      Calibration::Honesty h;
+      h.inflation = inflation;
+      h.verdict = Honesty::Overconfident;
+      c.honesty = h;
+    }
   }
+  c.T_parent_camera = file.T_parent_camera.pose;
+  set_pose_covariance(c, file.T_parent_camera.covariance);
   return file;
 }
 }  // namespace
@@ -481,29 +492,6 @@ CalibrationFile parse_result(const std::string& text, const std::string& source)
 }
 
 CalibrationFile read_result(const std::string& path) { return parse_result(read_file(path), path); }
-
-Calibration calibration_of(const CalibrationFile& file) {
-  Calibration c;
-  c.method = Method::Joint;
-  c.T_parent_camera = file.T_parent_camera.pose;
-  set_pose_covariance(c, file.T_parent_camera.covariance);
-  c.pattern = file.pattern;
-  c.cross_covariance = file.cross_covariance;
-  c.residual_noise = file.residual_noise;
-  c.noise_components = file.noise_components;
-  c.prediction = file.prediction;
-  c.noise_origin = file.noise_origin;
-  if (file.noise) c.noise = *file.noise;
-  c.samples_used = file.samples_used;
-  c.shared_robot_error = file.shared_robot_error;
-  if (file.inflation > 1.0) {
-    Calibration::Honesty h;
-    h.inflation = file.inflation;
-    h.verdict = Honesty::Overconfident;
-    c.honesty = h;
-  }
-  return c;
-}
 
 bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent, const std::string& child) {
   const auto agree = [](const std::string& a, const std::string& b) { return a.empty() || b.empty() || a == b; };
@@ -525,7 +513,7 @@ Calibration read_calibration_to_check(const std::string& path, const Rig& rig) {
                        "check with views of the setup and frames the calibration was made with (the node: the node of its "
                        "frames, or set ~calibration_file)");
   }
-  return calibration_of(file);
+  return file.calibration;
 }
 
 StoredCalibration parse_stored_calibration(const std::string& text, const std::string& source) {

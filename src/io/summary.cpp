@@ -76,6 +76,27 @@ std::string object_summary(const ObjectPose& object, const std::string& base, co
   return out;
 }
 
+std::string one_line_summary(const Calibration& c, const std::string& parent, const std::string& child) {
+  std::string line = "X = T_" + parent + "_" + child + " from " + std::to_string(c.samples_used) +
+                     " samples; worst-axis 1 sigma " + number_text(millimetres(max_sigma(c.translation_covariance))) +
+                     " mm, " + number_text(degrees(max_sigma(c.rotation_covariance))) + " deg";
+  if (c.shared_robot_error && c.shared_robot_error->used) {
+    line += "; with a robot error shared by nearby poses (" + number_text(millimetres(c.shared_robot_error->translation_sigma)) +
+            " mm, " + number_text(degrees(c.shared_robot_error->rotation_sigma)) + " deg over " +
+            number_text(c.shared_robot_error->length_scale, 2) + " m)";
+  }
+  if (c.honesty && c.honesty->ran()) line += "; " + c.honesty->text;
+  return line;
+}
+
+std::string shared_error_state(const std::optional<Calibration::SharedError>& e) {
+  if (!e) return "off";
+  return !e->not_fitted.empty() ? "not fitted: " + e->not_fitted
+         : e->used              ? "used"
+         : e->chosen            ? "advice"
+                                : "not preferred";
+}
+
 std::string human_summary(const Calibration& c, const ResultContext& context) {
   const std::string parent = name_or(context.parent, context.setup == Setup::EyeToHand ? "base" : "parent");
   const std::string child = name_or(context.child, "camera");

@@ -52,13 +52,9 @@ void CalibrationMonitorNode::load_calibration() {
   loaded_ = written;
   monitor_.reset();
   try {
-    const io::CalibrationFile file = io::read_result(config_.calibration_file);
-    if (file.context.setup && *file.context.setup != config_.rig.setup) {
-      throw HandEyeError(ErrorCode::MalformedFile, "the calibration is for the other setup", config_.calibration_file,
-                         "set ~eye_on_hand to the calibration's setup");
-    }
     SessionSettings settings = session_settings(config_);
-    monitor_ = std::make_unique<CalibrationMonitor>(io::calibration_of(file), settings.rig, settings.noise, options_);
+    monitor_ = std::make_unique<CalibrationMonitor>(io::read_calibration_to_check(config_.calibration_file, settings.rig),
+                                                    settings.rig, settings.noise, options_);
     problem_.clear();
     ROS_INFO("monitor: watching %s", config_.calibration_file.c_str());
   } catch (const HandEyeError& e) {

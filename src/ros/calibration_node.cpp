@@ -13,6 +13,7 @@
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -431,29 +432,13 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.honest_nees_band = {h.reference.low, h.reference.high};
     res.covariance_inflation = h.inflation;
   }
-  res.shared_robot_error = "off";
-  if (const auto& e = c.shared_robot_error) {
-    res.shared_robot_error = !e->not_fitted.empty() ? "not fitted: " + e->not_fitted
-                             : e->used              ? "used"
-                             : e->chosen            ? "advice"
-                                                    : "not preferred";
-  }
+  res.shared_robot_error = io::shared_error_state(c.shared_robot_error);
   res.warnings = c.warnings;
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
     res.rejected_reasons.push_back(r.reason);
   }
-  res.message = "X = T_" + config_.rig.camera_parent_frame() + "_" + config_.rig.frames.camera + " from " +
-                std::to_string(c.samples_used) + " samples; worst-axis 1 sigma " +
-                number_text(millimetres(max_sigma(c.translation_covariance))) + " mm, " +
-                number_text(degrees(max_sigma(c.rotation_covariance))) + " deg";
-  if (c.shared_robot_error && c.shared_robot_error->used) {
-    res.message += "; with a robot error shared by nearby poses (" +
-                   number_text(millimetres(c.shared_robot_error->translation_sigma)) + " mm, " +
-                   number_text(degrees(c.shared_robot_error->rotation_sigma)) + " deg over " +
-                   number_text(c.shared_robot_error->length_scale, 2) + " m)";
-  }
-  if (c.honesty && c.honesty->ran()) res.message += "; " + c.honesty->text;
+  res.message = io::one_line_summary(c, config_.rig.camera_parent_frame(), config_.rig.frames.camera);
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time
   calibration_pub_.publish(res.calibration);
   if (c.pattern) pattern_pub_.publish(res.pattern);
@@ -464,14 +449,15 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     tf_edges_.publish(conversions::to_transform_stamped(c.pattern->pose, res.pattern.header.frame_id,
                                                         config_.rig.frames.pattern, res.pattern.header.stamp));
   }
-  for (const auto& [key, value] : io::result_entries(c, io::context_of(snapshot.samples))) {
+  const std::string result_text = io::format_result(c, io::context_of(snapshot.samples));
+  for (const auto& [key, value] : io::result_entries(result_text)) {
     diagnostic_msgs::KeyValue entry;
     entry.key = key;
     entry.value = value;
     res.result.push_back(entry);
   }
   try {
-    io::write_file_atomically(config_.calibration_file, io::format_result(c, io::context_of(snapshot.samples)));
+    io::write_file_atomically(config_.calibration_file, result_text);
     res.calibration_file = config_.calibration_file;
   } catch (const HandEyeError& e) {
     res.message += "; but the result file could not be written: " + std::string(e.what());

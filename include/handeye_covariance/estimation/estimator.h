@@ -28,7 +28,11 @@
 #include "handeye_covariance/core/fields.h"
 #include "handeye_covariance/core/measurements.h"
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/estimation/corner_fit_record.h"
 #include "handeye_covariance/estimation/honesty_record.h"
+#include "handeye_covariance/estimation/noise_record.h"
+#include "handeye_covariance/estimation/prediction_record.h"
+#include "handeye_covariance/estimation/shared_error_record.h"
 
 namespace handeye {
 
@@ -112,22 +116,9 @@ const char* to_string(Loss loss);  // "squared" / "huber"
 enum class CovarianceKind { Information, Sandwich, SharedRobotError };
 const char* to_string(CovarianceKind kind);  // "information" / "sandwich" / "shared_robot_error"
 
-/// A corner fit's refined intrinsics, each (value, 1 sigma): fx, fy, cx, cy (px), k1, k2.
-/// At namespace scope: an optional of it is built while Calibration is incomplete.
-struct RefinedIntrinsics {
-  Eigen::Vector2d fx = Eigen::Vector2d::Zero(), fy = Eigen::Vector2d::Zero(), cx = Eigen::Vector2d::Zero(),
-                  cy = Eigen::Vector2d::Zero(), k1 = Eigen::Vector2d::Zero(), k2 = Eigen::Vector2d::Zero();
-  template <class Self, class Visit>
-  static void fields(Self& s, Visit&& visit) {
-    visit("fx", s.fx);
-    visit("fy", s.fy);
-    visit("cx", s.cx);
-    visit("cy", s.cy);
-    visit("k1", s.k1);
-    visit("k2", s.k2);
-  }
-};
-
+/// A calibration: X, Y and their joint covariance, how they were estimated, and one
+/// section per check or model that produced a diagnostic, each declared in its own
+/// record header and described once (core/fields.h) for files, messages and summaries.
 struct Calibration {
   /// X: T_effector_camera (eye_in_hand) or T_base_camera (eye_to_hand); for motion
   /// input, the X of A X = X B.
@@ -160,83 +151,13 @@ struct Calibration {
   /// camera noise, robot taken as exact) when none was given.
   MeasurementNoise noise;
   std::string noise_model;  // when estimated: which model the residuals supported, e.g. "a full 6x6 camera noise ..."
-  /// Joint: each noise number the residuals estimated (joint_estimator.h).
-  struct NoiseComponent {
-    std::string name;      // e.g. "camera z", "robot rotation", "stated camera noise scale"
-    std::string unit;      // "m", "rad" (value is a sigma) or "" (a scale of variances)
-    double value = 0.0;    // sigma (m, rad) or the scale
-    double sigma = 0.0;    // 1 sigma of that value, from the residuals (0 when at its bound)
-    bool supported = true; // false: the residuals do not support it, held at 0 (or its lowest value)
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("name", s.name);
-      visit("value", s.value);
-      visit("sigma", s.sigma);
-      visit("unit", s.unit, kOptional);
-      visit("supported", s.supported, kOptional);
-    }
-  };
+  using NoiseComponent = handeye::NoiseComponent;
   std::vector<NoiseComponent> noise_components;
-  /// Joint, noise estimated: the noise models that were compared, by BIC (the
-  /// restricted log-likelihood, less half of log(6n - 12) per number), and which one
-  /// the covariance uses. A candidate whose score test at the chosen model promised
-  /// less than BIC's price of its one number is not fitted.
-  struct NoiseCandidate {
-    std::string name;             // e.g. "camera variances, robot rotation", "+ view-following"
-    int numbers = 0;              // its free noise numbers
-    double score = 0.0;           // the score test that decided whether to fit it (0 for the first)
-    bool fitted = false, chosen = false;
-    double log_likelihood = 0.0;  // restricted, up to a constant the candidates share (fitted only)
-    double bic = 0.0;             // -2 log_likelihood + numbers log(6n - 12) (fitted only)
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("name", s.name);
-      visit("numbers", s.numbers);
-      visit("score", s.score);
-      visit("fitted", s.fitted);
-      visit("chosen", s.chosen);
-      visit("log_likelihood", s.log_likelihood, Only{s.fitted});
-      visit("bic", s.bic, Only{s.fitted});
-    }
-  };
+  using NoiseCandidate = handeye::NoiseCandidate;
   std::vector<NoiseCandidate> noise_candidates;
-  /// Joint: the residual noise the covariance was computed with, for any view
-  /// (the samples' and new ones; joint_estimator.h residual_covariance):
-  ///   S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T,
-  /// Sigma_P and Sigma_E the view's stated noise (its own, else the set's; zero
-  /// when none), D = d P_hat / d E at (X, Y). Absent (pairs): `noise` is S's.
-  struct ResidualNoise {
-    double camera_scale = 1.0;
-    Matrix6d camera = Matrix6d::Zero();  // camera frame, ROS order
-    Matrix6d robot = Matrix6d::Zero();   // base (or effector) frame, as E's perturbation
-    /// The view-following part, view_scale G(P) (core/view_noise.h: planar_view_covariance
-    /// of view_points at the view P); 0 when the model has none.
-    double view_scale = 0.0;
-    std::vector<Eigen::Vector3d> view_points;
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("camera_scale", s.camera_scale);
-      visit("camera", s.camera);
-      visit("robot", s.robot);
-      visit("view_scale", s.view_scale, kOptional);
-      visit("view_points", s.view_points, kWhenSet);
-    }
-  };
+  using ResidualNoise = handeye::ResidualNoise;
   std::optional<ResidualNoise> residual_noise;
-  /// Joint: the check of the residuals against the noise model and what followed.
-  struct ResidualCheck {
-    std::string test;        // e.g. "chi2 of the stated noise", "kurtosis of the Mahalanobis residuals"
-    double statistic = 0.0;  // chi2/dof, or the kurtosis z score
-    double bound = 0.0;      // the statistic's 99.9% bound under the model
-    bool passed = true;
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("test", s.test);
-      visit("statistic", s.statistic);
-      visit("bound", s.bound);
-      visit("passed", s.passed);
-    }
-  };
+  using ResidualCheck = handeye::ResidualCheck;
   std::vector<ResidualCheck> residual_checks;
   Loss loss = Loss::Squared;
   CovarianceKind covariance_kind = CovarianceKind::Information;
@@ -268,164 +189,13 @@ struct Calibration {
   using Honesty = HonestyRecord;
   std::optional<Honesty> honesty;
 
-  /// A robot error shared by nearby poses (shared_robot_error.h), fitted about this
-  /// calibration by CalibrationSession::calibrate_checked (a joint fit without robust
-  /// mode, 16 to 40 kept samples; otherwise `not_fitted` says why): whether the
-  /// likelihood prefers it (BIC), its numbers, and X and its covariance under it.
-  /// `used`: the session took them (X, Y and the covariances above are the model's);
-  /// otherwise advice, and when `chosen` the per-view covariance understates X's by
-  /// what per_view_estimate_covariance says.
-  struct SharedError {
-    /// Empty when fitted; otherwise why not (too few or too many samples, robust
-    /// mode, method corners, the fit refused): the fields below are then unset.
-    std::string not_fitted;
-    bool chosen = false;
-    /// The calibration's X, Y and covariances are this model's (chosen, and the
-    /// session uses it); the per-view model's X and its covariance are kept below.
-    bool used = false;
-    double bic_gain = 0.0;            // 2 (L - L0) - 4 log(6n - 12): > 0 chosen
-    double length_scale = 0.0;        // m, over the effector positions
-    double translation_sigma = 0.0;   // m, per axis, base frame
-    double rotation_sigma = 0.0;      // rad
-    double view_noise_scale = 1.0;    // on the per-view model's residual covariances
-    double step_nees = 0.0;           // X's step under its own covariance (about 6 when the model explains it)
-    double covariance_inflation = 1.0;  // in X's covariance, its factor for (s, a, b)'s own error (Kenward-Roger)
-    PoseWithCovariance X;             // after the GLS step, with its covariance
-    Matrix6d per_view_estimate_covariance = Matrix6d::Zero();  // the per-view X's covariance under the model
-    PoseWithCovariance per_view_X;
-    PoseWithCovariance per_view_pattern;  // Y, where the model is linearised
-    Matrix6d per_view_cross_covariance = Matrix6d::Zero();
-    /// The per-view model's own honesty check (calibrate_checked runs it too): its
-    /// verdict and inflation (1 unless overconfident and inflate_when_overconfident).
-    /// A check of new views from a file without `views` below predicts with the per-view
-    /// model times it; with them, under the model (whose own honesty factor applies).
-    std::string per_view_honesty;
-    double per_view_inflation = 1.0;
-    /// What a check of new views needs to predict them under the model (calibration_check.h),
-    /// about the per-view X and Y: their joint covariance under the model, H0 C H0^T (X's
-    /// block is per_view_estimate_covariance), and for each view the fit used, the
-    /// effector's position and H0_j D_j, how the per-view estimate moves with that view's
-    /// robot error: a new view's shared error is correlated with theirs.
-    Matrix6d per_view_estimate_pattern_covariance = Matrix6d::Zero(), per_view_estimate_cross_covariance = Matrix6d::Zero();
-    struct View {
-      Eigen::Vector3d position = Eigen::Vector3d::Zero();          // m, the effector's, base frame
-      Eigen::Matrix<double, 12, 6> gain = Eigen::Matrix<double, 12, 6>::Zero();  // H0_j D_j: (xi_X, xi_Y) per xi_E
-      template <class Self, class Visit>
-      static void fields(Self& s, Visit&& visit) {
-        visit("position", s.position);
-        visit("gain", s.gain);  // 12 x 6 row-major: (xi_X, xi_Y) in ROS order per the robot error xi_E
-      }
-    };
-    std::vector<View> views;
-    /// The per-view fit's own factors for its noise estimate's error and its noise
-    /// model's text, which the model's replaced in the calibration (not in files).
-    double per_view_covariance_inflation = 1.0, per_view_pattern_covariance_inflation = 1.0;
-    std::string per_view_noise_model;
-
-    bool fitted() const { return not_fitted.empty(); }
-    bool chosen_fit() const { return fitted() && chosen; }
-    bool used_fit() const { return fitted() && chosen && used; }
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("not_fitted", s.not_fitted, kWhenSet);
-      visit("chosen", s.chosen, Only{s.fitted()});
-      visit("used", s.used, Only{s.fitted(), true});  // files of earlier versions lack it: not used
-      visit("bic_gain", s.bic_gain, Only{s.fitted()});
-      visit("length_scale", s.length_scale, Only{s.chosen_fit()});
-      visit("translation_sigma", s.translation_sigma, Only{s.chosen_fit()});
-      visit("rotation_sigma", s.rotation_sigma, Only{s.chosen_fit()});
-      visit("view_noise_scale", s.view_noise_scale, Only{s.chosen_fit()});
-      visit("step_nees", s.step_nees, Only{s.chosen_fit()});
-      visit("covariance_inflation", s.covariance_inflation, Only{s.chosen_fit()});
-      visit("X", s.X, Only{s.chosen_fit()});
-      visit("per_view_covariance_under_it", s.per_view_estimate_covariance, Only{s.chosen_fit()});
-      // Used: the per-view model's X and Y with their own covariances, which the model's replaced.
-      visit("per_view_X", s.per_view_X, Only{s.used_fit()});
-      visit("per_view_pattern", s.per_view_pattern, Only{s.used_fit()});
-      visit("per_view_cross_covariance", s.per_view_cross_covariance, Only{s.used_fit()});
-      visit("per_view_honesty", s.per_view_honesty, Only{s.used_fit()});
-      visit("per_view_inflation", s.per_view_inflation, Only{s.used_fit()});
-      // What a check predicts new views with under the model (files of earlier versions lack them).
-      visit("per_view_pattern_covariance_under_it", s.per_view_estimate_pattern_covariance, Only{s.used_fit(), true});
-      visit("per_view_cross_covariance_under_it", s.per_view_estimate_cross_covariance, Only{s.used_fit(), true});
-      visit("views", s.views, Only{s.used_fit(), true});
-      visit("per_view_covariance_inflation", s.per_view_covariance_inflation, kInMemory);
-      visit("per_view_pattern_covariance_inflation", s.per_view_pattern_covariance_inflation, kInMemory);
-      visit("per_view_noise_model", s.per_view_noise_model, kInMemory);
-    }
-  };
+  using SharedError = handeye::SharedErrorRecord;
   std::optional<SharedError> shared_robot_error;
 
-  /// How well the noise model and the covariance predict a view the calibration has not
-  /// seen, measured on its own kept views by leave-one-out (calibration_check.h
-  /// prediction_check): each view predicted from the others' X, Y, covariance and noise
-  /// (estimated again without it). `scale` is the mean of d_i^2 / 6, d_i each view's
-  /// Mahalanobis length under its predicted covariance (1 when the model predicts
-  /// right); `dof` that mean's degrees of freedom from the d_i's own spread (6 n when
-  /// they scatter as chi2(6)). A check of new views (calibration_check.h) scales its
-  /// prediction by it.
-  struct Prediction {
-    double scale = 1.0;
-    double dof = 0.0;
-    int views = 0;
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("scale", s.scale);
-      visit("dof", s.dof);
-      visit("views", s.views, kOptional);
-    }
-  };
+  using Prediction = handeye::PredictionRecord;
   std::optional<Prediction> prediction;
 
-  /// Corners: the fit of every image's corners (corners/corner_calibration.h).
-  struct CornerFit {
-    double pixel_sigma = 0.0;  // px, estimated from the residuals (or given)
-    bool pixel_sigma_estimated = true;
-    double rms_px = 0.0;       // over every corner coordinate
-    int corners = 0;
-    struct Image {
-      std::string name;
-      int corners = 0;
-      double rms_px = 0.0;
-      double sigma_px = 0.0;  // the pixel sigma it was weighed with
-      template <class Self, class Visit>
-      static void fields(Self& s, Visit&& visit) {
-        visit("image", s.name);
-        visit("corners", s.corners);
-        visit("rms_px", s.rms_px);
-        visit("sigma_px", s.sigma_px);
-      }
-    };
-    std::vector<Image> images;
-    /// The test of one pixel sigma for every image and what followed ("one pixel
-    /// sigma: Bartlett chi2 12.3 on 11 dof, 99.9% bound 31.3", or each image its own).
-    std::string pixel_noise;
-    bool per_image_sigma = false;
-    std::string robot;  // how the robot poses entered: "exact" or their prior
-    bool robot_noise_estimated = false;  // the robot's noise estimated from the corners, off its floor
-    /// The printed target's points' 1 sigma (m, per axis; estimated or given, 0:
-    /// exact) and how it entered the covariance.
-    double target_point_sigma = 0.0;
-    std::string target_points;
-    /// Refined intrinsics; none when kept.
-    using Intrinsics = RefinedIntrinsics;
-    std::optional<Intrinsics> intrinsics;
-    template <class Self, class Visit>
-    static void fields(Self& s, Visit&& visit) {
-      visit("pixel_sigma", s.pixel_sigma);
-      visit("pixel_sigma_estimated", s.pixel_sigma_estimated);
-      visit("rms_px", s.rms_px);
-      visit("corners", s.corners);
-      visit("robot_poses", s.robot);
-      visit("target_point_sigma", s.target_point_sigma);  // m, per axis
-      visit("target_points", s.target_points, kWhenSet);
-      visit("pixel_noise", s.pixel_noise, kWhenSet);
-      visit("per_image_sigma", s.per_image_sigma);
-      visit("intrinsics", s.intrinsics, kBlock);
-      visit("images", s.images);
-      visit("robot_noise_estimated", s.robot_noise_estimated, kInMemory);
-    }
-  };
+  using CornerFit = handeye::CornerFitRecord;
   std::optional<CornerFit> corner_fit;
 };
 

@@ -34,10 +34,11 @@ ResultContext context_of(const SampleSet& samples);
 ResultContext context_of(const MotionSet& motions);
 
 std::string format_result(const Calibration& calibration, const ResultContext& context);
-/// The result file's keys as (path, value) pairs in its order: every section as its
-/// description writes it, "honesty.reference.mean" -> "6.17", lists of numbers as one
-/// value "[a, b, ...]", list entries as "key[i]". What /calibrate returns beside its fields.
-std::vector<std::pair<std::string, std::string>> result_entries(const Calibration& calibration, const ResultContext& context);
+/// A result file's keys (format_result's text) as (path, value) pairs in its order: every
+/// section as its description writes it, "honesty.reference.mean" -> "6.17", lists of
+/// numbers as one value "[a, b, ...]", list entries as "key[i]". What /calibrate returns
+/// beside its fields.
+std::vector<std::pair<std::string, std::string>> result_entries(const std::string& result_text);
 
 /// A check of a saved calibration (calibration_check.h) as `handeye check --output`
 /// writes it: verdict (consistent | changed), p_value, changed (X | Y | both),
@@ -56,31 +57,20 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
 /// with covariance from elsewhere. `read_result` reads it.
 std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& context);
 
-/// A result file read back: X with its covariance and the frames.
+/// A result file read back: its frames, X with its covariance, the noise model when the
+/// file states one, and what a check of the calibration needs as the Calibration it tests
+/// (calibration_check.h): X, Y and their covariances and cross block, the samples used,
+/// the noise model (`noise.model`, `noise.origin`, `noise.residual_model`,
+/// `noise.estimated`), the prediction, the shared robot error and the honesty check's
+/// inflation (an Overconfident honesty record when > 1). The solver's diagnostics are not read.
 struct CalibrationFile {
   ResultContext context;
   PoseWithCovariance T_parent_camera;
-  int samples_used = 0;
   std::optional<MeasurementNoise> noise;  // `noise.model` of a samples result: what the covariance assumed
-  NoiseOrigin noise_origin = NoiseOrigin::Given;  // `noise.origin`
-  /// A joint result's Y (`pattern`), Cov(X, Y) (`cross_covariance`), the noise model its
-  /// covariance was computed with (`noise.residual_model`) and the honesty check's
-  /// inflation (1 when none): what a check of the calibration needs.
-  std::optional<PoseWithCovariance> pattern;
-  Matrix6d cross_covariance = Matrix6d::Zero();
-  std::optional<Calibration::ResidualNoise> residual_noise;
-  std::vector<Calibration::NoiseComponent> noise_components;  // `noise.estimated`: how well each number is known
-  std::optional<Calibration::Prediction> prediction;  // `prediction`: the leave-one-out scale
-  double inflation = 1.0;
-  /// A calibration that uses the shared robot error's model (`shared_robot_error.used`):
-  /// the per-view X, Y and their covariances kept beside it (per_view_* only).
-  std::optional<Calibration::SharedError> shared_robot_error;
+  Calibration calibration;
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
-/// The file as the Calibration a check tests (calibration_check.h): X, Y, their
-/// covariances and cross block, the noise model and the inflation.
-Calibration calibration_of(const CalibrationFile& file);
 /// Whether a saved calibration of this setup and X = T_parent_child is `rig`'s: what
 /// either does not say (no setup, empty frames) is taken to agree.
 bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const std::string& parent, const std::string& child);

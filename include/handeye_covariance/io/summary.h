@@ -16,6 +16,12 @@ namespace handeye {
 namespace io {
 
 std::string human_summary(const Calibration& calibration, const ResultContext& context);
+/// One line (the node's /calibrate message): X = T_parent_child from n samples, its worst-axis
+/// 1 sigma in mm and degrees, the shared robot error when used, and the honesty verdict.
+std::string one_line_summary(const Calibration& calibration, const std::string& parent, const std::string& child);
+/// The shared robot error's state in one phrase: "used", "advice" (preferred, not used),
+/// "not preferred", "not fitted: <why>", or "off" (none).
+std::string shared_error_state(const std::optional<Calibration::SharedError>& shared);
 
 /// The split-half check's lines: the mean NEES of the halves' difference and
 /// what it means (honest about 6; above 7.5 overconfident; below 5 cautious).
