@@ -8,6 +8,7 @@
 #include <set>
 
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/simulation.h"
 
@@ -119,7 +120,9 @@ TEST(Honesty, AnOverconfidentVerdictInflatesTheCovariances) {
   EXPECT_TRUE(inflated.pattern->covariance.isApprox(2.0 * model.pattern->covariance));
   EXPECT_TRUE(inflated.cross_covariance.isApprox(2.0 * model.cross_covariance));
   EXPECT_TRUE(inflated.honesty->model_pose_covariance.isApprox(model.pose_covariance));
-  EXPECT_NE(inflated.warnings.front().find("the covariance is the model's x2"), std::string::npos) << inflated.warnings.front();
+  ASSERT_EQ(inflated.warnings.front().kind, Warning::Kind::Inflated);
+  EXPECT_NE(io::warning_text(inflated.warnings.front()).find("the covariance is the model's x2"), std::string::npos)
+      << io::warning_text(inflated.warnings.front());
 
   Calibration reported = model;
   record_honesty(reported, check, false);

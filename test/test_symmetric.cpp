@@ -371,8 +371,9 @@ TEST(HalfTurn, RealSessionsWithPlantedTurnsAreDecidedBack) {
     for (int i : via_session.turned) session_turned[static_cast<std::size_t>(i)] = true;
     EXPECT_EQ(session_turned, d.turned) << c.name;
     EXPECT_LT(in_sigmas(via_session, same_reading), 1e-6) << c.name;
-    EXPECT_NE(via_session.warnings.back().find(std::to_string(d.turned_count) + " of " + std::to_string(n) + " views turned"),
-              std::string::npos) << via_session.warnings.back();
+    ASSERT_EQ(via_session.warnings.back().kind, Warning::Kind::SymmetricTarget);
+    EXPECT_EQ(via_session.warnings.back().count, d.turned_count);
+    EXPECT_EQ(via_session.warnings.back().views, n);
     // A global turn moves Y, and X only within the estimator's own tolerance (its
     // noise rounds stop once a step would move X by under 0.1 sigma).
     EXPECT_LT(turn_alone, 0.1) << c.name;

@@ -902,12 +902,11 @@ Calibration solve_problem(const Problem& problem, const SolverOptions& options) 
     for (const auto* stage : {&result.rotation_stage, &result.translation_stage}) {
       const double ratio = stage->chi2 / std::max(1, stage->dof);
       if (stage->dof >= 9 && ratio > 3.0) {
-        result.warnings.push_back(
-            std::string(stage == &result.rotation_stage ? "rotation" : "translation") +
-            " residuals are " + number_text(std::sqrt(ratio), 2) +
-            "x larger than the stated noise predicts (chi2/dof = " + number_text(ratio, 3) +
-            "); the covariance is likely optimistic. Check the noise block or estimate it "
-            "(omit it, or use `handeye noise`).");
+        Warning w;
+        w.kind = Warning::Kind::StageAboveStatedNoise;
+        w.rotation_stage = stage == &result.rotation_stage;
+        w.chi2_per_dof = ratio;
+        result.warnings.push_back(w);
       }
     }
   }

@@ -1364,8 +1364,10 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
       result.residual_checks.push_back({"chi2/dof of the stated noise", s.chi2 / residual_dof, bound / residual_dof, !chi2_failed});
       if (chi2_failed && !options.estimate_missing_noise) {
         chi2_failed = false;
-        result.warnings.push_back("residuals are " + number_text(std::sqrt(s.chi2 / residual_dof), 2) +
-                                  "x larger than the stated noise predicts; the covariance is likely optimistic");
+        Warning w;
+        w.kind = Warning::Kind::AboveStatedNoise;
+        w.chi2_per_dof = s.chi2 / residual_dof;
+        result.warnings.push_back(w);
       }
     }
   } else if (n < 4) {
@@ -1525,9 +1527,10 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     result.noise_model = text + "; covariance x" + number_text(inflation, 3) + " (X), x" + number_text(pattern_inflation, 3) +
                          " (pattern) for the noise estimate's own uncertainty";
     if (given) {
-      result.warnings.push_back("the stated noise is too small: residuals are " +
-                                number_text(std::sqrt(result.residual_checks.back().statistic), 2) +
-                                "x what it predicts; the covariance uses the estimated missing noise (see noise_model)");
+      Warning w;
+      w.kind = Warning::Kind::StatedNoiseTooSmall;
+      w.chi2_per_dof = result.residual_checks.back().statistic;
+      result.warnings.push_back(w);
     }
   } else if (given) {
     result.noise = samples.noise ? *samples.noise : MeasurementNoise{};

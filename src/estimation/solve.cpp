@@ -57,7 +57,10 @@ Calibration solve_robust(const SampleSet& samples, Method method, const OutlierO
       std::sort(rejected.begin(), rejected.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
       c.rejected = rejected;
       if (!rejected.empty()) {
-        c.warnings.push_back(std::to_string(rejected.size()) + " sample(s) rejected as outliers (see `rejected`)");
+        Warning w;
+        w.kind = Warning::Kind::OutliersRejected;
+        w.count = static_cast<int>(rejected.size());
+        c.warnings.push_back(w);
       }
       return c;
     }

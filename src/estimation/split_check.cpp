@@ -136,9 +136,11 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
     const double k = check.inflation;
     h.inflation = k;
     scale_covariances(c, k);
-    c.warnings.insert(c.warnings.begin(),
-                      "the split-half check says the noise model is " + check.text + "; the covariance is the model's x" +
-                          number_text(k, 3) + " (the model's alone: --no-inflation)");
+    Warning w;
+    w.kind = Warning::Kind::Inflated;
+    w.factor = k;
+    w.verdict = check.text;
+    c.warnings.insert(c.warnings.begin(), w);
   }
   c.honesty = h;
 }

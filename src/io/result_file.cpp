@@ -9,6 +9,7 @@
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/files.h"
+#include "handeye_covariance/io/warning_text.h"
 #include "sections.h"
 #include "yaml_primitives.h"
 
@@ -247,7 +248,7 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
     emit_value(out, *stage);
   }
   out << YAML::EndMap;
-  out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << calibration.warnings;
+  out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << warning_texts(calibration.warnings);
   out << YAML::Key << "rejected" << YAML::Value;  // outliers left out, indices into the input
   emit_value(out, calibration.rejected);
   out << YAML::EndMap;

@@ -187,7 +187,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                 to_string(c.translation_stage.stop_reason),
                 c.translation_stage.chi2 / std::max(1, c.translation_stage.dof));
   }
-  for (const std::string& warning : c.warnings) out += "  WARNING: " + warning + "\n";
+  for (const Warning& warning : c.warnings) out += "  WARNING: " + warning_text(warning) + "\n";
   for (const auto& r : c.rejected) out += "  rejected samples[" + std::to_string(r.index) + "]: " + r.reason + "\n";
   return out;
 }

@@ -433,7 +433,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
     res.covariance_inflation = h.inflation;
   }
   res.shared_robot_error = io::shared_error_state(c.shared_robot_error);
-  res.warnings = c.warnings;
+  res.warnings = io::warning_texts(c.warnings);
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
     res.rejected_reasons.push_back(r.reason);

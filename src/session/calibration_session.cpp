@@ -250,11 +250,12 @@ Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const
   for (std::size_t i = 0; i < d.turned.size(); ++i) {
     if (d.turned[i]) c.turned.push_back(static_cast<int>(i));
   }
-  c.warnings.push_back("a symmetric target (its inner-corner counts are both odd or both even): " +
-                       std::to_string(c.turned.size()) + " of " + std::to_string(snapshot.samples.samples.size()) +
-                       " views turned by 180 degrees to agree with the robot's motion" +
-                       (d.undecided.empty() ? std::string() : ", " + std::to_string(d.undecided.size()) + " left out as ambiguous") +
-                       "; a board with one even and one odd count avoids this decision");
+  Warning w;
+  w.kind = Warning::Kind::SymmetricTarget;
+  w.count = static_cast<int>(c.turned.size());
+  w.views = static_cast<int>(snapshot.samples.samples.size());
+  w.ambiguous = static_cast<int>(d.undecided.size());
+  c.warnings.push_back(w);
   return c;
 }
 

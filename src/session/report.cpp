@@ -8,6 +8,7 @@
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/core/python_script.h"
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 
@@ -175,8 +176,8 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
   } else if (!r.target_not_reached.empty()) {
     advice.push_back(r.target_not_reached);
   }
-  for (const std::string& w : r.calibration.warnings) {
-    if (w.find("rejected as outliers") == std::string::npos) advice.push_back("the estimator warns: " + w);  // said above
+  for (const Warning& w : r.calibration.warnings) {
+    if (w.kind != Warning::Kind::OutliersRejected) advice.push_back("the estimator warns: " + io::warning_text(w));  // said above
   }
   if (advice.empty()) {
     advice.push_back("nothing to mend: every sample is within " + number_text(r.advice_sigma, 3) +

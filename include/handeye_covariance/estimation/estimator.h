@@ -116,6 +116,25 @@ const char* to_string(Loss loss);  // "squared" / "huber"
 enum class CovarianceKind { Information, Sandwich, SharedRobotError };
 const char* to_string(CovarianceKind kind);  // "information" / "sandwich" / "shared_robot_error"
 
+/// Something the user should know that did not stop the calibration: what it is and its
+/// figures. io/summary.h (warning_text) writes the words.
+struct Warning {
+  enum class Kind {
+    StageAboveStatedNoise,  // pairs: a stage's residuals above the stated noise (rotation_stage, chi2_per_dof)
+    AboveStatedNoise,       // joint: the residuals above the stated noise, no noise estimated (chi2_per_dof)
+    StatedNoiseTooSmall,    // joint: the same, the missing noise estimated (chi2_per_dof)
+    OutliersRejected,       // samples rejected as outliers (count)
+    Inflated,               // the honesty check inflated the covariances (factor; the verdict is Calibration::honesty's)
+    SymmetricTarget,        // views turned by 180 degrees (count of views; ambiguous ones left out)
+  };
+  Kind kind = Kind::AboveStatedNoise;
+  double chi2_per_dof = 0.0;
+  bool rotation_stage = false;
+  int count = 0, views = 0, ambiguous = 0;
+  double factor = 1.0;
+  std::string verdict;  // Inflated: the honesty check's text when it inflated
+};
+
 /// A calibration: X, Y and their joint covariance, how they were estimated, and one
 /// section per check or model that produced a diagnostic, each declared in its own
 /// record header and described once (core/fields.h) for files, messages and summaries.
@@ -166,7 +185,7 @@ struct Calibration {
   /// sandwich's) own uncertainty, X's and the pattern pose's (the X-pattern block
   /// takes their geometric mean).
   double covariance_inflation = 1.0, pattern_covariance_inflation = 1.0;
-  std::vector<std::string> warnings;  // e.g. residuals far larger than the stated noise
+  std::vector<Warning> warnings;  // e.g. residuals far larger than the stated noise
 
   /// A symmetric target (Rig::symmetric_face): the samples whose detected pose was
   /// replaced by its other candidate, turned by 180 degrees about the face's normal

@@ -10,6 +10,7 @@
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/check_text.h"
+#include "handeye_covariance/io/warning_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
