@@ -1,5 +1,5 @@
 // Client of monitor.test: the monitor of publish.launch monitor:=true (ros/calibration_monitor_node.h)
-// against the simulated rig. The test writes a calibration of the rig (20 simulated views of its
+// against the simulated rig, whose frames are not the defaults. The test writes a calibration of the rig (20 simulated views of its
 // truth, the rig's detection noise, solved as `handeye solve` does), starts publish.launch
 // monitor:=true in a shell as a user types it, and watches /diagnostics: no ERROR over 200
 // still views; after the rig's camera moves 3 mm on its mount, ERROR within 10 still views,
@@ -29,6 +29,9 @@ namespace {
 
 const std::string kDir = "/tmp/handeye_covariance_rostest_monitor";
 const std::string kFile = kDir + "/calibration.yaml";
+// monitor.test's robot and camera frames, not the node's defaults: the monitor and the publisher
+// take them from the file.
+const std::string kBase = "panda_link0", kEffector = "panda_hand", kCamera = "camera_color_optical_frame";
 
 /// A calibration of the simulated rig: its truth, its detection noise (0.3 mm, 0.05 deg,
 /// the robot exact), the noise estimated from the views, as `handeye solve` runs it.
@@ -39,6 +42,7 @@ void write_rig_calibration() {
   noise.camera.rotation = std::pow(radians(0.05), 2) * Eigen::Matrix3d::Identity();
   SimulatedSession sim = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, noise);
   sim.samples.noise.reset();
+  sim.samples.rig.frames = {kBase, kEffector, kCamera, "tag_0"};  // monitor.test's rig
   CalibrationSession session(session_settings(sim.samples));
   session.replace(sim.samples.samples, "the rig's calibration");
   const Calibration c = session.calibrate_checked(session.snapshot());
@@ -81,7 +85,7 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   // The published TF is the saved X (the monitor only reads).
   const Eigen::Isometry3d saved = io::read_result(kFile).T_parent_camera.pose;
   geometry_msgs::TransformStamped published;
-  ASSERT_NO_THROW(published = tf.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)));
+  ASSERT_NO_THROW(published = tf.lookupTransform(kEffector, kCamera, ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9));
 
   std_msgs::Float64 mm;
@@ -116,7 +120,7 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
               millimetres(reported(0)), millimetres(reported(1)), millimetres(reported(2)), millimetres(expected(0)),
               millimetres(expected(1)), millimetres(expected(2)), nees);
   EXPECT_LT(nees, chi2_quantile(6, 0.999)) << "reported " << reported.transpose() << ", the bump " << expected.transpose();
-  ASSERT_NO_THROW(published = tf.lookupTransform("tool0", "camera_optical_frame", ros::Time(0)));
+  ASSERT_NO_THROW(published = tf.lookupTransform(kEffector, kCamera, ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9)) << "the monitor never changes the TF";
 
   std::system(("kill -INT $(cat " + kDir + "/launch.pid)").c_str());

@@ -1516,7 +1516,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     for (std::size_t k = 0; k < result.noise_components.size(); ++k) {
       const Calibration::NoiseComponent& c = result.noise_components[k];
       if (free[k].kind == Kind::CameraPair) continue;  // in the result file; the text names the variances
-      const double unit = c.unit == "m" ? 1e3 : c.unit == "rad" ? kDegreesPerRadian : 1.0;
+      const double unit = c.unit == "m" ? kMillimetresPerMetre : c.unit == "rad" ? kDegreesPerRadian : 1.0;
       text += (k ? ", " : "") + c.name + " " + number_text(c.value * unit, 3) +
               (c.unit == "m" ? " mm" : c.unit == "rad" ? " deg" : "") +
               (!c.supported ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));

@@ -500,7 +500,10 @@ bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const 
 }
 
 Calibration read_calibration_to_check(const std::string& path, const Rig& rig) {
-  const CalibrationFile file = read_result(path);
+  return calibration_to_check(read_result(path), rig, path);
+}
+
+Calibration calibration_to_check(const CalibrationFile& file, const Rig& rig, const std::string& path) {
   const ResultContext& c = file.context;
   if (!is_calibration_of(rig, c.setup, c.parent, c.child)) {
     const auto name = [](const std::optional<Setup>& setup, const std::string& parent, const std::string& child) {
@@ -512,7 +515,8 @@ Calibration read_calibration_to_check(const std::string& path, const Rig& rig) {
                            name(rig.setup, rig.camera_parent_frame(), rig.frames.camera),
                        path,
                        "check with views of the setup and frames the calibration was made with (the node: the node of its "
-                       "frames, or set ~calibration_file)");
+                       "frames, or set ~calibration_file; publish.launch: its robot_*_frame and tracking_base_frame "
+                       "arguments rename the file's frames)");
   }
   return file.calibration;
 }

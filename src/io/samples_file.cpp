@@ -271,9 +271,9 @@ std::string format_noise_estimate(const NoiseEstimate& estimate) {
     out << YAML::Key << key << YAML::Value;
     emit_numbers(out, sigma.data(), 3);
   };
-  sigmas("pattern_sigma_mm", estimate.noise.camera.translation, 1e3);
+  sigmas("pattern_sigma_mm", estimate.noise.camera.translation, kMillimetresPerMetre);
   sigmas("pattern_sigma_deg", estimate.noise.camera.rotation, kDegreesPerRadian);
-  sigmas("effector_sigma_mm", estimate.noise.robot.translation, 1e3);
+  sigmas("effector_sigma_mm", estimate.noise.robot.translation, kMillimetresPerMetre);
   sigmas("effector_sigma_deg", estimate.noise.robot.rotation, kDegreesPerRadian);
   out << YAML::Key << "notes" << YAML::Value << estimate.notes;
   out << YAML::EndMap << YAML::EndMap;

@@ -148,7 +148,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     }
   } else if (c.noise_origin == NoiseOrigin::EstimatedFromResiduals) {
     std::string estimated = "  noise                 ESTIMATED from the residuals (no noise block given); camera 1 sigma x y z [mm] " +
-                            sigmas(c.noise.camera.translation, 1e3);
+                            sigmas(c.noise.camera.translation, kMillimetresPerMetre);
     estimated.pop_back();
     out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDegreesPerRadian);
     if (!c.noise_model.empty()) out += "                        (" + c.noise_model + ")\n";

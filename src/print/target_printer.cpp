@@ -336,7 +336,7 @@ PrintedTarget print_target(const Target& target, const std::string& output, cons
     check_status(cairo_surface_status(surface.get()), output);
     cairo_svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_MM);
     Context cr(cairo_create(surface.get()), cairo_destroy);
-    cairo_scale(cr.get(), 1e3, 1e3);
+    cairo_scale(cr.get(), kMillimetresPerMetre, kMillimetresPerMetre);  // SVG user units in mm, the drawing in m
     draw(cr.get(), placement, true);
     cr.reset();
     cairo_surface_finish(surface.get());

@@ -13,6 +13,12 @@ namespace handeye {
 
 CalibrationMonitorNode::CalibrationMonitorNode(ros::NodeHandle node, ros::NodeHandle private_node)
     : config_(node_session_config(private_node)), tf_listener_(tf_buffer_) {
+  // X's frames and the pattern's parent as publish.launch publishes them: the file's, unless a
+  // parameter names (renames) them.
+  const bool eye_in_hand = config_.rig.eye_in_hand();
+  renamed_parent_ = private_node.hasParam(eye_in_hand ? "robot_effector_frame" : "robot_base_frame");
+  renamed_camera_ = private_node.hasParam("tracking_base_frame");
+  renamed_pattern_parent_ = private_node.hasParam(eye_in_hand ? "robot_base_frame" : "robot_effector_frame");
   options_.window = param(private_node, "monitor/window", options_.window);
   options_.min_views = param(private_node, "monitor/min_views", options_.min_views);
   options_.warn_alpha = param(private_node, "monitor/warn_alpha", options_.warn_alpha);
@@ -52,9 +58,20 @@ void CalibrationMonitorNode::load_calibration() {
   loaded_ = written;
   monitor_.reset();
   try {
+    const io::CalibrationFile file = io::read_result(config_.calibration_file);
+    Rig& rig = config_.rig;
+    const auto adopt = [](std::string& frame, bool renamed, const std::string& saved) {
+      if (!renamed && !saved.empty()) frame = saved;
+    };
+    adopt(rig.eye_in_hand() ? rig.frames.effector : rig.frames.base, renamed_parent_, file.context.parent);
+    adopt(rig.frames.camera, renamed_camera_, file.context.child);
+    adopt(rig.eye_in_hand() ? rig.frames.base : rig.frames.effector, renamed_pattern_parent_, file.context.pattern_parent);
+    Rig as_saved = rig;  // a renamed frame is the file's under its new name
+    if (renamed_parent_) (as_saved.eye_in_hand() ? as_saved.frames.effector : as_saved.frames.base) = file.context.parent;
+    if (renamed_camera_) as_saved.frames.camera = file.context.child;
+    const Calibration calibration = io::calibration_to_check(file, as_saved, config_.calibration_file);
     SessionSettings settings = session_settings(config_);
-    monitor_ = std::make_unique<CalibrationMonitor>(io::read_calibration_to_check(config_.calibration_file, settings.rig),
-                                                    settings.rig, settings.noise, options_);
+    monitor_ = std::make_unique<CalibrationMonitor>(calibration, settings.rig, settings.noise, options_);
     problem_.clear();
     ROS_INFO("monitor: watching %s", config_.calibration_file.c_str());
   } catch (const HandEyeError& e) {
@@ -64,11 +81,16 @@ void CalibrationMonitorNode::load_calibration() {
 }
 
 void CalibrationMonitorNode::observe(const Detection& detection) {
-  if (!detection.stamp.isZero()) {
-    tf_buffer_.canTransform(config_.rig.frames.base, config_.rig.frames.effector, detection.stamp,
-                            ros::Duration(config_.tf_timeout));
+  Rig rig;  // the frames of the calibration watched (load_calibration sets them)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!monitor_) return;
+    rig = config_.rig;
   }
-  const ObservationResult result = make_observation(tf_buffer_, config_.rig, detection);
+  if (!detection.stamp.isZero()) {
+    tf_buffer_.canTransform(rig.frames.base, rig.frames.effector, detection.stamp, ros::Duration(config_.tf_timeout));
+  }
+  const ObservationResult result = make_observation(tf_buffer_, rig, detection);
   if (result.refusal) {
     ROS_WARN_THROTTLE(10.0, "monitor: %s", result.refusal->message.c_str());
     return;

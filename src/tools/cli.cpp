@@ -557,9 +557,9 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
       << (e.source == NoiseSource::RepeatedObservations ? " at " + std::to_string(e.groups) + " held poses" : "")
       << ", " << number_text(e.dof) << " dof (each variance +-" << number_text(100.0 * std::sqrt(2.0 / e.dof), 2)
       << "% at 1 sigma)\n";
-  out << "  pattern 1 sigma [mm]   " << per_axis(e.noise.camera.translation, 1e3) << "   (camera x, y, z)\n";
+  out << "  pattern 1 sigma [mm]   " << per_axis(e.noise.camera.translation, kMillimetresPerMetre) << "   (camera x, y, z)\n";
   out << "  pattern 1 sigma [deg]  " << per_axis(e.noise.camera.rotation, kDegreesPerRadian) << "\n";
-  out << "  robot 1 sigma [mm]     " << per_axis(e.noise.robot.translation, 1e3)
+  out << "  robot 1 sigma [mm]     " << per_axis(e.noise.robot.translation, kMillimetresPerMetre)
       << (e.robot_identified ? "" : "   (not identifiable from residuals: as given, else 0)") << "\n";
   out << "  robot 1 sigma [deg]    " << per_axis(e.noise.robot.rotation, kDegreesPerRadian) << "\n";
   for (const std::string& note : e.notes) out << "  note: " << note << "\n";

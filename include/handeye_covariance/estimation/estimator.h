@@ -117,7 +117,7 @@ enum class CovarianceKind { Information, Sandwich, SharedRobotError };
 const char* to_string(CovarianceKind kind);  // "information" / "sandwich" / "shared_robot_error"
 
 /// Something the user should know that did not stop the calibration: what it is and its
-/// figures. io/summary.h (warning_text) writes the words.
+/// figures. io/warning_text.h writes the words.
 struct Warning {
   enum class Kind {
     StageAboveStatedNoise,  // pairs: a stage's residuals above the stated noise (rotation_stage, chi2_per_dof)

@@ -78,6 +78,8 @@ bool is_calibration_of(const Rig& rig, const std::optional<Setup>& setup, const 
 /// `handeye check`, `handeye images check` and the node's check. Refuses
 /// (MalformedFile, naming both) a file of another setup or other frames.
 Calibration read_calibration_to_check(const std::string& path, const Rig& rig);
+/// The same guard on a file already read from `path`.
+Calibration calibration_to_check(const CalibrationFile& file, const Rig& rig, const std::string& path);
 
 /// A saved calibration to publish at start-up (publish.launch, the calibration
 /// node): ours (a result file) or easy_handeye's, whose users switch to us:

@@ -34,11 +34,14 @@ class CalibrationMonitorNode {
  private:
   void observe(const Detection& detection);
   /// Reads the calibration file when the monitor has none yet or the file was written
-  /// again since (the window starts over); `problem_` says why there is none.
+  /// again since (the window starts over); `problem_` says why there is none. The robot
+  /// and camera frames are the file's unless a parameter renames them (publish.launch's
+  /// arguments, as the publisher), and a file of the other setup is refused.
   void load_calibration();  // mutex_ held
   void publish_diagnostics();  // mutex_ held
 
-  SessionConfig config_;
+  SessionConfig config_;  // its rig's frames follow the calibration read (mutex_)
+  bool renamed_parent_ = false, renamed_camera_ = false, renamed_pattern_parent_ = false;
   MonitorOptions options_;
   std::string name_;  // the diagnostic's name
   tf2_ros::Buffer tf_buffer_;
