@@ -6,6 +6,7 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +18,19 @@ namespace handeye {
 namespace {
 
 std::string artifact_dir;
+
+/// The running rviz's process id ("" when none): the launch respawns an rviz that dies at
+/// start-up, so the test checks that the one that drew is the one that draws at the end.
+std::string rviz_pid() {
+  std::string out;
+  if (FILE* pipe = popen("pidof -s rviz", "r")) {
+    char buffer[64];
+    while (fgets(buffer, sizeof buffer, pipe)) out += buffer;
+    pclose(pipe);
+  }
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
 
 struct Blob {
   double area = 0, major = 0, minor = 0;  // pixels; axes from second moments
@@ -94,6 +108,8 @@ TEST(RvizDisplay, DrawsTheAnisotropicPositionEllipsoid) {
   std::printf("[rviz] magenta area %.0f px, axes %.1f x %.1f px, ratio %.2f (sigma ratio 4); screenshot %s\n", blob.area,
               blob.major, blob.minor, blob.minor > 0 ? blob.major / blob.minor : 0.0, png.c_str());
   ASSERT_GT(blob.area, 2000) << "no ellipsoid drawn: did the plugin load? see " << png;
+  const std::string drew = rviz_pid();
+  ASSERT_FALSE(drew.empty()) << "rviz drew, but no rviz process is running";
   const cv::Mat image = cv::imread(png);
   EXPECT_LT(blob.area, 0.25 * image.rows * image.cols) << "the ellipsoid fills the view";
   ASSERT_GT(blob.minor, 0.0);
@@ -115,6 +131,7 @@ TEST(RvizDisplay, DrawsTheAnisotropicPositionEllipsoid) {
   };
   EXPECT_TRUE(shows(invalid, false)) << "an invalid covariance was drawn";
   EXPECT_TRUE(shows(msg, true)) << "rviz did not draw again after an invalid covariance (crashed?)";
+  EXPECT_EQ(rviz_pid(), drew) << "rviz died after the invalid covariance and was started again";
 }
 
 }  // namespace
