@@ -19,13 +19,17 @@ namespace {
 
 std::string artifact_dir;
 
-/// The running rviz's process id ("" when none): the launch respawns an rviz that dies at
-/// start-up, so the test checks that the one that drew is the one that draws at the end.
+/// The process id of this launch's /rviz node, from its own master ("" when none): the launch
+/// respawns an rviz that dies at start-up, so the test checks that the one that drew is the
+/// one that draws at the end.
 std::string rviz_pid() {
   std::string out;
-  if (FILE* pipe = popen("pidof -s rviz", "r")) {
-    char buffer[64];
-    while (fgets(buffer, sizeof buffer, pipe)) out += buffer;
+  if (FILE* pipe = popen("rosnode info /rviz 2>/dev/null", "r")) {
+    char buffer[256];
+    while (fgets(buffer, sizeof buffer, pipe)) {
+      const std::string line(buffer);
+      if (line.rfind("Pid: ", 0) == 0) out = line.substr(5);
+    }
     pclose(pipe);
   }
   while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
@@ -109,7 +113,7 @@ TEST(RvizDisplay, DrawsTheAnisotropicPositionEllipsoid) {
               blob.major, blob.minor, blob.minor > 0 ? blob.major / blob.minor : 0.0, png.c_str());
   ASSERT_GT(blob.area, 2000) << "no ellipsoid drawn: did the plugin load? see " << png;
   const std::string drew = rviz_pid();
-  ASSERT_FALSE(drew.empty()) << "rviz drew, but no rviz process is running";
+  ASSERT_FALSE(drew.empty()) << "rviz drew, but rosnode info /rviz gives no pid";
   const cv::Mat image = cv::imread(png);
   EXPECT_LT(blob.area, 0.25 * image.rows * image.cols) << "the ellipsoid fills the view";
   ASSERT_GT(blob.minor, 0.0);

@@ -14,11 +14,13 @@ namespace handeye {
 CalibrationMonitorNode::CalibrationMonitorNode(ros::NodeHandle node, ros::NodeHandle private_node)
     : config_(node_session_config(private_node)), tf_listener_(tf_buffer_) {
   // X's frames and the pattern's parent as publish.launch publishes them: the file's, unless a
-  // parameter names (renames) them.
+  // parameter names (renames) them; empty is not given, as for the publisher.
   const bool eye_in_hand = config_.rig.eye_in_hand();
-  renamed_parent_ = private_node.hasParam(eye_in_hand ? "robot_effector_frame" : "robot_base_frame");
-  renamed_camera_ = private_node.hasParam("tracking_base_frame");
-  renamed_pattern_parent_ = private_node.hasParam(eye_in_hand ? "robot_base_frame" : "robot_effector_frame");
+  const auto given = [&](const char* key) { return !param<std::string>(private_node, key, "").empty(); };
+  renamed_parent_ = given(eye_in_hand ? "robot_effector_frame" : "robot_base_frame");
+  renamed_camera_ = given("tracking_base_frame");
+  renamed_pattern_parent_ = given(eye_in_hand ? "robot_base_frame" : "robot_effector_frame");
+  configured_rig_ = config_.rig;
   options_.window = param(private_node, "monitor/window", options_.window);
   options_.min_views = param(private_node, "monitor/min_views", options_.min_views);
   options_.warn_alpha = param(private_node, "monitor/warn_alpha", options_.warn_alpha);
@@ -59,7 +61,7 @@ void CalibrationMonitorNode::load_calibration() {
   monitor_.reset();
   try {
     const io::CalibrationFile file = io::read_result(config_.calibration_file);
-    Rig& rig = config_.rig;
+    Rig rig = configured_rig_;  // each file's frames over the parameters', not over an earlier file's
     const auto adopt = [](std::string& frame, bool renamed, const std::string& saved) {
       if (!renamed && !saved.empty()) frame = saved;
     };
@@ -70,6 +72,7 @@ void CalibrationMonitorNode::load_calibration() {
     if (renamed_parent_) (as_saved.eye_in_hand() ? as_saved.frames.effector : as_saved.frames.base) = file.context.parent;
     if (renamed_camera_) as_saved.frames.camera = file.context.child;
     const Calibration calibration = io::calibration_to_check(file, as_saved, config_.calibration_file);
+    config_.rig = rig;
     SessionSettings settings = session_settings(config_);
     monitor_ = std::make_unique<CalibrationMonitor>(calibration, settings.rig, settings.noise, options_);
     problem_.clear();

@@ -41,6 +41,7 @@ class CalibrationMonitorNode {
   void publish_diagnostics();  // mutex_ held
 
   SessionConfig config_;  // its rig's frames follow the calibration read (mutex_)
+  Rig configured_rig_;  // the parameters' (or the defaults') frames
   bool renamed_parent_ = false, renamed_camera_ = false, renamed_pattern_parent_ = false;
   MonitorOptions options_;
   std::string name_;  // the diagnostic's name
