@@ -274,7 +274,7 @@ BagResult replay(const std::string& bag) {
   const std::string result = temp("replay_result.yaml"), samples = temp("replay_samples.yaml");
   BagResult r{run("bag --bag " + bag + " --output " + result + " --samples-out " + samples), Isometry3d::Identity()};
   if (r.run.exit_code == 0) {
-    r.X = io::read_result(result).T_parent_camera.pose;
+    r.X = io::read_result(result).T_parent_camera().pose;
     r.samples = io::read_samples(samples).samples.size();
   }
   return r;

@@ -44,8 +44,8 @@ TEST(Cli, SimThenSolveRecoversTheTruthWithin3Sigma) {
   EXPECT_NE(r.out.find("T_tool0_camera_optical_frame"), std::string::npos) << r.out;
   const auto estimate = handeye::io::read_result(result);
   const auto exact = handeye::io::read_result(truth);
-  const Eigen::Vector3d error = estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation();
-  const Eigen::Matrix3d covariance = estimate.T_parent_camera.covariance.topLeftCorner<3, 3>();
+  const Eigen::Vector3d error = estimate.T_parent_camera().pose.translation() - exact.T_parent_camera().pose.translation();
+  const Eigen::Matrix3d covariance = estimate.T_parent_camera().covariance.topLeftCorner<3, 3>();
   const double mahalanobis = std::sqrt(error.dot(covariance.inverse() * error));
   EXPECT_LT(mahalanobis, 3.0 * std::sqrt(3.0));
   EXPECT_GT(covariance.trace(), 0.0);
@@ -172,7 +172,7 @@ TEST(Cli, SimBagThenBagReplay) {
   EXPECT_NE(r.out.find("1 sigma [mm]"), std::string::npos) << r.out;
   EXPECT_GE(handeye::io::read_samples(samples).samples.size(), 11u);
   const auto estimate = handeye::io::read_result(result), exact = handeye::io::read_result(truth);
-  EXPECT_LT((estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation()).norm(), 0.005);
+  EXPECT_LT((estimate.T_parent_camera().pose.translation() - exact.T_parent_camera().pose.translation()).norm(), 0.005);
 }
 
 TEST(Cli, BadBagsExit2WithTheReasonAndWriteNothing) {
@@ -225,7 +225,7 @@ TEST(Cli, ShippedExampleSolves) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto estimate = handeye::io::read_result(result);
   const auto exact = handeye::io::read_result(std::string(HANDEYE_SOURCE_DIR) + "/config/examples/eye_in_hand_truth.yaml");
-  EXPECT_LT((estimate.T_parent_camera.pose.translation() - exact.T_parent_camera.pose.translation()).norm(), 0.003);
+  EXPECT_LT((estimate.T_parent_camera().pose.translation() - exact.T_parent_camera().pose.translation()).norm(), 0.003);
 }
 
 }  // namespace
@@ -258,7 +258,7 @@ TEST(Cli, ComposeGivesTheObjectInTheBaseWithEq68sCovariance) {
   // The file holds eq. (68) with the three covariances compounded.
   const auto calibration = handeye::io::read_result(result);
   handeye::ObjectPoseInput in;
-  in.X = calibration.T_parent_camera;
+  in.X = calibration.T_parent_camera();
   in.T_camera_object = handeye::io::read_pose_file(detection).value;
   const double mm = 0.05e-3, rad = 0.01 * M_PI / 180.0;
   in.T_base_effector.pose = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));

@@ -146,8 +146,8 @@ TEST(CalibrationNode, AutoSamplesTheRigAndCalibratesWithAnHonestCovariance) {
   const Eigen::Isometry3d tf = conversions::to_eigen(buffer.lookupTransform(kParent, "camera_optical_frame", ros::Time(0)).transform);
   EXPECT_LE((tf.matrix() - X.pose.matrix()).norm(), 1e-9);
   const io::CalibrationFile file = io::read_result(calibrate.response.calibration_file);
-  EXPECT_LE((file.T_parent_camera.pose.matrix() - X.pose.matrix()).norm(), 1e-12);
-  EXPECT_LE((file.T_parent_camera.covariance - X.covariance).norm(), 1e-18);
+  EXPECT_LE((file.T_parent_camera().pose.matrix() - X.pose.matrix()).norm(), 1e-12);
+  EXPECT_LE((file.T_parent_camera().covariance - X.covariance).norm(), 1e-18);
 
   // Next-best pose: ~status names one, /suggest_pose ranks and plans.
   EXPECT_TRUE(status.latest.has_suggestion) << status.latest.last_event;

@@ -83,7 +83,7 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   EXPECT_EQ(errors, 0) << "an ERROR without a change: " << latest.message;
   std::printf("[monitor] %d checks of an unchanged rig: %d ERROR, last: %s\n", checks, errors, latest.message.c_str());
   // The published TF is the saved X (the monitor only reads).
-  const Eigen::Isometry3d saved = io::read_result(kFile).T_parent_camera.pose;
+  const Eigen::Isometry3d saved = io::read_result(kFile).T_parent_camera().pose;
   geometry_msgs::TransformStamped published;
   ASSERT_NO_THROW(published = tf.lookupTransform(kEffector, kCamera, ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9));

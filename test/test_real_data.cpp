@@ -29,6 +29,7 @@
 #include "handeye_covariance/estimation/calibration_check.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/noise_text.h"
 #include "handeye_covariance/io/result_file.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/report.h"
@@ -117,11 +118,11 @@ Calibration calibrate_by_corners(const RealSession& session) {
   for (const Calibration::CornerFit::Image& image : c.corner_fit->images) {
     std::printf("  %s: %d corners, reprojection RMS %.3f px\n", image.name.c_str(), image.corners, image.rms_px);
   }
-  std::printf("  corners: %s; RMS %.3f px over %d corners\n", c.noise_model.c_str(), c.corner_fit->rms_px,
+  std::printf("  corners: %s; RMS %.3f px over %d corners\n", io::noise_model_text(c).c_str(), c.corner_fit->rms_px,
               c.corner_fit->corners);
   // A real robot's noise, estimated from the corners of 6 images or more and off its
   // floor: one target_progress holds to its rule however the pixel sigma came.
-  EXPECT_TRUE(c.corner_fit->robot_noise_estimated) << c.noise_model;
+  EXPECT_TRUE(c.corner_fit->robot_noise_estimated) << io::noise_model_text(c);
   return c;
 }
 
@@ -148,7 +149,7 @@ Calibration judge(const RealSession& session, const Eigen::Isometry3d& published
   }
   const Vector6d ours = c.pose_covariance.diagonal().cwiseSqrt(), theirs = jackknife_sigma(leave_one_out);
   const Vector6d combined = (ours.cwiseAbs2() + theirs.cwiseAbs2()).cwiseSqrt();
-  std::printf("  noise: %s\n", c.noise_model.c_str());
+  std::printf("  noise: %s\n", io::noise_model_text(c).c_str());
   for (const auto& check : c.residual_checks) {
     std::printf("  check: %s = %.3g (bound %.3g) %s\n", check.test.c_str(), check.statistic, check.bound,
                 check.passed ? "passed" : "FAILED");
@@ -397,7 +398,7 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
                   h.reference.high, h.ratio, h.random_ratio, h.runs.length, h.runs.ratio, h.text.c_str(), h.inflation, error(0) * 1e3, error(1) * 1e3, error(2) * 1e3,
                   error(3) * 180 / M_PI, error(4) * 180 / M_PI, error(5) * 180 / M_PI, error(0) / sigma(0),
                   error(1) / sigma(1), error(2) / sigma(2), error(3) / sigma(3), error(4) / sigma(4), error(5) / sigma(5),
-                  cal.noise_model.c_str());
+                  io::noise_model_text(cal).c_str());
       EXPECT_TRUE(std::isfinite(h.ratio) && h.ratio > 0.0) << c.name;
       const bool within = h.ratio >= 0.8 && h.ratio <= 1.25;
       const bool inflated = h.verdict == Honesty::Overconfident && std::abs(h.inflation - h.ratio) < 1e-12 &&
@@ -710,7 +711,7 @@ void views_7_and_8_moved(const SampleSet& samples, const char* name, int k,
   const std::optional<Calibration> calibrated = part_calibration(before, name, 1.0, std::nullopt, false, &per_view);
   ASSERT_TRUE(calibrated) << "views 1-6 of " << name << " do not calibrate";
   const Calibration& cal = *calibrated;
-  std::printf("  views 1-6's noise: %s\n", cal.noise_model.c_str());
+  std::printf("  views 1-6's noise: %s\n", io::noise_model_text(cal).c_str());
   const CalibrationCheck moved = check_calibration(cal, after);
   ASSERT_EQ(moved.change.what, ChangedPose::X) << name;
   const EstimatedChange::Delta& d = *moved.change.X_change;

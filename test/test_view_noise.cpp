@@ -6,6 +6,7 @@
 
 #include "handeye_covariance/core/view_noise.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
+#include "handeye_covariance/io/noise_text.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "test_helpers.h"
@@ -161,13 +162,13 @@ TEST(ViewNoise, ConstantNoiseKeepsTheHomogeneousModel) {
     SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 31, paper_noise(1e-5));
     s.samples.noise.reset();
     const Calibration c = solve_joint(s.samples);
-    ASSERT_GE(c.noise_candidates.size(), 2u) << c.noise_model;
+    ASSERT_GE(c.noise_candidates.size(), 2u) << io::noise_model_text(c);
     for (const Calibration::NoiseCandidate& candidate : c.noise_candidates) {
       if (candidate.name.find("view-following") == std::string::npos) continue;
       chosen += candidate.chosen ? 1 : 0;
       fitted += candidate.fitted ? 1 : 0;
     }
-    EXPECT_NE(c.noise_model.find("noise model by BIC"), std::string::npos) << c.noise_model;
+    EXPECT_NE(io::noise_model_text(c).find("noise model by BIC"), std::string::npos) << io::noise_model_text(c);
   }
   std::printf("[ figures  ] constant noise, %d sessions of 31: view-following fitted in %d, chosen in %d\n", sessions,
               fitted, chosen);

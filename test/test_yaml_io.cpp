@@ -197,8 +197,8 @@ TEST(YamlIo, ResultFileHasTheDocumentedLayout) {
   EXPECT_EQ(root["noise"]["origin"].as<std::string>(), "given");
 
   const io::CalibrationFile back = io::parse_result(text, "memory");
-  expect_same_pose(back.T_parent_camera.pose, c.T_parent_camera);
-  EXPECT_EQ(back.T_parent_camera.covariance, c.pose_covariance);
+  expect_same_pose(back.T_parent_camera().pose, c.T_parent_camera);
+  EXPECT_EQ(back.T_parent_camera().covariance, c.pose_covariance);
   EXPECT_EQ(back.context.parent, "tool0");
 }
 

@@ -947,11 +947,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     robot += ": 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) + " mm / " +
              number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
   }
-  c.noise_model = std::string("corners: pixel sigma ") + (f.per_image_sigma ? "per image, pooled " : "") +
-                  number_text(f.pixel_sigma, 3) + " px" +
-                  (f.pixel_sigma_estimated ? " estimated from " + std::to_string(f.degrees_of_freedom) + " dof" : " given") +
-                  " under the detector's corner-noise model; robot poses " + robot +
-                  (f.intrinsics ? "; intrinsics refined" : "");
+  c.noise_model.reset();  // the corner fit says it (io::noise_model_text)
   c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
   c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;
   c.rotation_stage.dof = c.translation_stage.dof = f.degrees_of_freedom;

@@ -1187,23 +1187,6 @@ ViewScreen screen_view(const JointProblem& problem, const Solution& s) {
   return out;
 }
 
-/// How the noise model was chosen, for the result's text: "by BIC, + view-following
-/// image noise (BIC -2117.2 against -2093.2); + robot ... not fitted (score 1.2 < 5.1)".
-std::string candidates_text(const std::vector<Calibration::NoiseCandidate>& candidates, double price) {
-  std::string chosen = "the first", others;
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
-    const Calibration::NoiseCandidate& c = candidates[k];
-    if (c.chosen) chosen = k == 0 ? "without more numbers" : c.name;
-    if (c.chosen) continue;
-    others += (others.empty() ? "" : ", ") + (k == 0 ? std::string("without") : c.name) +
-              (c.fitted ? " (BIC " + number_text(c.bic, 6) + ")"
-                        : " not fitted (score " + number_text(c.score, 2) + " < " + number_text(price, 2) + ")");
-  }
-  double chosen_bic = candidates.front().bic;
-  for (const Calibration::NoiseCandidate& c : candidates) chosen_bic = c.chosen ? c.bic : chosen_bic;
-  return "noise model by BIC: " + chosen + " (BIC " + number_text(chosen_bic, 6) + ")" + (others.empty() ? "" : "; tried " + others);
-}
-
 /// One noise model fitted with the solve: its free numbers (a robot number the
 /// camera's can mimic dropped), their REML fit, the solution under them.
 struct NoiseFit {
@@ -1480,7 +1463,7 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
     inflation = pass.inflation_x, pattern_inflation = pass.inflation_y;
 
     result.noise_origin = given ? NoiseOrigin::Given : NoiseOrigin::EstimatedFromResiduals;
-    std::string text;
+    NoiseModelChoice& choice = result.noise_model.emplace();
     for (std::size_t k = 0; k < free.size(); ++k) {
       const Free& c = free[k];
       const double v = theta[static_cast<Eigen::Index>(k)], var = fit.covariance(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
@@ -1502,30 +1485,18 @@ Calibration solve_joint(const SampleSet& samples, const JointOptions& options) {
         out.sigma = out.value > 0.0 ? std::sqrt(std::max(var, 0.0)) / (2.0 * out.value) : 0.0;
       }
       result.noise_components.push_back(out);
+      choice.correlation.push_back(c.kind == Kind::CameraPair);
     }
-    if (given) {
-      text = "the stated noise is too small for the residuals (chi2/dof " +
-             number_text(result.residual_checks.back().statistic, 3) + "); estimated the missing part: ";
-    } else {
-      const bool full = dof >= options.full_noise_min_dof, per_axis = dof >= options.per_axis_noise_min_dof;
-      text = full ? "a full 6x6 camera noise" : per_axis ? "per-axis camera variances" : "one camera variance for translation and one for rotation";
-      text += dof >= options.robot_noise_min_dof ? " and the robot's rotation noise" : ", robot taken as exact";
-      text += " from " + std::to_string(dof) + " samples' worth of residuals: ";
-    }
-    text += free.empty() ? "nothing separable" : "";
-    for (std::size_t k = 0; k < result.noise_components.size(); ++k) {
-      const Calibration::NoiseComponent& c = result.noise_components[k];
-      if (free[k].kind == Kind::CameraPair) continue;  // in the result file; the text names the variances
-      const double unit = c.unit == "m" ? kMillimetresPerMetre : c.unit == "rad" ? kDegreesPerRadian : 1.0;
-      text += (k ? ", " : "") + c.name + " " + number_text(c.value * unit, 3) +
-              (c.unit == "m" ? " mm" : c.unit == "rad" ? " deg" : "") +
-              (!c.supported ? " (not supported by the residuals)" : " +- " + number_text(c.sigma * unit, 2));
-    }
-    if (!given) text += "; the robot's translation noise cannot be told from the camera's and is part of it";
-    for (const std::string& name : inseparable) text += "; " + name + " not separable from the camera's: part of it";
-    if (result.noise_candidates.size() > 1) text += "; " + candidates_text(result.noise_candidates, price);
-    result.noise_model = text + "; covariance x" + number_text(inflation, 3) + " (X), x" + number_text(pattern_inflation, 3) +
-                         " (pattern) for the noise estimate's own uncertainty";
+    choice.stated_too_small = given;
+    if (given) choice.stated_chi2_per_dof = result.residual_checks.back().statistic;
+    choice.camera = dof >= options.full_noise_min_dof      ? NoiseModelChoice::Camera::Full
+                    : dof >= options.per_axis_noise_min_dof ? NoiseModelChoice::Camera::PerAxis
+                                                            : NoiseModelChoice::Camera::TranslationAndRotation;
+    choice.robot_rotation = dof >= options.robot_noise_min_dof;
+    choice.residual_dof = dof;
+    choice.inseparable = inseparable;
+    choice.bic_price = price;
+    choice.inflation = inflation, choice.pattern_inflation = pattern_inflation;
     if (given) {
       Warning w;
       w.kind = Warning::Kind::StatedNoiseTooSmall;

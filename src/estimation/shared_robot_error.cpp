@@ -437,7 +437,6 @@ Calibration per_view_calibration(const Calibration& calibration) {
   c.covariance_kind = CovarianceKind::Information;
   c.covariance_inflation = e.per_view_covariance_inflation;
   c.pattern_covariance_inflation = e.per_view_pattern_covariance_inflation;
-  if (!e.per_view_noise_model.empty()) c.noise_model = e.per_view_noise_model;
   c.warnings.clear();  // the model's (its check's inflation among them)
   c.shared_robot_error->used = false;
   // Its own honesty check: the verdict it gave and its inflation, as record_honesty applies it.
@@ -507,7 +506,6 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   record.per_view_cross_covariance = c.cross_covariance;
   record.per_view_covariance_inflation = c.covariance_inflation;
   record.per_view_pattern_covariance_inflation = c.pattern_covariance_inflation;
-  record.per_view_noise_model = c.noise_model;
   c.T_parent_camera = fit.T_parent_camera;
   set_pose_covariance(c, fit.pose_covariance);
   c.cross_covariance = fit.cross_covariance;
@@ -516,17 +514,13 @@ void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit) {
   c.covariance_kind = CovarianceKind::SharedRobotError;
   c.covariance_inflation = fit.covariance_inflation;
   c.pattern_covariance_inflation = fit.pattern_covariance_inflation;
-  c.noise_model += "; with a robot error shared by nearby poses (" + number_text(millimetres(fit.best.translation_sigma), 3) +
-                   " mm, " + number_text(degrees(fit.best.rotation_sigma), 3) + " deg per axis over " +
-                   number_text(fit.best.length_scale, 2) + " m; the per-view noise x" +
-                   number_text(fit.best.view_noise_scale, 3) + ")" +
-                   (fit.candidates.empty() ? ", given" : ", chosen by BIC (gain " + number_text(fit.bic_gain, 1) + ")");
 }
 
 Calibration::SharedError shared_error_record(const SharedRobotErrorFit& fit) {
   Calibration::SharedError r;
   r.chosen = fit.chosen;
   r.bic_gain = fit.bic_gain;
+  r.given = fit.candidates.empty();
   r.length_scale = fit.best.length_scale;
   r.translation_sigma = fit.best.translation_sigma;
   r.rotation_sigma = fit.best.rotation_sigma;

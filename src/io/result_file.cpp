@@ -9,6 +9,7 @@
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/files.h"
+#include "handeye_covariance/io/noise_text.h"
 #include "handeye_covariance/io/warning_text.h"
 #include "sections.h"
 #include "yaml_primitives.h"
@@ -198,7 +199,8 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
       << to_string(calibration.noise_origin);
   out << YAML::Key << "model" << YAML::Value;
   emit_noise(out, calibration.noise, samples ? "effector" : "A", samples ? "pattern" : "B");
-  if (!calibration.noise_model.empty()) out << YAML::Key << "how" << YAML::Value << calibration.noise_model;
+  const std::string how = noise_model_text(calibration);
+  if (!how.empty()) out << YAML::Key << "how" << YAML::Value << how;
   if (!calibration.noise_components.empty()) {  // joint: each number the residuals estimated, with its 1 sigma
     out << YAML::Key << "estimated" << YAML::Value;
     emit_value(out, calibration.noise_components);
@@ -414,9 +416,9 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
   if (root["setup"]) file.context.setup = read_setup(root["setup"], top / "setup");
   if (root["parent"] && root["parent"].IsScalar()) file.context.parent = root["parent"].Scalar();
   if (root["child"] && root["child"].IsScalar()) file.context.child = root["child"].Scalar();
-  file.T_parent_camera.pose = read_pose(root, top);
+  c.T_parent_camera = read_pose(root, top);
   const std::string hint = "the result file needs `covariance: {rotation, translation, pose}`";
-  file.T_parent_camera.covariance = read_pose_covariance(require(root, "covariance", top, hint), top / "covariance");
+  set_pose_covariance(c, read_pose_covariance(require(root, "covariance", top, hint), top / "covariance"));
   if (root["samples_used"]) c.samples_used = as_integer(root["samples_used"], top / "samples_used", 0, 1e9, "samples_used");
   // The noise model the calibration used (samples results only).
   if (const YAML::Node noise = root["noise"];
@@ -482,8 +484,6 @@ CalibrationFile read_result_node(const YAML::Node& root, const Location& top) {
       c.honesty = h;
     }
   }
-  c.T_parent_camera = file.T_parent_camera.pose;
-  set_pose_covariance(c, file.T_parent_camera.covariance);
   return file;
 }
 }  // namespace
@@ -537,7 +537,7 @@ StoredCalibration parse_stored_calibration(const std::string& text, const std::s
     stored.setup = file.context.setup;
     stored.parent = file.context.parent;
     stored.child = file.context.child;
-    stored.T_parent_camera = file.T_parent_camera;
+    stored.T_parent_camera = file.T_parent_camera();
     stored.has_covariance = true;
     stored.format = "handeye_covariance";
     return stored;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/noise_text.h"
 
 namespace handeye {
 namespace io {
@@ -134,7 +135,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
     return line("%.4f %.4f %.4f", s.x(), s.y(), s.z());
   };
   if (c.method == Method::Corners) {
-    out += "  noise                 " + c.noise_model + "\n";
+    out += "  noise                 " + noise_model_text(c) + "\n";
     if (c.corner_fit) {
       std::string worst;
       double worst_rms = -1.0;
@@ -151,10 +152,10 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                             sigmas(c.noise.camera.translation, kMillimetresPerMetre);
     estimated.pop_back();
     out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDegreesPerRadian);
-    if (!c.noise_model.empty()) out += "                        (" + c.noise_model + ")\n";
+    if (c.noise_model) out += "                        (" + noise_model_text(c) + ")\n";
   } else if (!c.noise_components.empty()) {
     out += line("  noise                 given, too small for the residuals: the missing part ESTIMATED");
-    out += "                        (" + c.noise_model + ")\n";
+    out += "                        (" + noise_model_text(c) + ")\n";
   } else {
     out += line("  noise                 given (the noise block, or the detections' covariances)");
   }

@@ -34,7 +34,7 @@ ObjectLocalizer::ObjectLocalizer(ros::NodeHandle node, ros::NodeHandle private_n
                              " but ~eye_on_hand says " + to_string(rig_.setup),
                          calibration_file, "set ~eye_on_hand to match, or give the other calibration");
     }
-    X_ = file.T_parent_camera;
+    X_ = file.T_parent_camera();
     calibration_noise_ = file.noise;
     ROS_INFO("X from %s (%s)", calibration_file.c_str(), sigma_label(*X_).c_str());
   }

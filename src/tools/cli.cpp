@@ -442,7 +442,7 @@ int compose_command(const std::vector<std::string>& args, std::ostream& out, std
   };
   ObjectPoseInput input;
   input.rig.setup = setup;
-  input.X = calibration.T_parent_camera;
+  input.X = calibration.T_parent_camera();
   std::ostringstream notes;
   const io::PoseFile object = pose_argument(object_arg, "--object");
   input.T_camera_object = {object.value.pose, covariance_of(object, vm, "object", noise_part(false),
@@ -535,7 +535,7 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
         throw HandEyeError(ErrorCode::MalformedFile, "the calibration is for another setup", calibration_path + ": setup",
                            "give the result file of this setup (" + std::string(to_string(samples.rig.setup)) + ")");
       }
-      estimate = noise_from_residuals(samples, calibration.T_parent_camera.pose, false, robot);
+      estimate = noise_from_residuals(samples, calibration.T_parent_camera().pose, false, robot);
     } else {
       SampleSet unlabelled = samples;  // its own noise block is what is being measured
       unlabelled.noise.reset();

@@ -20,9 +20,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   named_errors_only([&] {
     const io::CalibrationFile c = io::parse_result(text, "fuzz");
     ObjectPoseInput in;
-    in.X = c.T_parent_camera;
-    in.T_camera_object = c.T_parent_camera;
-    in.T_base_effector = c.T_parent_camera;
+    in.X = c.T_parent_camera();
+    in.T_camera_object = c.T_parent_camera();
+    in.T_base_effector = c.T_parent_camera();
     named_errors_only([&] { object_in_base(in); });
   });
   named_errors_only([&] {

@@ -169,7 +169,8 @@ struct Calibration {
   /// The noise the covariance is based on: as given, or the estimate (isotropic
   /// camera noise, robot taken as exact) when none was given.
   MeasurementNoise noise;
-  std::string noise_model;  // when estimated: which model the residuals supported, e.g. "a full 6x6 camera noise ..."
+  /// Joint, noise estimated: the model the residuals supported (io::noise_model_text).
+  std::optional<NoiseModelChoice> noise_model;
   using NoiseComponent = handeye::NoiseComponent;
   std::vector<NoiseComponent> noise_components;
   using NoiseCandidate = handeye::NoiseCandidate;

@@ -51,6 +51,23 @@ struct NoiseCandidate {
     visit("bic", s.bic, Only{s.fitted});
   }
 };
+/// Joint, noise estimated: how the noise model was set up and chosen, in figures and
+/// codes (io::noise_model_text words it, with the components and candidates above).
+/// In memory: a result file carries its words (`noise.how`), not these.
+struct NoiseModelChoice {
+  enum class Camera { Full, PerAxis, TranslationAndRotation };
+  /// The stated noise was given and too small for the residuals: the missing part
+  /// estimated; its chi2/dof.
+  bool stated_too_small = false;
+  double stated_chi2_per_dof = 0.0;
+  Camera camera = Camera::Full;   // the camera noise's form (not stated_too_small)
+  bool robot_rotation = false;    // the robot's rotation noise estimated; else the robot exact
+  int residual_dof = 0;           // the samples' worth of residuals it was estimated from
+  std::vector<bool> correlation;  // per noise component: a camera correlation (files name it; the words do not)
+  std::vector<std::string> inseparable;  // robot numbers the camera's took in
+  double bic_price = 0.0;         // BIC's price of one number, log(6n - 12)
+  double inflation = 1.0, pattern_inflation = 1.0;  // for the noise estimate's own error, X's and Y's
+};
 /// Joint: the residual noise the covariance was computed with, for any view
 /// (the samples' and new ones; joint_estimator.h residual_covariance):
 ///   S = camera_scale Sigma_P + camera + view_scale G(P) + D (Sigma_E + robot) D^T,

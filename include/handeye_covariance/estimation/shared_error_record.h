@@ -63,10 +63,11 @@ struct SharedErrorRecord {
     }
   };
   std::vector<View> views;
-  /// The per-view fit's own factors for its noise estimate's error and its noise
-  /// model's text, which the model's replaced in the calibration (not in files).
+  /// The per-view fit's own factors for its noise estimate's error, which the model's
+  /// replaced in the calibration (not in files).
   double per_view_covariance_inflation = 1.0, per_view_pattern_covariance_inflation = 1.0;
-  std::string per_view_noise_model;
+  /// The model was given (SharedRobotErrorOptions::model), not chosen by BIC (not in files).
+  bool given = false;
 
   bool fitted() const { return not_fitted.empty(); }
   bool chosen_fit() const { return fitted() && chosen; }
@@ -97,7 +98,7 @@ struct SharedErrorRecord {
     visit("views", s.views, Only{s.used_fit(), true});
     visit("per_view_covariance_inflation", s.per_view_covariance_inflation, kInMemory);
     visit("per_view_pattern_covariance_inflation", s.per_view_pattern_covariance_inflation, kInMemory);
-    visit("per_view_noise_model", s.per_view_noise_model, kInMemory);
+    visit("given", s.given, kInMemory);
   }
 };
 

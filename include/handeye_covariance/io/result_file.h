@@ -65,9 +65,10 @@ std::string format_pose_file(const PoseWithCovariance& X, const ResultContext& c
 /// inflation (an Overconfident honesty record when > 1). The solver's diagnostics are not read.
 struct CalibrationFile {
   ResultContext context;
-  PoseWithCovariance T_parent_camera;
   std::optional<MeasurementNoise> noise;  // `noise.model` of a samples result: what the covariance assumed
   Calibration calibration;
+  /// X with its covariance, as the calibration holds them.
+  PoseWithCovariance T_parent_camera() const { return {calibration.T_parent_camera, calibration.pose_covariance}; }
 };
 CalibrationFile parse_result(const std::string& text, const std::string& source);
 CalibrationFile read_result(const std::string& path);
