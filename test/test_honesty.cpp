@@ -8,6 +8,7 @@
 #include <set>
 
 #include "handeye_covariance/estimation/split_check.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/simulation/simulation.h"
@@ -109,9 +110,10 @@ TEST(Honesty, AnOverconfidentVerdictInflatesTheCovariances) {
   check.ratio = 2.0;
   check.verdict = Honesty::Overconfident;
   check.inflation = 2.0;
-  check.text = "overconfident x2: sigma is about 1.4x too small";
+  const std::string words = io::honesty_text(check);
+  EXPECT_EQ(words, "overconfident x2: sigma is about 1.4x too small");
   Calibration inflated = model;
-  record_honesty(inflated, check, true);
+  record_honesty(inflated, check, true, words);
   ASSERT_TRUE(inflated.honesty);
   EXPECT_EQ(inflated.honesty->verdict, Honesty::Overconfident);
   EXPECT_DOUBLE_EQ(inflated.honesty->inflation, 2.0);
@@ -125,14 +127,14 @@ TEST(Honesty, AnOverconfidentVerdictInflatesTheCovariances) {
       << io::warning_text(inflated.warnings.front());
 
   Calibration reported = model;
-  record_honesty(reported, check, false);
+  record_honesty(reported, check, false, words);
   EXPECT_DOUBLE_EQ(reported.honesty->inflation, 1.0);
   EXPECT_TRUE(reported.pose_covariance.isApprox(model.pose_covariance));
 
   check.verdict = Honesty::Underconfident;  // errs safe: never deflated
   check.ratio = 0.5, check.inflation = 1.0;
   Calibration cautious = model;
-  record_honesty(cautious, check, true);
+  record_honesty(cautious, check, true, io::honesty_text(check));
   EXPECT_TRUE(cautious.pose_covariance.isApprox(model.pose_covariance));
 }
 

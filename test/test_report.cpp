@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cli_helpers.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/result_file.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/report.h"
@@ -140,7 +141,7 @@ TEST(Report, OnAnOverconfidentSessionTheChecksSeeIt) {
   }
   std::cout << "[ figures  ] pairs, noise stated 3x too small: mean ratio to the model's sigma leave-one-out " << loo
             << ", split-half " << split << ", NEES " << r.honesty.observed.mean_nees << " (middle 90% "
-            << r.honesty.observed.trimmed_mean_nees << ") against " << r.honesty.reference.mean << ": " << r.honesty.text
+            << r.honesty.observed.trimmed_mean_nees << ") against " << r.honesty.reference.mean << ": " << io::honesty_text(r.honesty)
             << "\n";
   EXPECT_GT(loo, 2.0);
   EXPECT_LT(loo, 4.5);

@@ -118,7 +118,7 @@ Honesty from_string(const std::string& name, Honesty) {
                      "write honest, overconfident, underconfident or not run");
 }
 
-void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
+void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate, const std::string& words) {
   Calibration::Honesty h;
   h.splits = check.observed.splits;
   h.half_size = check.observed.half_size;
@@ -130,7 +130,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
   h.reference = {check.reference.replicates, check.reference.mean, check.reference.low, check.reference.high};
   h.ratio = check.ratio;
   h.verdict = check.ran() ? check.verdict : Honesty::NotRun;
-  h.text = check.text;
+  h.text = words;
   h.model_pose_covariance = c.pose_covariance;
   if (inflate && check.verdict == Honesty::Overconfident && check.inflation > 1.0) {
     const double k = check.inflation;
@@ -139,7 +139,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate) {
     Warning w;
     w.kind = Warning::Kind::Inflated;
     w.factor = k;
-    w.verdict = check.text;
+    w.verdict = words;
     c.warnings.insert(c.warnings.begin(), w);
   }
   c.honesty = h;
@@ -165,28 +165,6 @@ SampleSet simulate_like(const SampleSet& samples, const Calibration& fitted, con
   }
   return out;
 }
-
-namespace {
-
-std::string verdict_text(const HonestyCheck& c) {
-  const double sigma = std::sqrt(c.ratio);
-  const int k = c.observed.run_length;
-  const std::string halves = k > 1 ? " (halves of runs of " + std::to_string(k) + " consecutive samples)" : "";
-  switch (c.verdict) {
-    case Honesty::Overconfident:
-      return "overconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(sigma, 2) + "x too small" +
-             halves;
-    case Honesty::Underconfident:
-      return "underconfident x" + number_text(c.ratio, 2) + ": sigma is about " + number_text(1.0 / sigma, 2) +
-             "x too large" + halves;
-    case Honesty::Honest:
-    case Honesty::NotRun:  // a check that did not run keeps its reason in `text` (honesty_check)
-      break;
-  }
-  return "honest" + halves;
-}
-
-}  // namespace
 
 void summarise_splits(SplitCheck& check) {
   check.splits = static_cast<int>(check.nees.size());
@@ -250,7 +228,6 @@ HonestyCheck judge_look(const SplitCheck& observed, const std::vector<SplitCheck
                   : value < ref.low ? Honesty::Underconfident
                                     : Honesty::Honest;
   check.inflation = check.verdict == Honesty::Overconfident ? check.ratio : 1.0;
-  check.text = verdict_text(check);
   return check;
 }
 

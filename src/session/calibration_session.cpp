@@ -10,6 +10,7 @@
 #include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/io/check_text.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
@@ -350,7 +351,8 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   if (c.shared_robot_error && c.shared_robot_error->used) {
     check_per_view(kept, c, settings_.honesty);
     try {  // the model in use judges itself
-      record_honesty(c, honesty_check(kept, c, settings_.honesty), settings_.inflate_when_overconfident);
+      const HonestyCheck check = honesty_check(kept, c, settings_.honesty);
+      record_honesty(c, check, settings_.inflate_when_overconfident, io::honesty_text(check));
     } catch (const HandEyeError& e) {  // the calibration stands; the record says why there is no verdict
       not_run(std::string("the shared robot error's check was refused: ") + e.what());
     }
@@ -358,7 +360,8 @@ Calibration CalibrationSession::calibrate_checked(const SessionSnapshot& snapsho
   }
   // The reference simulates from the kept samples' own fit (without the rejected).
   const Calibration fitted = c.rejected.empty() ? c : calibrate_decided(kept);
-  record_honesty(c, honesty_check(kept, fitted, settings_.honesty), settings_.inflate_when_overconfident);
+  const HonestyCheck check = honesty_check(kept, fitted, settings_.honesty);
+  record_honesty(c, check, settings_.inflate_when_overconfident, io::honesty_text(check));
   return c;
 }
 
@@ -371,7 +374,7 @@ void CalibrationSession::check_per_view(const SessionSnapshot& kept, Calibration
     // Its reference simulates from the kept samples' own fit (without the rejected).
     const HonestyCheck own = honesty_check(kept, per_view.rejected.empty() ? per_view : calibrate_decided(kept), options);
     e.per_view_inflation = settings_.inflate_when_overconfident && own.verdict == Honesty::Overconfident ? own.inflation : 1.0;
-    e.per_view_honesty = own.ran() ? own.text : "not run: " + own.text;
+    e.per_view_honesty = own.ran() ? io::honesty_text(own) : "not run: " + own.text;
   } catch (const HandEyeError& error) {
     e.per_view_inflation = 1.0;
     e.per_view_honesty = std::string("not run: ") + error.what();

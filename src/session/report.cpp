@@ -8,6 +8,7 @@
 #include "handeye_covariance/core/lie.h"
 #include "handeye_covariance/core/python_script.h"
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/io/yaml_io.h"
 
@@ -81,7 +82,7 @@ void split_half(const CalibrationSession& session, const SessionSnapshot& kept, 
   // error's model, the per-view model's own check beside it (a check of new views
   // predicts about the per-view X and Y).
   if (!r.calibration.honesty || !r.calibration.honesty->ran()) {
-    record_honesty(r.calibration, r.honesty, session.settings().inflate_when_overconfident);
+    record_honesty(r.calibration, r.honesty, session.settings().inflate_when_overconfident, io::honesty_text(r.honesty));
     session.check_per_view(kept, r.calibration, honesty);
   }
   if (r.honesty.observed.splits == 0) r.split_problem = "no split could be solved: " + r.honesty.observed.first_failure;
@@ -157,11 +158,11 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
                                 number_text(h.reference.high, 3) + ") for an honest covariance on these poses";
     if (h.verdict == Honesty::Overconfident) {
       const bool inflated = r.calibration.honesty && r.calibration.honesty->inflation > 1.0;
-      advice.push_back("the covariance is " + h.text + " (" + figures + "): the noise model does not explain this session" +
+      advice.push_back("the covariance is " + io::honesty_text(h) + " (" + figures + "): the noise model does not explain this session" +
                        (inflated ? "; the calibration's covariance is inflated by that factor" : "") +
                        "; look for a systematic error (camera intrinsics, robot kinematics, a loose mount)");
     } else {
-      advice.push_back("the covariance is " + h.text + " (" + figures + "): it errs on the safe side; the stated noise may "
+      advice.push_back("the covariance is " + io::honesty_text(h) + " (" + figures + "): it errs on the safe side; the stated noise may "
                        "be too large");
     }
   }

@@ -143,8 +143,8 @@ struct HonestyCheck {
   /// What the covariance should be multiplied by to be honest here: the ratio when
   /// overconfident, else 1 (an underconfident covariance is kept: it errs safe).
   double inflation = 1.0;
-  /// A plain verdict: "honest", "overconfident x1.4: sigma is about 1.2x too small", ...;
-  /// or why there is none ("no reference: ...").
+  /// Why there is no verdict ("no reference: ..."); empty when it ran (io::honesty_text
+  /// words a verdict).
   std::string text;
   /// Whether there is a verdict: the session had solved splits and the reference at
   /// least two simulated sessions (the halves of 4 samples a small session leaves
@@ -200,7 +200,8 @@ Calibration solve_with_held_noise(const SampleSet& half);
 /// What `check` says, recorded in `calibration` (Calibration::honesty); with
 /// `inflate`, an overconfident verdict multiplies X's, Y's and their cross
 /// covariance by check.inflation (the model's X covariance is kept in the record).
-void record_honesty(Calibration& calibration, const HonestyCheck& check, bool inflate);
+/// `words`: the check's in words (io::honesty_text), for the record and its warning.
+void record_honesty(Calibration& calibration, const HonestyCheck& check, bool inflate, const std::string& words);
 
 /// The session simulated once at its own robot poses (the reference's replicate):
 /// each view P_i = exp(eps_i) P_hat_i, eps_i ~ N(0, S_i) (left perturbation, ROS
