@@ -12,6 +12,7 @@
 #include "cli_helpers.h"
 #include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/result_file.h"
+#include "handeye_covariance/io/summary.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/session/report.h"
 #include "test_helpers.h"
@@ -155,6 +156,11 @@ TEST(Report, OnAnOverconfidentSessionTheChecksSeeIt) {
               1e-9 * r.calibration.pose_covariance(0, 0));
   EXPECT_TRUE(mentions(r.advice, "the covariance is overconfident x")) << r.advice.front();
   EXPECT_TRUE(mentions(r.advice, "split-half NEES")) << r.advice.front();
+  // The report's file and its summary give the verdict in the same words as the calibration's record.
+  const std::string words = r.calibration.honesty->text;
+  EXPECT_EQ(words.rfind("overconfident x", 0), 0u) << words;
+  EXPECT_EQ(YAML::Load(io::format_report(r, {}, "test"))["checks"]["honesty_text"].as<std::string>(), words);
+  EXPECT_NE(io::report_summary(r).find(": " + words + ")"), std::string::npos) << io::report_summary(r);
 }
 
 // Every detection's stated noise 3x too small: the joint estimator estimates the

@@ -71,8 +71,7 @@ std::string corners_text(const Calibration& c, const CornerFitRecord& f) {
 
 std::string noise_model_text(const Calibration& c) {
   if (c.corner_fit) return corners_text(c, *c.corner_fit);
-  if (!c.noise_model) return "";
-  std::string text = joint_text(c, *c.noise_model);
+  std::string text = c.noise_model ? joint_text(c, *c.noise_model) : "";  // a given noise has no words of its own
   if (c.shared_robot_error && c.shared_robot_error->used) text += shared_text(*c.shared_robot_error);
   return text;
 }

@@ -9,6 +9,7 @@
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/files.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/noise_text.h"
 #include "handeye_covariance/io/warning_text.h"
 #include "sections.h"
@@ -146,7 +147,8 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
         << to_string(h.runs_verdict) << YAML::EndMap;
   }
   out << YAML::Key << "honesty" << YAML::Value << to_string(h.ran() ? h.verdict : Honesty::NotRun);
-  out << YAML::Key << "honesty_text" << YAML::Value << (h.text.empty() ? std::string("not run") : h.text);
+  const std::string words = honesty_text(h);
+  out << YAML::Key << "honesty_text" << YAML::Value << (words.empty() ? std::string("not run") : words);
   if (!report.split_problem.empty()) out << YAML::Key << "split_half_problem" << YAML::Value << report.split_problem;
   out << YAML::EndMap;
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/noise_text.h"
 
 namespace handeye {
@@ -152,7 +153,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                             sigmas(c.noise.camera.translation, kMillimetresPerMetre);
     estimated.pop_back();
     out += estimated + ", [deg] " + sigmas(c.noise.camera.rotation, kDegreesPerRadian);
-    if (c.noise_model) out += "                        (" + noise_model_text(c) + ")\n";
+    if (const std::string how = noise_model_text(c); !how.empty()) out += "                        (" + how + ")\n";
   } else if (!c.noise_components.empty()) {
     out += line("  noise                 given, too small for the residuals: the missing part ESTIMATED");
     out += "                        (" + noise_model_text(c) + ")\n";
@@ -284,7 +285,7 @@ std::string report_summary(const CalibrationReport& report) {
     const HonestyCheck& h = report.honesty;
     out += row("split-half", report.split_half_sigma,
                "   (" + std::to_string(h.observed.splits) + " splits, NEES " + number_text(h.observed.trimmed_mean_nees, 3) +
-                   (h.ran() ? "; honest here " + number_text(h.reference.mean, 3) + ": " + h.text : "") + ")");
+                   (h.ran() ? "; honest here " + number_text(h.reference.mean, 3) + ": " + honesty_text(h) : "") + ")");
   } else {
     out += "    split-half      " + report.split_problem + "\n";
   }

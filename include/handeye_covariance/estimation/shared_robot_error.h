@@ -120,7 +120,7 @@ double shared_error_kernel(const Eigen::Vector3d& p, const Eigen::Vector3d& q, d
 Matrix6d shared_error_covariance(const SharedRobotError& model);
 
 /// X, Y and their covariances become the chosen model's (its GLS step); the per-view
-/// model's X, Y, covariances and noise text stay in `c.shared_robot_error` (which must
+/// model's X, Y and covariances stay in `c.shared_robot_error` (which must
 /// hold shared_error_record(fit)), marked used. Throws InvalidNoise when the fit did not
 /// choose a model or `c` has no record or no pattern pose.
 void use_shared_robot_error(Calibration& c, const SharedRobotErrorFit& fit);

@@ -10,7 +10,8 @@
 namespace handeye {
 namespace io {
 
-/// Empty when nothing was estimated (the noise as given, pairs, or a calibration read from a file).
+/// Empty when nothing was estimated and no shared robot error is used (the noise as given,
+/// pairs, or a calibration read from a file).
 std::string noise_model_text(const Calibration& calibration);
 
 }  // namespace io
