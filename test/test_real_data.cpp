@@ -20,6 +20,7 @@
 #include <sys/wait.h>
 #include <yaml-cpp/yaml.h>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -356,8 +357,11 @@ std::vector<RealCase> real_cases() {
 
 /// A session on both paths a user has: the images with the detector's covariances
 /// (handeye images), and the same images' poses without a covariance (a detector that
-/// publishes a plain PoseStamped; the target's size known).
-std::vector<std::pair<std::string, SampleSet>> both_paths(const RealCase& c) {
+/// publishes a plain PoseStamped; the target's size known). Detected once per program:
+/// three tests read them.
+const std::vector<std::pair<std::string, SampleSet>>& both_paths(const RealCase& c) {
+  static std::map<std::string, std::vector<std::pair<std::string, SampleSet>>> detected;
+  if (const auto found = detected.find(c.name); found != detected.end()) return found->second;
   Rig rig{c.setup, {"base", "effector", "camera", "pattern"}};
   set_target(rig, c.target);
   const images::ImageSession found = images::detect_images(images::pair_images_with_poses(c.dir, c.dir),
@@ -366,7 +370,18 @@ std::vector<std::pair<std::string, SampleSet>> both_paths(const RealCase& c) {
   SampleSet poses = found.samples;  // the second path: no covariance anywhere
   poses.noise.reset();
   for (PoseSample& s : poses.samples) s.noise.reset(), s.corners.reset();
-  return {{"images", found.samples}, {"poses without a covariance", poses}};
+  return detected[c.name] = {{"images", found.samples}, {"poses without a covariance", poses}};
+}
+
+/// What a user gets on one path (calibrate_checked with the session's settings), once per
+/// program: three tests start from it (deterministic, so the same whichever asks first).
+const Calibration& checked_calibration(const RealCase& c, const std::string& path, const SampleSet& samples) {
+  static std::map<std::string, Calibration> done;
+  const std::string key = std::string(c.name) + " / " + path;
+  if (const auto found = done.find(key); found != done.end()) return found->second;
+  CalibrationSession session(session_settings(samples));
+  session.replace(samples.samples, c.name);
+  return done[key] = session.calibrate_checked(session.snapshot());
 }
 
 // Every real session on both paths, as a user runs them: the images with the
@@ -383,9 +398,7 @@ TEST(RealData, EverySessionOnBothPathsIsJudgedAgainstItsOwnReference) {
     ASSERT_TRUE(fs::exists(c.dir)) << "the real data is not at " << c.dir;
     for (const auto& [path, samples_on_path] : both_paths(c)) {
       const SampleSet* samples = &samples_on_path;
-      CalibrationSession session(session_settings(*samples));
-      session.replace(samples->samples, c.name);
-      const Calibration cal = session.calibrate_checked(session.snapshot());
+      const Calibration& cal = checked_calibration(c, path, *samples);
       ASSERT_TRUE(cal.honesty) << c.name;
       const Calibration::Honesty& h = *cal.honesty;
       ASSERT_TRUE(h.ran()) << c.name << ": " << h.text;
@@ -436,7 +449,7 @@ TEST(RealData, TheSharedRobotErrorOnEverySessionAndPath) {
       const bool kuka = std::string(c.name).find("kuka") != std::string::npos;
       // The session's own path (calibrate_checked) fits the same model and, where it is
       // chosen, uses it (X, Y and their covariances); with `advice` it keeps the per-view X.
-      const Calibration checked = session.calibrate_checked(snapshot);
+      const Calibration& checked = checked_calibration(c, path, samples);
       SessionSettings advising = session.settings();
       advising.shared_robot_error = SharedErrorUse::Advice;
       advising.honesty.splits = 0;
@@ -844,9 +857,7 @@ TEST(RealData, ChecksOfACalibrationOnEverySession) {
       std::optional<SharedRobotError> shared;  // the whole session's, where it uses one
       Calibration whole_calibration;
       {
-        CalibrationSession whole(session_settings(*samples));
-        whole.replace(samples->samples, c.name);
-        whole_calibration = whole.calibrate_checked(whole.snapshot());
+        whole_calibration = checked_calibration(c, path, *samples);
         if (whole_calibration.honesty) inflation = whole_calibration.honesty->inflation;
         if (whole_calibration.shared_robot_error && whole_calibration.shared_robot_error->used) {
           shared = model_of(*whole_calibration.shared_robot_error);

@@ -139,7 +139,7 @@ void record_honesty(Calibration& c, const HonestyCheck& check, bool inflate, con
     Warning w;
     w.kind = Warning::Kind::Inflated;
     w.factor = k;
-    w.verdict = words;
+    w.run_length = check.observed.run_length;
     c.warnings.insert(c.warnings.begin(), w);
   }
   c.honesty = h;

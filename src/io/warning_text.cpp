@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "handeye_covariance/core/units.h"
+#include "handeye_covariance/io/honesty_text.h"
 
 namespace handeye {
 namespace io {
@@ -23,7 +24,8 @@ std::string warning_text(const Warning& w) {
     case Warning::Kind::OutliersRejected:
       return std::to_string(w.count) + " sample(s) rejected as outliers (see `rejected`)";
     case Warning::Kind::Inflated:
-      return "the split-half check says the noise model is " + w.verdict + "; the covariance is the model's x" +
+      return "the split-half check says the noise model is " +
+             honesty_verdict_text(Honesty::Overconfident, w.factor, w.run_length) + "; the covariance is the model's x" +
              number_text(w.factor, 3) + " (the model's alone: --no-inflation)";
     case Warning::Kind::SymmetricTarget:
       return "a symmetric target (its inner-corner counts are both odd or both even): " + std::to_string(w.count) + " of " +

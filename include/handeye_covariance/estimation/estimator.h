@@ -124,7 +124,7 @@ struct Warning {
     AboveStatedNoise,       // joint: the residuals above the stated noise, no noise estimated (chi2_per_dof)
     StatedNoiseTooSmall,    // joint: the same, the missing noise estimated (chi2_per_dof)
     OutliersRejected,       // samples rejected as outliers (count)
-    Inflated,               // the honesty check inflated the covariances (factor; the verdict is Calibration::honesty's)
+    Inflated,               // the honesty check inflated the covariances (factor: its ratio; run_length: the look that decided)
     SymmetricTarget,        // views turned by 180 degrees (count of views; ambiguous ones left out)
   };
   Kind kind = Kind::AboveStatedNoise;
@@ -132,7 +132,7 @@ struct Warning {
   bool rotation_stage = false;
   int count = 0, views = 0, ambiguous = 0;
   double factor = 1.0;
-  std::string verdict;  // Inflated: the honesty check's text when it inflated
+  int run_length = 1;
 };
 
 /// A calibration: X, Y and their joint covariance, how they were estimated, and one

@@ -200,7 +200,7 @@ Calibration solve_with_held_noise(const SampleSet& half);
 /// What `check` says, recorded in `calibration` (Calibration::honesty); with
 /// `inflate`, an overconfident verdict multiplies X's, Y's and their cross
 /// covariance by check.inflation (the model's X covariance is kept in the record).
-/// `words`: the check's in words (io::honesty_text), for the record and its warning.
+/// `words`: the check's in words (io::honesty_text), for the record.
 void record_honesty(Calibration& calibration, const HonestyCheck& check, bool inflate, const std::string& words);
 
 /// The session simulated once at its own robot poses (the reference's replicate):
