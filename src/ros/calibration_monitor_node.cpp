@@ -65,11 +65,11 @@ void CalibrationMonitorNode::load_calibration() {
     const auto adopt = [](std::string& frame, bool renamed, const std::string& saved) {
       if (!renamed && !saved.empty()) frame = saved;
     };
-    adopt(rig.eye_in_hand() ? rig.frames.effector : rig.frames.base, renamed_parent_, file.context.parent);
+    adopt(rig.camera_parent_frame(), renamed_parent_, file.context.parent);
     adopt(rig.frames.camera, renamed_camera_, file.context.child);
-    adopt(rig.eye_in_hand() ? rig.frames.base : rig.frames.effector, renamed_pattern_parent_, file.context.pattern_parent);
+    adopt(rig.pattern_parent_frame(), renamed_pattern_parent_, file.context.pattern_parent);
     Rig as_saved = rig;  // a renamed frame is the file's under its new name
-    if (renamed_parent_) (as_saved.eye_in_hand() ? as_saved.frames.effector : as_saved.frames.base) = file.context.parent;
+    if (renamed_parent_) as_saved.camera_parent_frame() = file.context.parent;
     if (renamed_camera_) as_saved.frames.camera = file.context.child;
     const Calibration calibration = io::calibration_to_check(file, as_saved, config_.calibration_file);
     config_.rig = rig;

@@ -48,7 +48,7 @@ CalibrationPublisher::CalibrationPublisher(ros::NodeHandle node, ros::NodeHandle
   const std::string parent_key = rig_.eye_in_hand() ? "robot_effector_frame" : "robot_base_frame";
   const std::string parent = param<std::string>(private_node, parent_key, "");
   const std::string child = param<std::string>(private_node, "tracking_base_frame", "");
-  (rig_.eye_in_hand() ? rig_.frames.effector : rig_.frames.base) = parent.empty() ? stored.parent : parent;
+  rig_.camera_parent_frame() = parent.empty() ? stored.parent : parent;
   rig_.frames.camera = child.empty() ? stored.child : child;
   if (rig_.camera_parent_frame().empty() || rig_.frames.camera.empty()) {
     throw HandEyeError(ErrorCode::MissingKey, "the file does not name X's frames", path,

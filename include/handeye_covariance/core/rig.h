@@ -61,8 +61,10 @@ struct Rig {
   Eigen::Isometry3d face_half_turn() const;
   /// X's parent frame: the effector (eye_in_hand) or the base (eye_to_hand).
   const std::string& camera_parent_frame() const { return eye_in_hand() ? frames.effector : frames.base; }
+  std::string& camera_parent_frame() { return eye_in_hand() ? frames.effector : frames.base; }
   /// Y's parent frame: the base (eye_in_hand) or the effector (eye_to_hand).
   const std::string& pattern_parent_frame() const { return eye_in_hand() ? frames.base : frames.effector; }
+  std::string& pattern_parent_frame() { return eye_in_hand() ? frames.base : frames.effector; }
 
   /// Which setup inverts E in the loop: V = E^-1 eye_in_hand, V = E eye_to_hand. The
   /// one statement of it; robot_link, its Jacobian and the solver's terms ask it.
