@@ -6,7 +6,6 @@
 
 #include "handeye_covariance/core/errors.h"
 #include "handeye_covariance/core/statistics.h"
-#include "handeye_covariance/core/units.h"
 #include "handeye_covariance/estimation/noise_estimation.h"
 
 namespace handeye {
@@ -56,10 +55,10 @@ std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const Out
   for (int s = 0; s < n; ++s) {
     const double share = checks[s] ? static_cast<double>(disagreements[s]) / checks[s] : 0.0;
     if (share > o.disagreeing_share) {
-      rejected.push_back({s, "its motions to " + std::to_string(disagreements[s]) + " of " + std::to_string(checks[s]) +
-                                 " other samples break A X = X B (robot and camera rotation angles or screw pitches "
-                                 "differ beyond " + number_text(degrees(angle_gate), 2) + " deg / " +
-                                 number_text(millimetres(pitch_gate), 2) + " mm): a wrong detection or a mismatched stamp"});
+      Calibration::Rejected r;
+      r.index = s, r.why = Calibration::Rejected::Why::MotionsBreakAXXB;
+      r.disagreeing = disagreements[s], r.compared = checks[s], r.angle_gate = angle_gate, r.pitch_gate = pitch_gate;
+      rejected.push_back(r);
     }
   }
   return rejected;

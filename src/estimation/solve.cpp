@@ -67,9 +67,10 @@ Calibration solve_robust(const SampleSet& samples, Method method, const OutlierO
     if (static_cast<int>(dropped.size()) + 1 > max_rejected) throw too_many(static_cast<int>(dropped.size()) + 1);
     const int index = kept_index[worst];
     dropped.push_back(index);
-    rejected.push_back({index, "its pattern pose is " + number_text(std::sqrt(worst_distance), 3) +
-                                   " sigma (Mahalanobis, 6 dof) from what X and its robot pose predict; gate " +
-                                   number_text(std::sqrt(gate), 3) + " sigma"});
+    Calibration::Rejected r;
+    r.index = index, r.why = Calibration::Rejected::Why::FarFromPrediction;
+    r.sigmas = std::sqrt(worst_distance), r.gate_sigmas = std::sqrt(gate);
+    rejected.push_back(r);
   }
 }
 

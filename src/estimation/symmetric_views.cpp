@@ -417,15 +417,8 @@ TurnDecision refine_half_turns(const SampleSet& given, const Isometry3d& F, cons
   for (int i = 0; i < n; ++i) {
     d.candidates[i] = {std::sqrt(given_squared[i]), std::sqrt(turned_squared[i])};
     const bool given_fits = given_squared[i] <= gate, turned_fits = turned_squared[i] <= gate;
-    const std::string distances = "the pose as detected is " + number_text(d.candidates[i].as_given_sigmas, 3) +
-                                  " sigma and turned by 180 degrees " + number_text(d.candidates[i].turned_sigmas, 3) +
-                                  " sigma (Mahalanobis, 6 dof) from what X and its robot pose predict; gate " +
-                                  number_text(d.gate_sigmas, 3) + " sigma";
-    if (given_fits && turned_fits) {
-      d.undecided.push_back({i, "both candidates fit: " + distances + " (the robot's motion cannot tell them apart)"});
-    } else if (!given_fits && !turned_fits) {
-      d.undecided.push_back({i, "neither candidate fits: " + distances +
-                                    " (a wrong detection, or a robot pose from another time)"});
+    if (given_fits == turned_fits) {
+      d.undecided.push_back({i, given_fits});
     } else {
       kept.push_back(i);
       d.turned[i] = turned_fits;

@@ -111,7 +111,7 @@ std::string format_report(const CalibrationReport& report, const ResultContext& 
         << YAML::Value << millimetres(f.translation) << YAML::Key << "residual_deg" << YAML::Value
         << degrees(f.rotation) << YAML::Key << "sigma" << YAML::Value << f.sigmas << YAML::Key << "rejected"
         << YAML::Value << (rejected != nullptr);
-    if (rejected) out << YAML::Key << "reason" << YAML::Value << rejected->reason;
+    if (rejected) out << YAML::Key << "reason" << YAML::Value << rejected_text(*rejected);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -253,8 +253,13 @@ std::string format_result(const Calibration& calibration, const ResultContext& c
   }
   out << YAML::EndMap;
   out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << warning_texts(calibration.warnings);
-  out << YAML::Key << "rejected" << YAML::Value;  // outliers left out, indices into the input
-  emit_value(out, calibration.rejected);
+  out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;  // outliers left out, indices into the input
+  for (const Calibration::Rejected& r : calibration.rejected) {
+    out << YAML::Flow << YAML::BeginMap;
+    emit_fields(out, r);
+    out << YAML::Key << "reason" << YAML::Value << rejected_text(r) << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -139,20 +139,22 @@ void emit_value(YAML::Emitter& out, const T& value) {
 template <class S>
 void emit_fields(YAML::Emitter& out, const S& section) {
   S::fields(section, [&](const char* key, const auto& member, auto... option) {
-    if (!written(member, option...)) return;
-    out << YAML::Key << key << YAML::Value;
-    const auto& value = [&]() -> const auto& {
-      if constexpr (is_optional<std::decay_t<decltype(member)>>::value) {
-        return *member;
+    if constexpr (!(std::is_same_v<decltype(option), InMemory> || ...)) {  // files do not carry an InMemory field
+      if (!written(member, option...)) return;
+      out << YAML::Key << key << YAML::Value;
+      const auto& value = [&]() -> const auto& {
+        if constexpr (is_optional<std::decay_t<decltype(member)>>::value) {
+          return *member;
+        } else {
+          return member;
+        }
+      }();
+      using T = std::decay_t<decltype(value)>;
+      if constexpr (is_section_v<T> && (std::is_same_v<decltype(option), Block> || ...)) {
+        emit_section(out, value, false);
       } else {
-        return member;
+        emit_value(out, value);
       }
-    }();
-    using T = std::decay_t<decltype(value)>;
-    if constexpr (is_section_v<T> && (std::is_same_v<decltype(option), Block> || ...)) {
-      emit_section(out, value, false);
-    } else {
-      emit_value(out, value);
     }
   });
 }
@@ -227,17 +229,18 @@ void read_section(const YAML::Node& node, const Location& at, S& section) {
     throw HandEyeError(ErrorCode::MalformedFile, "expected a map", at.str(), "write it as " + keys_of<S>());
   }
   S::fields(section, [&](const char* key, auto& member, auto... option) {
-    if constexpr ((std::is_same_v<decltype(option), InMemory> || ...)) return;
-    using T = std::decay_t<decltype(member)>;
-    const YAML::Node child = node[key];
-    if (!child) {
-      if (!is_optional<T>::value && is_required(option...)) require(node, key, at, "it is " + keys_of<S>());
-      return;
-    }
-    if constexpr (is_optional<T>::value) {
-      read_value(child, at / key, member.emplace());
-    } else {
-      read_value(child, at / key, member);
+    if constexpr (!(std::is_same_v<decltype(option), InMemory> || ...)) {  // files do not carry an InMemory field
+      using T = std::decay_t<decltype(member)>;
+      const YAML::Node child = node[key];
+      if (!child) {
+        if (!is_optional<T>::value && is_required(option...)) require(node, key, at, "it is " + keys_of<S>());
+        return;
+      }
+      if constexpr (is_optional<T>::value) {
+        read_value(child, at / key, member.emplace());
+      } else {
+        read_value(child, at / key, member);
+      }
     }
   });
 }

@@ -8,6 +8,7 @@
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/noise_text.h"
+#include "handeye_covariance/io/warning_text.h"
 
 namespace handeye {
 namespace io {
@@ -190,7 +191,7 @@ std::string human_summary(const Calibration& c, const ResultContext& context) {
                 c.translation_stage.chi2 / std::max(1, c.translation_stage.dof));
   }
   for (const Warning& warning : c.warnings) out += "  WARNING: " + warning_text(warning) + "\n";
-  for (const auto& r : c.rejected) out += "  rejected samples[" + std::to_string(r.index) + "]: " + r.reason + "\n";
+  for (const auto& r : c.rejected) out += "  rejected samples[" + std::to_string(r.index) + "]: " + rejected_text(r) + "\n";
   return out;
 }
 

@@ -36,6 +36,29 @@ std::string warning_text(const Warning& w) {
   return "";
 }
 
+std::string rejected_text(const Calibration::Rejected& r) {
+  using Why = Calibration::Rejected::Why;
+  const std::string from_prediction = " sigma (Mahalanobis, 6 dof) from what X and its robot pose predict; gate " +
+                                      number_text(r.gate_sigmas, 3) + " sigma";
+  const std::string ambiguous = "its pose is ambiguous: the target looks the same turned by 180 degrees, and ";
+  const std::string distances = "the pose as detected is " + number_text(r.sigmas, 3) + " sigma and turned by 180 degrees " +
+                                number_text(r.turned_sigmas, 3) + from_prediction;
+  switch (r.why) {
+    case Why::MotionsBreakAXXB:
+      return "its motions to " + std::to_string(r.disagreeing) + " of " + std::to_string(r.compared) +
+             " other samples break A X = X B (robot and camera rotation angles or screw pitches differ beyond " +
+             number_text(degrees(r.angle_gate), 2) + " deg / " + number_text(millimetres(r.pitch_gate), 2) +
+             " mm): a wrong detection or a mismatched stamp";
+    case Why::FarFromPrediction:
+      return "its pattern pose is " + number_text(r.sigmas, 3) + from_prediction;
+    case Why::AmbiguousBothFit:
+      return ambiguous + "both candidates fit: " + distances + " (the robot's motion cannot tell them apart)";
+    case Why::AmbiguousNeitherFits:
+      return ambiguous + "neither candidate fits: " + distances + " (a wrong detection, or a robot pose from another time)";
+  }
+  return "";
+}
+
 std::vector<std::string> warning_texts(const std::vector<Warning>& warnings) {
   std::vector<std::string> texts;
   for (const Warning& w : warnings) texts.push_back(warning_text(w));

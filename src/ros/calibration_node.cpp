@@ -14,6 +14,7 @@
 #include "handeye_covariance/corners/corner_calibration.h"
 #include "handeye_covariance/estimation/split_check.h"
 #include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/io/warning_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 #include "handeye_covariance/ros/covariance_markers.h"
 #include "handeye_covariance/ros/msg_conversion.h"
@@ -309,7 +310,7 @@ void CalibrationNode::publish_status() {  // lock held
     if (!progress.why_not.empty()) status.last_event += "; " + progress.why_not;
     for (const auto& r : c.rejected) {
       status.rejected_samples.push_back(r.index);
-      status.rejected_reasons.push_back(r.reason);
+      status.rejected_reasons.push_back(io::rejected_text(r));
     }
   }
   if (current) {
@@ -436,7 +437,7 @@ bool CalibrationNode::calibrate(Calibrate::Request&, Calibrate::Response& res) {
   res.warnings = io::warning_texts(c.warnings);
   for (const auto& r : c.rejected) {
     res.rejected_samples.push_back(r.index);
-    res.rejected_reasons.push_back(r.reason);
+    res.rejected_reasons.push_back(io::rejected_text(r));
   }
   res.message = io::one_line_summary(c, config_.rig.camera_parent_frame(), config_.rig.frames.camera);
   std::lock_guard<std::mutex> outputs(output_mutex_);  // one /calibrate's outputs at a time

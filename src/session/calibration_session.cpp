@@ -245,7 +245,12 @@ Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const
   Calibration c = calibrate_decided({snapshot.generation, d.samples});
   for (Calibration::Rejected& r : c.rejected) r.index = d.kept.at(static_cast<std::size_t>(r.index));  // the snapshot's indices
   for (const TurnDecision::Undecided& u : d.undecided) {
-    c.rejected.push_back({u.index, "its pose is ambiguous: the target looks the same turned by 180 degrees, and " + u.reason});
+    Calibration::Rejected r;
+    r.index = u.index;
+    r.why = u.both_fit ? Calibration::Rejected::Why::AmbiguousBothFit : Calibration::Rejected::Why::AmbiguousNeitherFits;
+    const TurnDecision::Candidates& fit = d.candidates.at(static_cast<std::size_t>(u.index));
+    r.sigmas = fit.as_given_sigmas, r.turned_sigmas = fit.turned_sigmas, r.gate_sigmas = d.gate_sigmas;
+    c.rejected.push_back(r);
   }
   std::sort(c.rejected.begin(), c.rejected.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
   for (std::size_t i = 0; i < d.turned.size(); ++i) {

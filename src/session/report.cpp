@@ -10,6 +10,7 @@
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/honesty_text.h"
 #include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/io/warning_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 
@@ -127,7 +128,7 @@ void advise(const ReportOptions& options, CalibrationReport& r) {
     std::string text = "sample " + std::to_string(i) + " is " + readable(f.sigmas) + " sigma off (" +
                        readable(millimetres(f.translation)) + " mm, " + readable(degrees(f.rotation)) + " deg): remove it";
     text += rejected
-                ? " (X already leaves it out: " + rejected->reason + ")"
+                ? " (X already leaves it out: " + io::rejected_text(*rejected) + ")"
                 : " (X still uses it; the panel's Remove selected or /remove_sample " + std::to_string(i) + ")";
     advice.push_back(text);
   }

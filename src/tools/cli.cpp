@@ -24,6 +24,7 @@
 #include "handeye_covariance/core/validation.h"
 #include "handeye_covariance/simulation/simulation.h"
 #include "handeye_covariance/io/summary.h"
+#include "handeye_covariance/io/warning_text.h"
 #include "handeye_covariance/session/calibration_session.h"
 #include "handeye_covariance/session/report.h"
 
@@ -542,7 +543,7 @@ int noise_command(const std::vector<std::string>& args, std::ostream& out, std::
       for (PoseSample& s : unlabelled.samples) s.noise.reset();
       // Outliers would inflate the estimate: measure on the samples that agree.
       const Calibration fitted = solve_robust(unlabelled);
-      for (const auto& r : fitted.rejected) out << "  left out samples[" << r.index << "]: " << r.reason << "\n";
+      for (const auto& r : fitted.rejected) out << "  left out samples[" << r.index << "]: " << io::rejected_text(r) << "\n";
       estimate = noise_from_residuals(without_rejected(samples, fitted), fitted.T_parent_camera, true, robot);
     }
   }

@@ -193,14 +193,33 @@ struct Calibration {
   /// (CalibrationSession::calibrate; indices into its input, ascending).
   std::vector<int> turned;
 
-  /// Samples left out by solve_robust (outliers.h), indices into its input.
+  /// A sample left out (outliers.h, symmetric_views.h), by its index into the input: why,
+  /// and the figures that decided it (io::rejected_text words them).
   struct Rejected {
+    enum class Why {
+      MotionsBreakAXXB,      // pairs: its motions to `disagreeing` of `compared` others beyond the gates
+      FarFromPrediction,     // joint: its pattern pose `sigmas` from the prediction, beyond `gate_sigmas`
+      AmbiguousBothFit,      // a symmetric target: both candidates within the gate
+      AmbiguousNeitherFits,  // a symmetric target: neither
+    };
     int index = 0;
-    std::string reason;
+    Why why = Why::FarFromPrediction;
+    int disagreeing = 0, compared = 0;          // MotionsBreakAXXB
+    double angle_gate = 0.0, pitch_gate = 0.0;  // MotionsBreakAXXB: rad, m
+    /// Mahalanobis lengths (6 dof): the pose as detected, turned by 180 degrees (ambiguous), the gate.
+    double sigmas = 0.0, turned_sigmas = 0.0, gate_sigmas = 0.0;
+    /// Files carry the index and the words (result_file.cpp adds `reason`), not the figures.
     template <class Self, class Visit>
     static void fields(Self& s, Visit&& visit) {
       visit("index", s.index);
-      visit("reason", s.reason);
+      visit("why", s.why, kInMemory);
+      visit("disagreeing", s.disagreeing, kInMemory);
+      visit("compared", s.compared, kInMemory);
+      visit("angle_gate", s.angle_gate, kInMemory);
+      visit("pitch_gate", s.pitch_gate, kInMemory);
+      visit("sigmas", s.sigmas, kInMemory);
+      visit("turned_sigmas", s.turned_sigmas, kInMemory);
+      visit("gate_sigmas", s.gate_sigmas, kInMemory);
     }
   };
   std::vector<Rejected> rejected;

@@ -61,10 +61,11 @@ TurnSynchronisation synchronise_half_turns(const SampleSet& samples, const Eigen
 struct TurnDecision {
   /// Per input sample: its pose was replaced by P * F (false for the undecided).
   std::vector<bool> turned;
-  /// A view left out, by its index in the input: both candidates fit, or neither.
+  /// A view left out, by its index in the input: both candidates fit, or neither
+  /// (their distances in `candidates`, the gate in `gate_sigmas`).
   struct Undecided {
     int index = 0;
-    std::string reason;
+    bool both_fit = false;
   };
   std::vector<Undecided> undecided;
   /// The kept samples, in input order, each with its decided candidate (a turned
