@@ -47,13 +47,7 @@ int agreeing(const std::vector<bool>& decided, const std::vector<bool>& planted)
 
 /// Why a view was left out, in the words a user reads (io::rejected_text).
 std::string reason(const TurnDecision& d, const TurnDecision::Undecided& u) {
-  Calibration::Rejected r;
-  r.index = u.index;
-  r.why = u.both_fit ? Calibration::Rejected::Why::AmbiguousBothFit : Calibration::Rejected::Why::AmbiguousNeitherFits;
-  r.sigmas = d.candidates.at(static_cast<std::size_t>(u.index)).as_given_sigmas;
-  r.turned_sigmas = d.candidates.at(static_cast<std::size_t>(u.index)).turned_sigmas;
-  r.gate_sigmas = d.gate_sigmas;
-  const std::string text = io::rejected_text(r);
+  const std::string text = io::rejected_text(undecided_rejection(d, u));
   const std::string prefix = "its pose is ambiguous: the target looks the same turned by 180 degrees, and ";
   return text.rfind(prefix, 0) == 0 ? text.substr(prefix.size()) : text;
 }

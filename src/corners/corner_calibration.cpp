@@ -859,17 +859,6 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 
 namespace {
 
-// What the fit took of the target's geometry, for the noise model's line.
-std::string target_points_text(const CornerCalibration& f) {
-  if (f.target_point_sigma == 0.0) {
-    return f.target_point_sigma_estimated ? "exact (the corners show no error of theirs)" : "exact (as given)";
-  }
-  return "1 sigma " + number_text(millimetres(f.target_point_sigma), 3) + " mm" +
-         (f.target_point_sigma_estimated ? " estimated from the corners" : " given") + ": X's 1 sigma x" +
-         number_text(f.target_inflation[0], 3) + " in translation, x" + number_text(f.target_inflation[1], 3) +
-         " in rotation";
-}
-
 bool same_camera(const CameraModel& a, const CameraModel& b) {
   return a.K == b.K && a.distortion == b.distortion && a.width == b.width && a.height == b.height;
 }
@@ -905,7 +894,6 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   if (camera == nullptr) {
     throw HandEyeError(ErrorCode::NoData, "no sample is left to refine", "method corners", "take more samples");
   }
-  std::string robot = "exact";
   if (!options.robot_covariance && !options.estimate_robot_noise) {
     const bool stated = samples.noise && !samples.noise->robot.as_pose_covariance().isZero(0.0);
     bool trusted = stated;
@@ -917,12 +905,13 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
     }
     options.estimate_robot_noise = !trusted && views.size() >= 6;
   }
+  Calibration::CornerFit fit;
   if (options.estimate_robot_noise) {
-    robot = "free, their noise estimated from the corners";
+    fit.robot_poses = Calibration::CornerFit::RobotPoses::Estimated;
   } else if (options.robot_covariance) {
     const Vector6d s = options.robot_covariance->diagonal().cwiseSqrt();
-    robot = "free, prior 1 sigma " + number_text(millimetres(s.head<3>().maxCoeff()), 3) + " mm / " +
-            number_text(degrees(s.tail<3>().maxCoeff()), 3) + " deg (largest axis)";
+    fit.robot_poses = Calibration::CornerFit::RobotPoses::Prior;
+    fit.robot_prior_sigma = {s.head<3>().maxCoeff(), s.tail<3>().maxCoeff()};
   }
   CornerMethodResult out;
   out.fit = calibrate_corners(samples.rig, *camera, views, pose_level.T_parent_camera, pose_level.pattern->pose, options);
@@ -943,25 +932,22 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   c.downweighted = 0;
   c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
   c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
-  if (f.robot_noise_estimated) {
-    robot += ": 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) + " mm / " +
-             number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
-  }
+  fit.robot_sigma_estimated = f.robot_noise_estimated;
+  if (f.robot_noise_estimated) fit.robot_sigma = f.robot_sigma;
   c.noise_model.reset();  // the corner fit says it (io::noise_model_text)
   c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
   c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;
   c.rotation_stage.dof = c.translation_stage.dof = f.degrees_of_freedom;
   c.rotation_stage.chi2 = c.translation_stage.chi2 = f.chi2;
-  Calibration::CornerFit fit;
   fit.pixel_sigma = f.pixel_sigma;
   fit.pixel_sigma_estimated = f.pixel_sigma_estimated;
   fit.rms_px = f.rms_px;
-  fit.robot = robot;
   // As the pose-level components count only off their bound: a robot noise the corners
   // held at its floor (both parts) is one they did not support.
   fit.robot_noise_estimated = f.robot_noise_estimated && !(f.robot_at_bound[0] && f.robot_at_bound[1]);
-  fit.target_points = target_points_text(f);
   fit.target_point_sigma = f.target_point_sigma;
+  fit.target_point_sigma_estimated = f.target_point_sigma_estimated;
+  fit.target_inflation = f.target_inflation;
   for (const ImageReprojection& image : f.images) {
     fit.corners += image.points;
     fit.images.push_back({image.name, image.points, image.rms_px, image.sigma_px});
@@ -969,11 +955,8 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   fit.per_image_sigma = f.per_image_sigma;
   if (f.homogeneity) {
     const HomogeneityTest& h = *f.homogeneity;
-    fit.pixel_noise = std::string(h.passed ? "one pixel sigma for every image" : "each image its own pixel sigma") +
-                      " (Bartlett's test of one sigma: chi2 " + number_text(h.chi2, 3) + " on " + std::to_string(h.dof) +
-                      " dof, bound " + number_text(h.bound, 3) + ")";
-  } else if (f.per_image_sigma) {
-    fit.pixel_noise = "each image its own pixel sigma (robust on)";
+    fit.homogeneity_tested = true, fit.homogeneity_passed = h.passed;
+    fit.homogeneity_chi2 = h.chi2, fit.homogeneity_bound = h.bound, fit.homogeneity_dof = h.dof;
   }
   if (f.intrinsics) {
     Calibration::CornerFit::Intrinsics& refined = fit.intrinsics.emplace();

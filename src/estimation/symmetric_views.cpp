@@ -445,4 +445,13 @@ TurnDecision decide_half_turns(const SampleSet& samples, const Isometry3d& F, co
   return refine_half_turns(samples, F, synchronise_half_turns(samples, F, o).turned, joint, o);
 }
 
+Calibration::Rejected undecided_rejection(const TurnDecision& d, const TurnDecision::Undecided& u) {
+  Calibration::Rejected r;
+  r.index = u.index;
+  r.why = u.both_fit ? Calibration::Rejected::Why::AmbiguousBothFit : Calibration::Rejected::Why::AmbiguousNeitherFits;
+  const TurnDecision::Candidates& fit = d.candidates.at(static_cast<std::size_t>(u.index));
+  r.sigmas = fit.as_given_sigmas, r.turned_sigmas = fit.turned_sigmas, r.gate_sigmas = d.gate_sigmas;
+  return r;
+}
+
 }  // namespace handeye

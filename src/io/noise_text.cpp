@@ -69,6 +69,35 @@ std::string corners_text(const Calibration& c, const CornerFitRecord& f) {
 
 }  // namespace
 
+void word_corner_fit(CornerFitRecord& f) {
+  using RobotPoses = CornerFitRecord::RobotPoses;
+  f.robot = f.robot_poses == RobotPoses::Estimated ? "free, their noise estimated from the corners"
+            : f.robot_poses == RobotPoses::Prior
+                ? "free, prior 1 sigma " + number_text(millimetres(f.robot_prior_sigma[0]), 3) + " mm / " +
+                      number_text(degrees(f.robot_prior_sigma[1]), 3) + " deg (largest axis)"
+                : "exact";
+  if (f.robot_sigma_estimated) {
+    f.robot += ": 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) + " mm / " +
+               number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
+  }
+  if (f.target_point_sigma == 0.0) {
+    f.target_points = f.target_point_sigma_estimated ? "exact (the corners show no error of theirs)" : "exact (as given)";
+  } else {
+    f.target_points = "1 sigma " + number_text(millimetres(f.target_point_sigma), 3) + " mm" +
+                      (f.target_point_sigma_estimated ? " estimated from the corners" : " given") + ": X's 1 sigma x" +
+                      number_text(f.target_inflation[0], 3) + " in translation, x" +
+                      number_text(f.target_inflation[1], 3) + " in rotation";
+  }
+  f.pixel_noise.clear();
+  if (f.homogeneity_tested) {
+    f.pixel_noise = std::string(f.homogeneity_passed ? "one pixel sigma for every image" : "each image its own pixel sigma") +
+                    " (Bartlett's test of one sigma: chi2 " + number_text(f.homogeneity_chi2, 3) + " on " +
+                    std::to_string(f.homogeneity_dof) + " dof, bound " + number_text(f.homogeneity_bound, 3) + ")";
+  } else if (f.per_image_sigma) {
+    f.pixel_noise = "each image its own pixel sigma (robust on)";
+  }
+}
+
 std::string noise_model_text(const Calibration& c) {
   if (c.corner_fit) return corners_text(c, *c.corner_fit);
   std::string text = c.noise_model ? joint_text(c, *c.noise_model) : "";  // a given noise has no words of its own

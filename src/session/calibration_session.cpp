@@ -11,6 +11,7 @@
 #include "handeye_covariance/estimation/symmetric_views.h"
 #include "handeye_covariance/io/check_text.h"
 #include "handeye_covariance/io/honesty_text.h"
+#include "handeye_covariance/io/noise_text.h"
 #include "handeye_covariance/io/yaml_io.h"
 
 namespace handeye {
@@ -245,12 +246,7 @@ Calibration CalibrationSession::calibrate(const SessionSnapshot& snapshot) const
   Calibration c = calibrate_decided({snapshot.generation, d.samples});
   for (Calibration::Rejected& r : c.rejected) r.index = d.kept.at(static_cast<std::size_t>(r.index));  // the snapshot's indices
   for (const TurnDecision::Undecided& u : d.undecided) {
-    Calibration::Rejected r;
-    r.index = u.index;
-    r.why = u.both_fit ? Calibration::Rejected::Why::AmbiguousBothFit : Calibration::Rejected::Why::AmbiguousNeitherFits;
-    const TurnDecision::Candidates& fit = d.candidates.at(static_cast<std::size_t>(u.index));
-    r.sigmas = fit.as_given_sigmas, r.turned_sigmas = fit.turned_sigmas, r.gate_sigmas = d.gate_sigmas;
-    c.rejected.push_back(r);
+    c.rejected.push_back(undecided_rejection(d, u));
   }
   std::sort(c.rejected.begin(), c.rejected.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
   for (std::size_t i = 0; i < d.turned.size(); ++i) {
@@ -280,7 +276,9 @@ Calibration CalibrationSession::calibrate_decided(const SessionSnapshot& snapsho
   }
   // The joint estimate first: it rejects the outliers and starts the corners.
   const Calibration pose_level = solve_samples(snapshot.samples, settings_.reject_outliers, Method::Joint, joint);
-  return settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
+  Calibration c = settings_.refine_corners(snapshot.samples, pose_level, settings_.robust);
+  if (c.corner_fit) io::word_corner_fit(*c.corner_fit);
+  return c;
 }
 
 std::optional<SharedRobotErrorFit> CalibrationSession::shared_error_fit(const SessionSnapshot& snapshot, const Calibration& c,

@@ -147,7 +147,8 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 /// when there is none. The Calibration holds X, Y, their covariances and cross
 /// block (method Corners) and the corner fit; the pose-level residual checks and
 /// noise components, which described the poses' fit, are replaced by the corners'.
-/// Throws HandEyeError(MalformedFile) naming a sample without corners or with
+/// The corner fit's words (robot, target_points, pixel_noise) are left empty for
+/// io::word_corner_fit, which the session calls after this. Throws HandEyeError(MalformedFile) naming a sample without corners or with
 /// another camera's, and calibrate_corners's errors.
 struct CornerMethodResult {
   Calibration calibration;

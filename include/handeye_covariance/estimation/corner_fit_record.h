@@ -48,11 +48,11 @@ struct CornerFitRecord {
     }
   };
   std::vector<Image> images;
-  /// The test of one pixel sigma for every image and what followed ("one pixel
-  /// sigma: Bartlett chi2 12.3 on 11 dof, 99.9% bound 31.3", or each image its own).
+  /// The test of one pixel sigma for every image and what followed, in words ("one pixel
+  /// sigma for every image (Bartlett's test of one sigma: chi2 12.3 on 11 dof, bound 31.3)").
   std::string pixel_noise;
   bool per_image_sigma = false;
-  std::string robot;  // how the robot poses entered: "exact" or their prior
+  std::string robot;  // how the robot poses entered, in words: exact, under a prior, or their noise estimated
   bool robot_noise_estimated = false;  // the robot's noise estimated from the corners, off its floor
   /// The printed target's points' 1 sigma (m, per axis; estimated or given, 0:
   /// exact) and how it entered the covariance.
@@ -61,6 +61,21 @@ struct CornerFitRecord {
   /// Refined intrinsics; none when kept.
   using Intrinsics = RefinedIntrinsics;
   std::optional<Intrinsics> intrinsics;
+  /// The figures `robot`, `target_points` and `pixel_noise` are worded from
+  /// (io::word_corner_fit; files carry the words). The robot poses: held exact, free
+  /// under a prior (its largest axis' 1 sigma, m and rad), or with their noise
+  /// estimated (its 1 sigma per axis, m and rad, when the fit estimated it).
+  enum class RobotPoses { Exact, Prior, Estimated };
+  RobotPoses robot_poses = RobotPoses::Exact;  // (the file key robot_poses holds `robot`, the words)
+  Eigen::Vector2d robot_prior_sigma = Eigen::Vector2d::Zero();
+  bool robot_sigma_estimated = false;
+  Eigen::Vector2d robot_sigma = Eigen::Vector2d::Zero();
+  bool target_point_sigma_estimated = false;
+  Eigen::Vector2d target_inflation = Eigen::Vector2d::Ones();  // X's 1 sigma factors: translation, rotation
+  /// Bartlett's test of one pixel sigma for every image, when it ran.
+  bool homogeneity_tested = false, homogeneity_passed = false;
+  double homogeneity_chi2 = 0.0, homogeneity_bound = 0.0;
+  int homogeneity_dof = 0;
   template <class Self, class Visit>
   static void fields(Self& s, Visit&& visit) {
     visit("pixel_sigma", s.pixel_sigma);
@@ -75,6 +90,17 @@ struct CornerFitRecord {
     visit("intrinsics", s.intrinsics, kBlock);
     visit("images", s.images);
     visit("robot_noise_estimated", s.robot_noise_estimated, kInMemory);
+    visit("robot_poses_kind", s.robot_poses, kInMemory);
+    visit("robot_prior_sigma", s.robot_prior_sigma, kInMemory);
+    visit("robot_sigma_estimated", s.robot_sigma_estimated, kInMemory);
+    visit("robot_sigma", s.robot_sigma, kInMemory);
+    visit("target_point_sigma_estimated", s.target_point_sigma_estimated, kInMemory);
+    visit("target_inflation", s.target_inflation, kInMemory);
+    visit("homogeneity_tested", s.homogeneity_tested, kInMemory);
+    visit("homogeneity_passed", s.homogeneity_passed, kInMemory);
+    visit("homogeneity_chi2", s.homogeneity_chi2, kInMemory);
+    visit("homogeneity_bound", s.homogeneity_bound, kInMemory);
+    visit("homogeneity_dof", s.homogeneity_dof, kInMemory);
   }
 };
 

@@ -102,4 +102,8 @@ SampleSet apply_half_turns(const SampleSet& samples, const Eigen::Isometry3d& F,
 TurnDecision decide_half_turns(const SampleSet& samples, const Eigen::Isometry3d& F, const JointOptions& joint = {},
                                const HalfTurnOptions& options = {});
 
+/// The undecided view `u` of `d` as a sample the calibration leaves out: ambiguous, with
+/// its two candidates' distances and the gate (its index the input's).
+Calibration::Rejected undecided_rejection(const TurnDecision& d, const TurnDecision::Undecided& u);
+
 }  // namespace handeye

@@ -14,5 +14,9 @@ namespace io {
 /// pairs, or a calibration read from a file).
 std::string noise_model_text(const Calibration& calibration);
 
+/// Words the corner fit's figures into its `robot`, `target_points` and `pixel_noise`
+/// (what files carry and the summary prints); the session calls it after the fit.
+void word_corner_fit(CornerFitRecord& fit);
+
 }  // namespace io
 }  // namespace handeye
