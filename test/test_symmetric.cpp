@@ -47,9 +47,7 @@ int agreeing(const std::vector<bool>& decided, const std::vector<bool>& planted)
 
 /// Why a view was left out, in the words a user reads (io::rejected_text).
 std::string reason(const TurnDecision& d, const TurnDecision::Undecided& u) {
-  const std::string text = io::rejected_text(undecided_rejection(d, u));
-  const std::string prefix = "its pose is ambiguous: the target looks the same turned by 180 degrees, and ";
-  return text.rfind(prefix, 0) == 0 ? text.substr(prefix.size()) : text;
+  return io::rejected_text(undecided_rejection(d, u));
 }
 
 std::string reasons(const TurnDecision& d) {

@@ -932,8 +932,7 @@ CornerMethodResult refine_with_corners(const SampleSet& samples, const Calibrati
   c.downweighted = 0;
   c.covariance_inflation = c.pattern_covariance_inflation = 1.0;
   c.noise_origin = f.pixel_sigma_estimated ? NoiseOrigin::EstimatedFromResiduals : NoiseOrigin::Given;
-  fit.robot_sigma_estimated = f.robot_noise_estimated;
-  if (f.robot_noise_estimated) fit.robot_sigma = f.robot_sigma;
+  if (f.robot_noise_estimated) fit.robot_sigma = f.robot_sigma;  // robot_poses Estimated
   c.noise_model.reset();  // the corner fit says it (io::noise_model_text)
   c.rotation_stage.iterations = c.translation_stage.iterations = f.iterations;
   c.rotation_stage.stop_reason = c.translation_stage.stop_reason = StopReason::CostChangeBelowTolerance;

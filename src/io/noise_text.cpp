@@ -70,15 +70,18 @@ std::string corners_text(const Calibration& c, const CornerFitRecord& f) {
 }  // namespace
 
 void word_corner_fit(CornerFitRecord& f) {
-  using RobotPoses = CornerFitRecord::RobotPoses;
-  f.robot = f.robot_poses == RobotPoses::Estimated ? "free, their noise estimated from the corners"
-            : f.robot_poses == RobotPoses::Prior
-                ? "free, prior 1 sigma " + number_text(millimetres(f.robot_prior_sigma[0]), 3) + " mm / " +
-                      number_text(degrees(f.robot_prior_sigma[1]), 3) + " deg (largest axis)"
-                : "exact";
-  if (f.robot_sigma_estimated) {
-    f.robot += ": 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) + " mm / " +
-               number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
+  switch (f.robot_poses) {
+    case CornerFitRecord::RobotPoses::Exact:
+      f.robot = "exact";
+      break;
+    case CornerFitRecord::RobotPoses::Prior:
+      f.robot = "free, prior 1 sigma " + number_text(millimetres(f.robot_prior_sigma[0]), 3) + " mm / " +
+                number_text(degrees(f.robot_prior_sigma[1]), 3) + " deg (largest axis)";
+      break;
+    case CornerFitRecord::RobotPoses::Estimated:
+      f.robot = "free, their noise estimated from the corners: 1 sigma " + number_text(millimetres(f.robot_sigma[0]), 3) +
+                " mm / " + number_text(degrees(f.robot_sigma[1]), 3) + " deg per axis";
+      break;
   }
   if (f.target_point_sigma == 0.0) {
     f.target_points = f.target_point_sigma_estimated ? "exact (the corners show no error of theirs)" : "exact (as given)";

@@ -148,8 +148,9 @@ CornerCalibration calibrate_corners(const Rig& rig, const CameraModel& camera, c
 /// block (method Corners) and the corner fit; the pose-level residual checks and
 /// noise components, which described the poses' fit, are replaced by the corners'.
 /// The corner fit's words (robot, target_points, pixel_noise) are left empty for
-/// io::word_corner_fit, which the session calls after this. Throws HandEyeError(MalformedFile) naming a sample without corners or with
-/// another camera's, and calibrate_corners's errors.
+/// io::word_corner_fit, which the session calls after this. Throws
+/// HandEyeError(MalformedFile) naming a sample without corners or with another
+/// camera's, and calibrate_corners's errors.
 struct CornerMethodResult {
   Calibration calibration;
   CornerCalibration fit;

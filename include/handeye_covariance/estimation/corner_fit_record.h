@@ -64,11 +64,10 @@ struct CornerFitRecord {
   /// The figures `robot`, `target_points` and `pixel_noise` are worded from
   /// (io::word_corner_fit; files carry the words). The robot poses: held exact, free
   /// under a prior (its largest axis' 1 sigma, m and rad), or with their noise
-  /// estimated (its 1 sigma per axis, m and rad, when the fit estimated it).
+  /// estimated (its 1 sigma per axis, m and rad).
   enum class RobotPoses { Exact, Prior, Estimated };
   RobotPoses robot_poses = RobotPoses::Exact;  // (the file key robot_poses holds `robot`, the words)
   Eigen::Vector2d robot_prior_sigma = Eigen::Vector2d::Zero();
-  bool robot_sigma_estimated = false;
   Eigen::Vector2d robot_sigma = Eigen::Vector2d::Zero();
   bool target_point_sigma_estimated = false;
   Eigen::Vector2d target_inflation = Eigen::Vector2d::Ones();  // X's 1 sigma factors: translation, rotation
@@ -92,7 +91,6 @@ struct CornerFitRecord {
     visit("robot_noise_estimated", s.robot_noise_estimated, kInMemory);
     visit("robot_poses_kind", s.robot_poses, kInMemory);
     visit("robot_prior_sigma", s.robot_prior_sigma, kInMemory);
-    visit("robot_sigma_estimated", s.robot_sigma_estimated, kInMemory);
     visit("robot_sigma", s.robot_sigma, kInMemory);
     visit("target_point_sigma_estimated", s.target_point_sigma_estimated, kInMemory);
     visit("target_inflation", s.target_inflation, kInMemory);
