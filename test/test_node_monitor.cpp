@@ -1,10 +1,11 @@
 // Client of monitor.test: the monitor of publish.launch monitor:=true (ros/calibration_monitor_node.h)
-// against the simulated rig, whose frames are not the defaults. The test writes a calibration of the rig (20 simulated views of its
-// truth, the rig's detection noise, solved as `handeye solve` does), starts publish.launch
-// monitor:=true in a shell as a user types it, and watches /diagnostics: no ERROR over 200
-// still views; after the rig's camera moves 3 mm on its mount, ERROR within 10 still views,
-// and X named on ~check once the window holds only views after the bump, its reported change the bump
-// within its covariance (NEES below chi2(6)'s 99.9%). The published TF stays the saved X throughout.
+// against the simulated rig, whose frames are not the defaults, eye-in-hand or (eye_on_hand:=false)
+// eye-to-hand. The test writes a calibration of the rig (20 simulated views of its truth, the rig's
+// detection noise, solved as `handeye solve` does), starts publish.launch monitor:=true in a shell as a
+// user types it, and watches /diagnostics: no ERROR over ~views still views; after the rig's camera
+// moves 3 mm on its mount, ERROR within 10 still views, and X named on ~check once the window holds
+// only views after the bump, its reported change the bump within its covariance (NEES below chi2(6)'s
+// 99.9%). The published TF stays the saved X throughout.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <signal.h>
 #include <std_msgs/Float64.h>
@@ -15,6 +16,7 @@
 #include <filesystem>
 
 #include "handeye_covariance/core/lie.h"
+#include "handeye_covariance/core/pose_covariance.h"
 #include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/core/units.h"
 #include "handeye_covariance/io/yaml_io.h"
@@ -27,33 +29,41 @@
 namespace handeye {
 namespace {
 
-const std::string kDir = "/tmp/handeye_covariance_rostest_monitor";
-const std::string kFile = kDir + "/calibration.yaml";
 // monitor.test's robot and camera frames, not the node's defaults: the monitor and the publisher
 // take them from the file.
 const std::string kBase = "panda_link0", kEffector = "panda_hand", kCamera = "camera_color_optical_frame";
 
-/// A calibration of the simulated rig: its truth, its detection noise (0.3 mm, 0.05 deg,
-/// the robot exact), the noise estimated from the views, as `handeye solve` runs it.
-void write_rig_calibration() {
+/// A calibration of the simulated rig written to `file`: its truth, its detection noise (0.3 mm,
+/// 0.05 deg, the robot exact), the noise estimated from the views, as `handeye solve` runs it.
+void write_rig_calibration(Setup setup, const std::string& file) {
   Rng rng(11);
   MeasurementNoise noise;
   noise.camera.translation = std::pow(0.3e-3, 2) * Eigen::Matrix3d::Identity();
   noise.camera.rotation = std::pow(radians(0.05), 2) * Eigen::Matrix3d::Identity();
-  SimulatedSession sim = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand), 20, noise);
+  SimulatedSession sim = simulate_session(rng, setup, typical_X(setup), 20, noise);
   sim.samples.noise.reset();
   sim.samples.rig.frames = {kBase, kEffector, kCamera, "tag_0"};  // monitor.test's rig
   CalibrationSession session(session_settings(sim.samples));
   session.replace(sim.samples.samples, "the rig's calibration");
   const Calibration c = session.calibrate_checked(session.snapshot());
-  std::filesystem::create_directories(kDir);
-  io::write_file_atomically(kFile, io::format_result(c, io::context_of(sim.samples)));
+  std::filesystem::create_directories(std::filesystem::path(file).parent_path());
+  io::write_file_atomically(file, io::format_result(c, io::context_of(sim.samples)));
 }
 
-TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
-  write_rig_calibration();
-  const std::string launch = "roslaunch handeye_covariance publish.launch monitor:=true calibration_file:=" + kFile +
-                             " still_window:=0.15 > " + kDir + "/launch.log 2>&1 & echo $! > " + kDir + "/launch.pid";
+TEST(Monitor, NoErrorOverStillViewsAndErrorWithin10AfterABump) {
+  ros::NodeHandle pn("~");
+  const bool eye_on_hand = pn.param("eye_on_hand", true);
+  const int views = pn.param("views", 200);
+  const handeye::Setup setup = eye_on_hand ? handeye::Setup::EyeInHand : handeye::Setup::EyeToHand;
+  // publish.launch's namespace, and a directory of this variant's own (ctest runs both at once).
+  const std::string ns = eye_on_hand ? "/handeye_eye_on_hand" : "/handeye_eye_on_base";
+  const std::string dir = "/tmp/handeye_covariance_rostest_monitor" + std::string(eye_on_hand ? "" : "_eye_on_base");
+  const std::string file = dir + "/calibration.yaml";
+  const std::string parent = eye_on_hand ? kEffector : kBase;  // X's parent
+  write_rig_calibration(setup, file);
+  const std::string launch = "roslaunch handeye_covariance publish.launch monitor:=true calibration_file:=" + file +
+                             (eye_on_hand ? "" : " eye_on_hand:=false") + " still_window:=0.15 > " + dir +
+                             "/launch.log 2>&1 & echo $! > " + dir + "/launch.pid";
   ASSERT_EQ(std::system(launch.c_str()), 0);
 
   ros::NodeHandle nh;
@@ -68,7 +78,7 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   });
   int checks = 0;
   CalibrationCheckMsg check;
-  auto check_sub = nh.subscribe<CalibrationCheckMsg>("/handeye_eye_on_hand/handeye_monitor/check", 50,
+  auto check_sub = nh.subscribe<CalibrationCheckMsg>(ns + "/handeye_monitor/check", 50,
                                                      [&](const auto& msg) {
                                                        check = *msg;
                                                        ++checks;
@@ -77,15 +87,15 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   tf2_ros::Buffer tf;
   tf2_ros::TransformListener listener(tf);
 
-  // A check per still view once the window has 3: 200 of them with the rig unchanged.
-  ASSERT_TRUE(test::wait_for([&] { return checks >= 200; }, 200.0))
-      << checks << " checks; last diagnostic: " << latest.message << " (see " << kDir << "/launch.log)";
+  // A check per still view once the window has 3: `views` of them with the rig unchanged.
+  ASSERT_TRUE(test::wait_for([&] { return checks >= views; }, views + 20.0))
+      << checks << " checks; last diagnostic: " << latest.message << " (see " << dir << "/launch.log)";
   EXPECT_EQ(errors, 0) << "an ERROR without a change: " << latest.message;
   std::printf("[monitor] %d checks of an unchanged rig: %d ERROR, last: %s\n", checks, errors, latest.message.c_str());
   // The published TF is the saved X (the monitor only reads).
-  const Eigen::Isometry3d saved = io::read_result(kFile).T_parent_camera().pose;
+  const Eigen::Isometry3d saved = io::read_result(file).T_parent_camera().pose;
   geometry_msgs::TransformStamped published;
-  ASSERT_NO_THROW(published = tf.lookupTransform(kEffector, kCamera, ros::Time(0)));
+  ASSERT_NO_THROW(published = tf.lookupTransform(parent, kCamera, ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9));
 
   std_msgs::Float64 mm;
@@ -106,12 +116,13 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
   EXPECT_EQ(check.changed, "X") << check.text;
   std::printf("[monitor] 10 views later: %s\n", latest.message.c_str());
   // The change it reports is the bump: the rig moved the camera 3 mm along its own x axis
-  // (rig_simulator.cpp), so the new X is exp(expected) saved. Its NEES under the reported
-  // covariance is one chi2(6) draw: below its 99.9% point (22.46) unless the value or the
-  // covariance is wrong (a flipped sign puts it 6 mm off, hundreds of sigma).
-  Eigen::Isometry3d bumped = typical_X(Setup::EyeInHand);
+  // (rig_simulator.cpp), and the change is the package's pose perturbation from the saved X to
+  // the new (pose_covariance.h: t = t_saved + change_t, R = exp(change_R) R_saved). Its NEES
+  // under the reported covariance is one chi2(6) draw: below its 99.9% point (22.46) unless the
+  // value or the covariance is wrong (a flipped sign puts it 6 mm off, hundreds of sigma).
+  Eigen::Isometry3d bumped = typical_X(setup);
   bumped.translation() += bumped.linear() * Eigen::Vector3d(metres(3.0), 0.0, 0.0);
-  const Vector6d expected = se3::log(bumped * saved.inverse());
+  const Vector6d expected = pose_error(bumped, saved);
   const Vector6d reported = Eigen::Map<const Vector6d>(check.change.data());
   const Matrix6d covariance = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(check.change_covariance.data());
   const Vector6d error = reported - expected;
@@ -120,10 +131,10 @@ TEST(Monitor, NoErrorOver200StillViewsAndErrorWithin10AfterABump) {
               millimetres(reported(0)), millimetres(reported(1)), millimetres(reported(2)), millimetres(expected(0)),
               millimetres(expected(1)), millimetres(expected(2)), nees);
   EXPECT_LT(nees, chi2_quantile(6, 0.999)) << "reported " << reported.transpose() << ", the bump " << expected.transpose();
-  ASSERT_NO_THROW(published = tf.lookupTransform(kEffector, kCamera, ros::Time(0)));
+  ASSERT_NO_THROW(published = tf.lookupTransform(parent, kCamera, ros::Time(0)));
   EXPECT_TRUE(conversions::to_eigen(published.transform).isApprox(saved, 1e-9)) << "the monitor never changes the TF";
 
-  std::system(("kill -INT $(cat " + kDir + "/launch.pid)").c_str());
+  std::system(("kill -INT $(cat " + dir + "/launch.pid)").c_str());
 }
 
 }  // namespace

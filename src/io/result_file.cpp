@@ -306,7 +306,7 @@ std::string format_check(const CalibrationCheck& check, const std::string& calib
   if (check.changed) {
     out << YAML::Key << "changed" << YAML::Value << to_string(*check.change.what);
     const EstimatedChange::Delta& main = check.change.reported();
-    emit_6("change", main.value);  // ROS order, m and rad: the new pose is exp(change) times the saved one
+    emit_6("change", main.value);  // ROS order, m and rad: t = t_saved + change_t, R = exp(change_R) R_saved
     emit_6x6("change_covariance", main.covariance);
     if (check.change.what == ChangedPose::Both) {
       emit_6("pattern_change", check.change.Y_change->value);

@@ -79,8 +79,9 @@ struct EstimatedChange {
   int dof = 6;                        // 6, or 12 for both
   double residual_chi2 = 0.0;         // the joint chi2 the change leaves ...
   double residual_p_value = 1.0;      // ... and its p against chi2(6k - dof)
-  /// X's change (X or both; the new X is exp(change) X) and Y's (Y or both), each
-  /// with its covariance: left perturbations in their parent frames, ROS order.
+  /// X's change (X or both) and Y's (Y or both), each with its covariance: the
+  /// perturbation of pose_covariance.h from the saved pose to the new (t = t_saved +
+  /// change_t, R = exp(change_R) R_saved), in the parent frame, ROS order.
   struct Delta {
     Vector6d value = Vector6d::Zero();
     Matrix6d covariance = Matrix6d::Zero();
