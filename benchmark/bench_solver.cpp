@@ -7,6 +7,7 @@
 #include "handeye_covariance/estimation/estimator.h"
 #include "handeye_covariance/estimation/joint_estimator.h"
 #include "handeye_covariance/estimation/next_best_pose.h"
+#include "handeye_covariance/estimation/outliers.h"
 #include "handeye_covariance/estimation/shared_robot_error.h"
 #include "handeye_covariance/estimation/solve.h"
 #include "handeye_covariance/session/calibration_session.h"
@@ -202,6 +203,48 @@ void BM_SharedErrorSession(benchmark::State& state) {
   state.SetLabel(label);
 }
 BENCHMARK(BM_SharedErrorSession)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
+
+// The robust solve (outliers.h: the consensus screen, then the residual gate) of an
+// n-sample session, its noise estimated, with the screen comparing every pair of samples
+// (second argument 0, as before consensus_partners) or each sample with its 60 partners (1,
+// the default; the same screen up to 61 samples).
+void BM_RobustSolve(benchmark::State& state) {
+  Rng rng(5);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)), paper_noise(1e-5));
+  s.samples.noise.reset();
+  OutlierOptions options;
+  if (state.range(1) == 0) options.consensus_partners = static_cast<int>(2 * ((state.range(0) + 1) / 2));
+  std::size_t rejected = 0;
+  for (auto _ : state) {
+    const Calibration c = solve_robust(s.samples, Method::Joint, options);
+    rejected = c.rejected.size();
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetLabel(std::to_string(rejected) + " rejected");
+}
+BENCHMARK(BM_RobustSolve)
+    ->Args({50, 0})->Args({50, 1})->Args({250, 0})->Args({250, 1})->Args({1000, 0})->Args({1000, 1})
+    ->Args({2000, 0})->Args({2000, 1})
+    ->Unit(benchmark::kMillisecond);
+// What `handeye solve` runs on an n-sample session with the defaults, its noise estimated
+// (calibrate_checked: the robust solve, the noise model, the honesty check's two looks).
+void BM_CalibrateChecked(benchmark::State& state) {
+  Rng rng(5);
+  SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
+                                        static_cast<int>(state.range(0)), paper_noise(1e-5));
+  s.samples.noise.reset();
+  CalibrationSession session(session_settings(s.samples));
+  session.replace(s.samples.samples, "benchmark");
+  std::string label;
+  for (auto _ : state) {
+    const Calibration c = session.calibrate_checked(session.snapshot());
+    label = std::string(to_string(c.honesty->verdict)) + " " + number_text(c.honesty->ratio, 3);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetLabel(label);
+}
+BENCHMARK(BM_CalibrateChecked)->Arg(16)->Arg(50)->Arg(250)->Arg(1000)->Arg(2000)->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_HonestyCheck)
     ->Args({10, 0, 0, 1})

@@ -186,5 +186,43 @@ TEST(Outliers, TooManyDisagreeingSamplesAreRefused) {
   }
 }
 
+// A session of more than consensus_partners + 1 samples is screened with each sample's
+// partners, not every pair: on 600 samples with every 10th a gross outlier (a flipped
+// pattern pose or another sample's), the partners' screen rejects what the all-pairs
+// screen rejects, every planted outlier and no other sample, at a tenth of the pairs.
+// Up to consensus_partners + 1 samples it is the all-pairs screen.
+TEST(Outliers, TheConsensusOfALargeSessionScreensEachSampleWithItsPartnersAsAllPairsWould) {
+  Rng rng(61);
+  const int n = 600;
+  const Injected in = with_outliers(rng, Setup::EyeInHand, n, true);
+  OutlierOptions all_pairs;
+  all_pairs.consensus_partners = n;
+  const OutlierOptions partners;  // the default
+  const auto indices = [](const std::vector<Calibration::Rejected>& rejected) {
+    std::vector<int> out;
+    for (const auto& r : rejected) out.push_back(r.index);
+    return out;
+  };
+  const std::vector<Calibration::Rejected> by_all = consensus(in.samples, all_pairs);
+  const std::vector<Calibration::Rejected> by_partners = consensus(in.samples, partners);
+  EXPECT_EQ(indices(by_partners), indices(by_all));
+  EXPECT_EQ(indices(by_partners), in.outliers) << "every planted outlier, and no other sample";
+  for (const auto& r : by_all) EXPECT_EQ(r.compared, n - 1) << "sample " << r.index;
+  for (const auto& r : by_partners) {
+    EXPECT_GE(r.compared, partners.consensus_partners - 1) << "sample " << r.index;
+    EXPECT_LE(r.compared, partners.consensus_partners) << "sample " << r.index;
+  }
+  std::printf("[consensus] %d samples, %zu planted: all pairs rejected %zu, %d partners each rejected %zu\n", n,
+              in.outliers.size(), by_all.size(), partners.consensus_partners, by_partners.size());
+  // At consensus_partners + 1 samples, every pair.
+  const Injected small = with_outliers(rng, Setup::EyeInHand, partners.consensus_partners + 1, true);
+  const std::vector<Calibration::Rejected> by_small = consensus(small.samples, partners);
+  EXPECT_EQ(indices(by_small), small.outliers);
+  for (const auto& r : by_small) EXPECT_EQ(r.compared, partners.consensus_partners) << "sample " << r.index;
+  OutlierOptions odd;
+  odd.consensus_partners = 7;
+  EXPECT_THROW(consensus(small.samples, odd), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace handeye

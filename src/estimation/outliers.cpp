@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "handeye_covariance/core/errors.h"
@@ -21,25 +23,54 @@ struct PairCheck {
   std::optional<double> pitch_difference;  // m, when both rotate enough for a stable axis
 };
 
+/// The pairs (i < j) the consensus compares: all of them when each of the n samples
+/// has at most `partners` others; else each sample i with the samples i + d (mod n)
+/// for `partners` / 2 offsets d spread evenly over [1, n / 2], so that every sample is
+/// compared with `partners` others (as i and as i + d) near and far along the session.
+std::vector<std::pair<int, int>> consensus_pairs(int n, int partners) {
+  std::vector<std::pair<int, int>> pairs;
+  if (n - 1 <= partners) {
+    pairs.reserve(static_cast<std::size_t>(n) * (n - 1) / 2);
+    for (int i = 0; i < n; ++i) {
+      for (int j = i + 1; j < n; ++j) pairs.emplace_back(i, j);
+    }
+    return pairs;
+  }
+  const int offsets = partners / 2, widest = n / 2;  // widest > offsets: n >= partners + 2
+  pairs.reserve(static_cast<std::size_t>(n) * offsets);
+  for (int m = 0; m < offsets; ++m) {
+    const int d = 1 + static_cast<int>(static_cast<long long>(m) * (widest - 1) / (offsets - 1));
+    for (int i = 0; i < n; ++i) {
+      const int j = (i + d) % n;
+      if (2 * d == n && j < i) continue;  // i + n/2 pairs with i: taken once
+      pairs.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  return pairs;
+}
+
 }  // namespace
 
 std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const OutlierOptions& o) {
+  if (o.consensus_partners < 4 || o.consensus_partners % 2 != 0) {
+    throw std::invalid_argument("OutlierOptions::consensus_partners must be even and at least 4, got " +
+                                std::to_string(o.consensus_partners));
+  }
   const int n = static_cast<int>(samples.samples.size());
+  const std::vector<std::pair<int, int>> compared = consensus_pairs(n, o.consensus_partners);
   std::vector<PairCheck> pairs;
-  pairs.reserve(static_cast<std::size_t>(n) * (n - 1) / 2);
+  pairs.reserve(compared.size());
   std::vector<double> angles, pitches;
-  for (int i = 0; i < n; ++i) {
-    for (int j = i + 1; j < n; ++j) {
-      const MotionPair m = motion_between(samples.rig, samples.samples[i], samples.samples[j]);
-      const Eigen::AngleAxisd a(m.A.linear()), b(m.B.linear());
-      PairCheck c{i, j, std::abs(a.angle() - b.angle()), std::nullopt};
-      if (std::min(a.angle(), b.angle()) > o.min_pitch_angle) {
-        c.pitch_difference = std::abs(a.axis().dot(m.A.translation()) - b.axis().dot(m.B.translation()));
-        pitches.push_back(*c.pitch_difference);
-      }
-      angles.push_back(c.angle_difference);
-      pairs.push_back(c);
+  for (const auto& [i, j] : compared) {
+    const MotionPair m = motion_between(samples.rig, samples.samples[i], samples.samples[j]);
+    const Eigen::AngleAxisd a(m.A.linear()), b(m.B.linear());
+    PairCheck c{i, j, std::abs(a.angle() - b.angle()), std::nullopt};
+    if (std::min(a.angle(), b.angle()) > o.min_pitch_angle) {
+      c.pitch_difference = std::abs(a.axis().dot(m.A.translation()) - b.axis().dot(m.B.translation()));
+      pitches.push_back(*c.pitch_difference);
     }
+    angles.push_back(c.angle_difference);
+    pairs.push_back(c);
   }
   const double angle_gate = std::max(o.min_angle_gate, o.consensus_sigmas * robust_sigma(angles));
   const double pitch_gate = std::max(o.min_pitch_gate, o.consensus_sigmas * robust_sigma(pitches));

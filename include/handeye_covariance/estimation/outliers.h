@@ -1,11 +1,14 @@
 // Outlier rejection for pose samples: wrong detections (a flipped tag pose, a
 // detection paired with the wrong robot pose) must not corrupt X.
 //
-//  1. Consensus, before any X exists. For every pair of samples, A X = X B
+//  1. Consensus, before any X exists. For a pair of samples, A X = X B
 //     demands that A and B rotate by the same angle and have the same screw
-//     pitch (omega . t), whatever X is (Chen's screw congruence). A sample
-//     that disagrees with most others is rejected. Scales are robust (median
-//     lower quartile of the differences over all pairs), with floors for noise-free input.
+//     pitch (omega . t), whatever X is (Chen's screw congruence). Each sample
+//     is compared with every other, or in a session of more than
+//     `consensus_partners` + 1 samples with that many others spread over it (the
+//     cost grows with n, not n^2). A sample that disagrees with most of those it
+//     is compared with is rejected. Scales are robust (the differences' robust
+//     sigma over the pairs compared), with floors for noise-free input.
 //  2. Residual gating after the solve. Each sample's pattern pose is compared
 //     with what X, its robot pose and the pattern's mean pose predict (eq.
 //     64-65). Its Mahalanobis distance is taken under the predicted covariance
@@ -33,6 +36,7 @@ struct OutlierOptions {
   double min_pitch_gate = 0.2e-3;           // m
   double min_pitch_angle = radians(5.0);  // pitch is compared only for rotations beyond this
   double disagreeing_share = 0.5;           // a sample disagreeing with more than this share of others is rejected
+  int consensus_partners = 60;              // each sample is compared with at most this many others (even, >= 4)
   double residual_gate = 27.86;             // chi2(6) 0.9999 quantile
   double max_rejected_fraction = 0.3;
 };
@@ -61,7 +65,8 @@ const Calibration::Rejected* rejection_of(const Calibration& calibration, int in
 double residual_scale(std::vector<double> squared_distances);
 
 /// Stage 1: the samples whose motions to more than `disagreeing_share` of the others
-/// break screw congruence (rotation angle or pitch beyond the robust gates).
+/// they are compared with break screw congruence (rotation angle or pitch beyond the
+/// robust gates). Each rejected entry says how many it was compared with.
 std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const OutlierOptions& options);
 
 /// Each sample of `evaluated` against X and the mean pattern pose of `fitted`, the
