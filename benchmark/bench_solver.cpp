@@ -181,6 +181,22 @@ void BM_SharedRobotError(benchmark::State& state) {
   state.SetLabel(chosen ? "chosen" : "not chosen");
 }
 BENCHMARK(BM_SharedRobotError)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
+// calibrate_checked of `samples` with the defaults, their noise estimated (what `handeye
+// solve` runs); the label: whether the shared robot error was used (`say_model`) and the
+// honesty check's verdict and ratio.
+void time_calibrate_checked(benchmark::State& state, SampleSet samples, bool say_model) {
+  samples.noise.reset();
+  CalibrationSession session(session_settings(samples));
+  session.replace(samples.samples, "benchmark");
+  std::string label;
+  for (auto _ : state) {
+    const Calibration c = session.calibrate_checked(session.snapshot());
+    label = say_model ? std::string(c.shared_robot_error && c.shared_robot_error->used ? "used, " : "not used, ") : "";
+    label += std::string(to_string(c.honesty->verdict)) + " " + number_text(c.honesty->ratio, 3);
+    benchmark::DoNotOptimize(c.pose_covariance);
+  }
+  state.SetLabel(label);
+}
 // calibrate_checked of an n-sample session whose robot poses carry an error shared by
 // nearby poses (simulation.h add_shared_robot_error: 2 mm, 0.15 degree per axis), its
 // noise estimated, with the defaults: the model chosen and used, and the honesty check
@@ -190,17 +206,7 @@ void BM_SharedErrorSession(benchmark::State& state) {
   SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                         static_cast<int>(state.range(0)), paper_noise(1e-6));
   add_shared_robot_error(rng, s.samples, 2e-3, radians(0.15));
-  s.samples.noise.reset();
-  CalibrationSession session(session_settings(s.samples));
-  session.replace(s.samples.samples, "benchmark");
-  std::string label;
-  for (auto _ : state) {
-    const Calibration c = session.calibrate_checked(session.snapshot());
-    label = std::string(c.shared_robot_error && c.shared_robot_error->used ? "used, " : "not used, ") + to_string(c.honesty->verdict) +
-            " " + number_text(c.honesty->ratio, 3);
-    benchmark::DoNotOptimize(c.pose_covariance);
-  }
-  state.SetLabel(label);
+  time_calibrate_checked(state, s.samples, true);
 }
 BENCHMARK(BM_SharedErrorSession)->Arg(16)->Arg(30)->Arg(40)->Unit(benchmark::kMillisecond);
 
@@ -233,16 +239,7 @@ void BM_CalibrateChecked(benchmark::State& state) {
   Rng rng(5);
   SimulatedSession s = simulate_session(rng, Setup::EyeInHand, typical_X(Setup::EyeInHand),
                                         static_cast<int>(state.range(0)), paper_noise(1e-5));
-  s.samples.noise.reset();
-  CalibrationSession session(session_settings(s.samples));
-  session.replace(s.samples.samples, "benchmark");
-  std::string label;
-  for (auto _ : state) {
-    const Calibration c = session.calibrate_checked(session.snapshot());
-    label = std::string(to_string(c.honesty->verdict)) + " " + number_text(c.honesty->ratio, 3);
-    benchmark::DoNotOptimize(c.pose_covariance);
-  }
-  state.SetLabel(label);
+  time_calibrate_checked(state, s.samples, false);
 }
 BENCHMARK(BM_CalibrateChecked)->Arg(16)->Arg(50)->Arg(250)->Arg(1000)->Arg(2000)->Unit(benchmark::kMillisecond);
 
