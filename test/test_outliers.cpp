@@ -5,6 +5,7 @@
 #include "handeye_covariance/estimation/solve.h"
 
 #include <boost/math/distributions/normal.hpp>
+#include <set>
 
 #include "handeye_covariance/core/statistics.h"
 #include "handeye_covariance/simulation/monte_carlo.h"
@@ -190,7 +191,6 @@ TEST(Outliers, TooManyDisagreeingSamplesAreRefused) {
 // partners, not every pair: on 600 samples with every 10th a gross outlier (a flipped
 // pattern pose or another sample's), the partners' screen rejects what the all-pairs
 // screen rejects, every planted outlier and no other sample, at a tenth of the pairs.
-// Up to consensus_partners + 1 samples it is the all-pairs screen.
 TEST(Outliers, TheConsensusOfALargeSessionScreensEachSampleWithItsPartnersAsAllPairsWould) {
   Rng rng(61);
   const int n = 600;
@@ -208,20 +208,44 @@ TEST(Outliers, TheConsensusOfALargeSessionScreensEachSampleWithItsPartnersAsAllP
   EXPECT_EQ(indices(by_partners), indices(by_all));
   EXPECT_EQ(indices(by_partners), in.outliers) << "every planted outlier, and no other sample";
   for (const auto& r : by_all) EXPECT_EQ(r.compared, n - 1) << "sample " << r.index;
-  for (const auto& r : by_partners) {
-    EXPECT_GE(r.compared, partners.consensus_partners - 1) << "sample " << r.index;
-    EXPECT_LE(r.compared, partners.consensus_partners) << "sample " << r.index;
-  }
+  for (const auto& r : by_partners) EXPECT_EQ(r.compared, partners.consensus_partners - 1) << "sample " << r.index;  // n even
   std::printf("[consensus] %d samples, %zu planted: all pairs rejected %zu, %d partners each rejected %zu\n", n,
               in.outliers.size(), by_all.size(), partners.consensus_partners, by_partners.size());
-  // At consensus_partners + 1 samples, every pair.
-  const Injected small = with_outliers(rng, Setup::EyeInHand, partners.consensus_partners + 1, true);
-  const std::vector<Calibration::Rejected> by_small = consensus(small.samples, partners);
-  EXPECT_EQ(indices(by_small), small.outliers);
-  for (const auto& r : by_small) EXPECT_EQ(r.compared, partners.consensus_partners) << "sample " << r.index;
   OutlierOptions odd;
   odd.consensus_partners = 7;
-  EXPECT_THROW(consensus(small.samples, odd), std::invalid_argument);
+  EXPECT_THROW(consensus(in.samples, odd), std::invalid_argument);
+}
+
+// The pairs themselves: up to partners + 1 samples every pair, in the order of the nested loop;
+// beyond, distinct pairs (i < j), each sample in exactly `partners` of them (partners - 1 when
+// n is even), offsets reaching n / 2.
+TEST(Outliers, TheConsensusPairsAreAllPairsUpToPartnersPlusOneAndThenEachSamplesPartners) {
+  const int partners = OutlierOptions{}.consensus_partners;
+  for (int n : {2, 6, partners + 1, partners + 2, partners + 3, 600, 601}) {
+    const std::vector<std::pair<int, int>> pairs = consensus_pairs(n, partners);
+    std::set<std::pair<int, int>> distinct(pairs.begin(), pairs.end());
+    EXPECT_EQ(distinct.size(), pairs.size()) << n << " samples: a pair twice";
+    std::vector<int> count(static_cast<std::size_t>(n), 0);
+    int widest = 0;
+    for (const auto& [i, j] : pairs) {
+      ASSERT_TRUE(0 <= i && i < j && j < n) << n << " samples: pair " << i << ", " << j;
+      ++count[static_cast<std::size_t>(i)], ++count[static_cast<std::size_t>(j)];
+      widest = std::max(widest, std::min(j - i, n - (j - i)));
+    }
+    if (n - 1 <= partners) {
+      std::vector<std::pair<int, int>> nested;
+      for (int i = 0; i < n; ++i) {
+        for (int j = i + 1; j < n; ++j) nested.emplace_back(i, j);
+      }
+      EXPECT_EQ(pairs, nested) << n << " samples";
+      continue;
+    }
+    const int each = n % 2 == 0 ? partners - 1 : partners;
+    for (int s = 0; s < n; ++s) EXPECT_EQ(count[static_cast<std::size_t>(s)], each) << n << " samples: sample " << s;
+    EXPECT_EQ(widest, n / 2) << n << " samples";
+  }
+  EXPECT_THROW(consensus_pairs(100, 7), std::invalid_argument);
+  EXPECT_THROW(consensus_pairs(100, 2), std::invalid_argument);
 }
 
 }  // namespace

@@ -44,8 +44,8 @@ double chi2_upper(double statistic, int dof) { return dof <= 0 ? 1.0 : chi2_uppe
 
 /// The GLS fit of a change in the columns `H` (whitened: L^-1 J for those parameters,
 /// J = d e / d xi) to the whitened residual z: the change that removes z, -(H^T H)^-1 H^T z,
-/// as the joint estimator's step (so the new pose is exp(value) times the saved one), its
-/// covariance and the chi2 drop.
+/// as the joint estimator's step (so the new pose is the saved one perturbed by value:
+/// t + value_t, exp(value_R) R, pose_covariance.h), its covariance and the chi2 drop.
 struct Fit {
   Eigen::VectorXd value;
   Eigen::MatrixXd covariance;

@@ -23,11 +23,13 @@ struct PairCheck {
   std::optional<double> pitch_difference;  // m, when both rotate enough for a stable axis
 };
 
-/// The pairs (i < j) the consensus compares: all of them when each of the n samples
-/// has at most `partners` others; else each sample i with the samples i + d (mod n)
-/// for `partners` / 2 offsets d spread evenly over [1, n / 2], so that every sample is
-/// compared with `partners` others (as i and as i + d) near and far along the session.
+}  // namespace
+
 std::vector<std::pair<int, int>> consensus_pairs(int n, int partners) {
+  if (partners < 4 || partners % 2 != 0) {
+    throw std::invalid_argument("OutlierOptions::consensus_partners must be even and at least 4, got " +
+                                std::to_string(partners));
+  }
   std::vector<std::pair<int, int>> pairs;
   if (n - 1 <= partners) {
     pairs.reserve(static_cast<std::size_t>(n) * (n - 1) / 2);
@@ -49,13 +51,7 @@ std::vector<std::pair<int, int>> consensus_pairs(int n, int partners) {
   return pairs;
 }
 
-}  // namespace
-
 std::vector<Calibration::Rejected> consensus(const SampleSet& samples, const OutlierOptions& o) {
-  if (o.consensus_partners < 4 || o.consensus_partners % 2 != 0) {
-    throw std::invalid_argument("OutlierOptions::consensus_partners must be even and at least 4, got " +
-                                std::to_string(o.consensus_partners));
-  }
   const int n = static_cast<int>(samples.samples.size());
   const std::vector<std::pair<int, int>> compared = consensus_pairs(n, o.consensus_partners);
   std::vector<PairCheck> pairs;

@@ -9,8 +9,8 @@
 // so the stacked residual of k views is e ~ N(0, C), C = blockdiag(S_i) + J Sigma J^T:
 // the views share the calibration's error, and are not independent of each other.
 //
-// If X moved by d (its left perturbation in its parent frame, ROS order: the new X is
-// exp(d) X), e gains -J_X d (J_X = de/dxi_X at the saved X). Its generalised-least-squares
+// If X moved by d (its perturbation in its parent frame, ROS order, pose_covariance.h: the
+// new X has translation t_X + d_t and rotation exp(d_R) R_X), e gains -J_X d (J_X = de/dxi_X at the saved X). Its generalised-least-squares
 // estimate and covariance
 //     d_X = -(J_X^T C^-1 J_X)^-1 J_X^T C^-1 e,   Cov(d_X) = (J_X^T C^-1 J_X)^-1,
 // and the drop of the joint chi2 e^T C^-1 e it buys, T_X = d_X^T Cov(d_X)^-1 d_X, is

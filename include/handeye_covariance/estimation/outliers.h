@@ -23,6 +23,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "handeye_covariance/core/units.h"
@@ -63,6 +64,13 @@ const Calibration::Rejected* rejection_of(const Calibration& calibration, int in
 /// at least 1 (1 for none). A detector's decoupled covariance can understate a
 /// correlated truth; scaled so, samples are judged against each other (stage 2).
 double residual_scale(std::vector<double> squared_distances);
+
+/// The pairs (i < j) stage 1 compares among n samples: all of them when each sample has at
+/// most `partners` others; else each sample i with the samples i + d (mod n) for `partners` / 2
+/// offsets d spread evenly over [1, n / 2] (as i and as i + d), so each is compared with
+/// `partners` others near and far along the session (`partners` - 1 when n is even: the
+/// offset n / 2 pairs a sample once). `partners` even and >= 4.
+std::vector<std::pair<int, int>> consensus_pairs(int n, int partners);
 
 /// Stage 1: the samples whose motions to more than `disagreeing_share` of the others
 /// they are compared with break screw congruence (rotation angle or pitch beyond the
